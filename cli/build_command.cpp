@@ -1,0 +1,145 @@
+// lightvol build: depth image(s) + light description → closed light volume on disk.
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <lightvol/core/atomic_file.h>
+#include <lightvol/core/mesh.h>
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/export/export.h>
+#include <lightvol/light/light.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "commands.h"
+#include "progress.h"
+
+namespace lightvol::cli {
+namespace {
+
+struct BuildOptions {
+  std::vector<std::string> depth_paths;
+  std::string light_path;
+  std::string out_path;
+  std::string channel;
+  std::string space = "world";
+  std::string report_path;
+  bool ascii = false;
+  bool draco = false;
+  int draco_bits = 16;
+  bool quiet = false;
+  bool json = false;
+};
+
+nlohmann::json stage_json(const StageLog& log) {
+  nlohmann::json stages = nlohmann::json::array();
+  for (const StageRecord& s : log.stages())
+    stages.push_back({{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_bytes", s.peak_memory_bytes}});
+  return stages;
+}
+
+int run_build(const BuildOptions& o) {
+  Progress progress(o.quiet);
+
+  Result<MeshFormat> format = mesh_format_from_path(o.out_path);
+  if (!format) return fail(format.error().message);
+  if (o.draco && *format != MeshFormat::glb) return fail("--draco: applies to .glb output only");
+  if (o.ascii && *format != MeshFormat::ply && *format != MeshFormat::stl)
+    return fail("--ascii: applies to .ply and .stl output only");
+
+  progress.begin("reading " + o.light_path);
+  Result<Light> light = load_light(o.light_path);
+  if (!light) return fail(light.error().message);
+  progress.end();
+  if (light->type == LightType::omni) return fail(o.light_path + ": omni lights are not supported yet");
+  if (o.depth_paths.size() != 1)
+    return fail("a " + std::string(to_string(light->type)) + " light takes one depth image, got " +
+                std::to_string(o.depth_paths.size()));
+
+  const std::string& depth_path = o.depth_paths.front();
+  progress.begin("reading " + depth_path);
+  Result<DepthImage> depth = read_depth_image(depth_path, {o.channel});
+  if (!depth) return fail(depth.error().message);
+  progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
+
+  progress.begin("building static volume");
+  VolumeOptions vo;
+  vo.space = o.space == "light" ? Space::light : Space::world;
+  Result<Mesh> mesh = build_static_volume(*light, *depth, vo, depth_path);
+  if (!mesh) return fail(mesh.error().message);
+  progress.end(thousands(mesh->num_triangles()) + " triangles");
+
+  progress.begin("writing " + o.out_path);
+  ExportOptions eo;
+  eo.ascii = o.ascii;
+  eo.draco = o.draco;
+  eo.draco_bits = o.draco_bits;
+  if (Status s = write_mesh(o.out_path, *mesh, eo); !s) return fail(s.error().message);
+  progress.end();
+
+  const Bounds box = bounding_box(*mesh);
+  const double volume = signed_volume(*mesh);
+  nlohmann::json report = {
+      {"inputs", o.depth_paths},
+      {"light", {{"path", o.light_path}, {"type", to_string(light->type)}, {"depth", to_string(light->depth)}}},
+      {"output", o.out_path},
+      {"space", o.space},
+      {"width", depth->width},
+      {"height", depth->height},
+      {"mode", "static"},
+      {"vertices", mesh->num_vertices()},
+      {"triangles", mesh->num_triangles()},
+      {"bounds", {{"min", box.min}, {"max", box.max}}},
+      {"volume", volume},
+      {"stages", stage_json(progress.log())},
+      {"total_seconds", progress.log().total_seconds()},
+      {"peak_memory_bytes", peak_memory_bytes()},
+  };
+  if (!o.report_path.empty()) {
+    if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
+      return fail(s.error().message);
+  }
+  if (o.json) {
+    std::printf("%s\n", report.dump(2).c_str());
+  } else if (!o.quiet) {
+    std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
+                o.out_path.c_str(), thousands(mesh->num_triangles()).c_str(),
+                thousands(mesh->num_vertices()).c_str(), volume, progress.log().total_seconds(),
+                human_bytes(peak_memory_bytes()).c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_build_command(CLI::App& app, Runner* run) {
+  auto o = std::make_shared<BuildOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "build", "Build the closed light volume of a shadow map and write it as a mesh.");
+  cmd->footer(
+      "Example:\n  lightvol build shadow.exr --light light.json --out volume.ply\n"
+      "The volume has one vertex per texel, at the texel centre's ray and depth, closed to the\n"
+      "light (spot: a fan to its position; directional: walls and a cap on the near plane).\n"
+      "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file written.");
+  cmd->add_option("depth", o->depth_paths, "Depth image(s): EXR, TIFF, PFM, 16-bit PNG, ...")
+      ->required();
+  cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
+  cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")->required();
+  cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
+  cmd->add_option("--space", o->space, "Frame of the output: world or light (the light's eye space)")
+      ->check(CLI::IsMember({"world", "light"}))
+      ->capture_default_str();
+  cmd->add_flag("--ascii", o->ascii, "Write ASCII PLY or STL instead of binary");
+  cmd->add_flag("--draco", o->draco, "Compress .glb output with KHR_draco_mesh_compression");
+  cmd->add_option("--draco-bits", o->draco_bits, "Position quantization bits for .drc and --draco")
+      ->check(CLI::Range(1, 30))
+      ->capture_default_str();
+  cmd->add_option("--report", o->report_path,
+                  "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
+  cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
+  cmd->add_flag("--quiet,-q", o->quiet, "No progress lines and no summary");
+  cmd->callback([o, run] { *run = [o] { return run_build(*o); }; });
+}
+
+}  // namespace lightvol::cli

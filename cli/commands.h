@@ -1,0 +1,18 @@
+// Each command registers a CLI11 subcommand and the function that runs it, returning the exit
+// code: 0 success, 1 an invalid volume, 2 bad usage or input.
+#pragma once
+
+#include <functional>
+
+#include <CLI/CLI.hpp>
+
+namespace lightvol::cli {
+
+using Runner = std::function<int()>;
+
+void add_build_command(CLI::App& app, Runner* run);
+
+// Prints "lightvol: <message>" on stderr and returns 2 (bad usage or input).
+int fail(const std::string& message);
+
+}  // namespace lightvol::cli

@@ -1,0 +1,48 @@
+// lightvol: closed light volumes from shadow-map depth images. Parses the command line, runs
+// one command from the library, and turns its errors into exit codes.
+#include <cstdio>
+#include <exception>
+#include <new>
+
+#include "commands.h"
+
+namespace lightvol::cli {
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "lightvol: %s\n", message.c_str());
+  return 2;
+}
+
+}  // namespace lightvol::cli
+
+int main(int argc, char** argv) {
+  using namespace lightvol::cli;
+  CLI::App app{
+      "lightvol turns shadow-map depth images into closed light volumes: meshes enclosing exactly\n"
+      "the space a light illuminates, for exact volumetric shadows drawn with additive blending.\n"};
+  app.name("lightvol");
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "lightvol 0.1.0");
+  app.footer("Run 'lightvol COMMAND --help' for a command's options. Exit codes: 0 success, "
+             "1 invalid volume, 2 bad usage or input.");
+
+  Runner run;
+  add_build_command(app, &run);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return fail(e.what() + std::string(" (see 'lightvol --help')"));
+  }
+  try {
+    return run ? run() : 2;
+  } catch (const std::bad_alloc&) {
+    return fail("out of memory");
+  }
+}

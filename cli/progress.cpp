@@ -1,0 +1,43 @@
+#include "progress.h"
+
+#include <cstdio>
+
+#include <unistd.h>
+
+namespace lightvol::cli {
+
+Progress::Progress(bool quiet) : show_(!quiet && ::isatty(STDERR_FILENO)) {}
+
+void Progress::begin(const std::string& step) {
+  log_.begin(step);
+  if (show_) {
+    std::fprintf(stderr, "%s ... ", step.c_str());
+    std::fflush(stderr);
+  }
+}
+
+void Progress::end(const std::string& detail) {
+  const StageRecord& r = log_.end();
+  if (show_)
+    std::fprintf(stderr, "%.2f s%s%s\n", r.seconds, detail.empty() ? "" : "  ", detail.c_str());
+}
+
+std::string thousands(unsigned long long n) {
+  std::string digits = std::to_string(n), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+std::string human_bytes(unsigned long long bytes) {
+  char buf[32];
+  const double b = static_cast<double>(bytes);
+  if (b >= 1024.0 * 1024 * 1024) std::snprintf(buf, sizeof buf, "%.2f GiB", b / (1024.0 * 1024 * 1024));
+  else if (b >= 1024.0 * 1024) std::snprintf(buf, sizeof buf, "%.0f MiB", b / (1024.0 * 1024));
+  else std::snprintf(buf, sizeof buf, "%.0f KiB", b / 1024.0);
+  return buf;
+}
+
+}  // namespace lightvol::cli

@@ -1,0 +1,30 @@
+// Timed progress lines on stderr: shown on a terminal, silent when piped or with --quiet.
+#pragma once
+
+#include <string>
+
+#include <lightvol/core/stages.h>
+
+namespace lightvol::cli {
+
+class Progress {
+ public:
+  explicit Progress(bool quiet);
+  // Starts a step ("reading depth.exr") and its timer.
+  void begin(const std::string& step);
+  // Ends the current step, printing its time, and records it in the stage log.
+  void end(const std::string& detail = "");
+  const StageLog& log() const { return log_; }
+  bool shown() const { return show_; }
+
+ private:
+  bool show_;
+  StageLog log_;
+};
+
+// Formats 33538050 as "33,538,050".
+std::string thousands(unsigned long long n);
+// Formats bytes as "1.23 GiB", "512 MiB", ...
+std::string human_bytes(unsigned long long bytes);
+
+}  // namespace lightvol::cli

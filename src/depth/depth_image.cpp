@@ -1,0 +1,122 @@
+#include <lightvol/depth/depth_image.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <OpenImageIO/imageio.h>
+
+#include <lightvol/core/atomic_file.h>
+
+namespace lightvol {
+namespace {
+
+// OpenImageIO keeps errors in per-thread (global) or per-object queues; fetch and tidy them.
+std::string oiio_message(std::string message) {
+  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  return message.empty() ? "unknown OpenImageIO error" : message;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& options,
+                           const std::string& path) {
+  const auto& names = spec.channelnames;
+  if (!options.channel.empty()) {
+    for (int c = 0; c < spec.nchannels; ++c)
+      if (names[c] == options.channel) return c;
+    return Error{path + ": no channel named '" + options.channel + "' (channels: " +
+                 join_names(names) + ")"};
+  }
+  if (spec.nchannels == 1) return 0;
+  for (const char* preferred : {"Z", "depth", "Y"})
+    for (int c = 0; c < spec.nchannels; ++c)
+      if (names[c] == preferred) return c;
+  int candidate = -1, non_alpha = 0;
+  for (int c = 0; c < spec.nchannels; ++c) {
+    if (c == spec.alpha_channel || names[c] == "A") continue;
+    ++non_alpha;
+    candidate = c;
+  }
+  if (non_alpha == 1) return candidate;
+  return Error{path + ": has " + std::to_string(spec.nchannels) + " channels (" + join_names(names) +
+               "): choose the depth channel with --channel"};
+}
+
+}  // namespace
+
+Status validate_depths(const DepthImage& image, const std::string& source) {
+  const std::size_t n = image.values.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = image.values[i];
+    if (std::isfinite(v) && v >= 0) continue;
+    const std::size_t col = i % static_cast<std::size_t>(image.width);
+    const std::size_t row = i / static_cast<std::size_t>(image.width);
+    const char* what = std::isnan(v) ? "NaN" : (std::isinf(v) ? "infinite" : "negative");
+    return Error{source + ": pixel (" + std::to_string(col) + ", " + std::to_string(row) +
+                 "): depth is " + what + " (" + std::to_string(v) +
+                 "); depths must be finite and >= 0"};
+  }
+  return {};
+}
+
+Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
+  if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return Error{path + ": cannot read image: " + oiio_message(OIIO::geterror())};
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.width < 2 || spec.height < 2)
+    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                 "; a depth image needs at least 2x2 texels"};
+  if (spec.depth > 1) return Error{path + ": is a volume image; a depth image is 2D"};
+  const std::int64_t texels = static_cast<std::int64_t>(spec.width) * spec.height;
+  if (texels > (std::int64_t{1} << 30))
+    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                 ", more than 2^30 texels; lightvol's 32-bit indices cannot hold its volume"};
+  if (spec.deep) return Error{path + ": is a deep image; a depth image has one value per texel"};
+
+  const Result<int> channel = choose_channel(spec, options, path);
+  if (!channel) return channel.error();
+  const OIIO::TypeDesc format = spec.channelformat(*channel);
+  if (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::INT8)
+    return Error{path + ": channel '" + spec.channelnames[*channel] +
+                 "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
+
+  DepthImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  image.values.resize(static_cast<std::size_t>(texels));
+  const bool read = in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT,
+                                   image.values.data());
+  // A truncated file can come back "read" with the damage reported only in the error queue.
+  if (!read || in->has_error())
+    return Error{path + ": cannot read pixels: " + oiio_message(in->geterror())};
+  in->close();
+  if (Status s = validate_depths(image, path); !s) return s.error();
+  return image;
+}
+
+Status write_depth_image(const std::string& path, const DepthImage& image) {
+  return write_file_atomically(path, [&](const std::string& temp_path) -> Status {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) return Error{path + ": cannot write images of this type: " + oiio_message(OIIO::geterror())};
+    OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    if (ext == ".png") spec.set_format(OIIO::TypeDesc::UINT16);
+    spec.channelnames = {ext == ".exr" ? "Z" : "Y"};
+    if (!out->open(temp_path, spec) ||
+        !out->write_image(OIIO::TypeDesc::FLOAT, image.values.data()) || !out->close())
+      return Error{path + ": cannot write image: " + oiio_message(out->geterror())};
+    return {};
+  });
+}
+
+}  // namespace lightvol

@@ -1,0 +1,42 @@
+// Depth images: what a shadow-map render wrote, read through OpenImageIO.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+// One channel of depths, row-major, first stored row first (DESIGN §2: the top of the light's view
+// unless flip_y). Values are as stored; their meaning is the light's `depth` encoding.
+struct DepthImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> values;  // width × height
+
+  float at(int col, int row) const {
+    return values[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) + col];
+  }
+};
+
+struct DepthReadOptions {
+  // Channel to read from a multi-channel image ("Z", "R", ...). Empty: the only channel, else a
+  // channel named Z, depth or Y, else the only non-alpha channel; anything else is ambiguous.
+  std::string channel;
+};
+
+// Reads the first subimage of any file OpenImageIO reads with one float or 16-bit channel (EXR,
+// float TIFF, PFM, 16-bit PNG, ...): 16-bit integers become [0, 1], as a depth buffer stores them.
+// Errors name the file: unreadable or truncated data, 8-bit or unknown channels, fewer than 2×2
+// texels, and the first NaN, infinite or negative depth, by pixel (column, row as stored).
+Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options = {});
+
+// Writes a single-channel float image (EXR, TIFF, PFM; 16-bit for PNG), atomically.
+Status write_depth_image(const std::string& path, const DepthImage& image);
+
+// The first NaN, infinite or negative value, as an Error naming `source` and the pixel.
+Status validate_depths(const DepthImage& image, const std::string& source);
+
+}  // namespace lightvol

@@ -1,0 +1,202 @@
+#include <lightvol/export/export.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+#include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
+#include <draco/io/gltf_decoder.h>
+#include <draco/io/gltf_encoder.h>
+#include <draco/mesh/mesh.h>
+
+#include <lightvol/check/topology.h>
+#include <lightvol/core/atomic_file.h>
+#include <lightvol/core/check.h>
+#include <lightvol/export/flat_exporter.h>
+#include <lightvol/export/ply_writer.h>
+
+namespace lightvol {
+
+Result<MeshFormat> mesh_format_from_path(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".ply") return MeshFormat::ply;
+  if (ext == ".obj") return MeshFormat::obj;
+  if (ext == ".off") return MeshFormat::off;
+  if (ext == ".stl") return MeshFormat::stl;
+  if (ext == ".drc") return MeshFormat::drc;
+  if (ext == ".glb") return MeshFormat::glb;
+  return Error{path + ": unknown mesh format '" + ext +
+               "' (known: .ply, .obj, .off, .stl, .drc, .glb)"};
+}
+
+namespace {
+
+// Our flat mesh as a Draco mesh: one point per vertex, positions only.
+std::unique_ptr<draco::Mesh> to_draco(const Mesh& mesh) {
+  auto out = std::make_unique<draco::Mesh>();
+  const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
+  out->set_num_points(static_cast<std::uint32_t>(nv));
+  draco::GeometryAttribute position;
+  position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false,
+                sizeof(float) * 3, 0);
+  const int id = out->AddAttribute(position, true, static_cast<std::uint32_t>(nv));
+  draco::PointAttribute* attribute = out->attribute(id);
+  for (std::size_t v = 0; v < nv; ++v)
+    attribute->SetAttributeValue(draco::AttributeValueIndex(static_cast<std::uint32_t>(v)),
+                                 &mesh.positions[3 * v]);
+  out->SetNumFaces(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    draco::Mesh::Face face;
+    for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(mesh.indices[3 * t + k]);
+    out->SetFace(draco::FaceIndex(static_cast<std::uint32_t>(t)), face);
+  }
+  return out;
+}
+
+// A decoded Draco mesh back to flat buffers, positions welded (Draco may split points).
+Mesh from_draco(const draco::Mesh& in) {
+  Mesh out;
+  const draco::PointAttribute* position = in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (!position) return out;
+  out.positions.resize(3 * static_cast<std::size_t>(in.num_points()));
+  for (draco::PointIndex p(0); p < in.num_points(); ++p)
+    position->GetMappedValue(p, &out.positions[3 * static_cast<std::size_t>(p.value())]);
+  out.indices.reserve(3 * static_cast<std::size_t>(in.num_faces()));
+  for (draco::FaceIndex f(0); f < in.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) out.indices.push_back(in.face(f)[k].value());
+  return weld_identical_positions(out);
+}
+
+Status check_bits(int bits) {
+  if (bits < 1 || bits > 30)
+    return Error{"--draco-bits: must lie in 1..30, got " + std::to_string(bits)};
+  return {};
+}
+
+// What a lossy encoding must preserve: the same number of faces, and a sound volume.
+Status verify_decoded(const Mesh& original, const Mesh& decoded, const std::string& what) {
+  if (decoded.num_triangles() != original.num_triangles())
+    return Error{what + ": " + std::to_string(original.num_triangles() - decoded.num_triangles()) +
+                 " faces were lost (collapsed by quantization); raise --draco-bits"};
+  if (Status s = check_closed_outward(decoded, what); !s)
+    return Error{s.error().message + "; raise --draco-bits"};
+  return {};
+}
+
+Status write_with_openmesh(const std::string& path, const std::string& temp, MeshFormat format,
+                           const Mesh& mesh, const ExportOptions& options) {
+  OpenMesh::IO::Options opts;
+  std::string ext;
+  switch (format) {
+    case MeshFormat::stl:
+      ext = "stl";
+      if (!options.ascii) opts += OpenMesh::IO::Options::Binary;
+      break;
+    case MeshFormat::obj: ext = "obj"; break;
+    case MeshFormat::off: ext = "off"; break;
+    default: LV_CHECK(false);
+  }
+  // OpenMesh chats on its log streams; a command-line tool speaks for itself.
+  omlog().disable();
+  omout().disable();
+  std::ofstream out(temp, std::ios::binary);
+  if (!out) return Error{path + ": cannot create file: " + std::strerror(errno)};
+  std::vector<char> buffer(1 << 20);
+  out.rdbuf()->pubsetbuf(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  detail::FlatExporter exporter(mesh);
+  // Nine significant digits round-trip every float exactly in the ASCII formats.
+  if (!OpenMesh::IO::IOManager().write(out, ext, exporter, opts, 9))
+    return Error{path + ": OpenMesh could not write the mesh"};
+  out.close();
+  if (!out) return Error{path + ": write failed: " + std::strerror(errno)};
+  return {};
+}
+
+}  // namespace
+
+Result<std::string> encode_draco(const Mesh& mesh, int bits) {
+  if (Status s = check_bits(bits); !s) return s.error();
+  const auto dm = to_draco(mesh);
+  draco::Encoder encoder;
+  encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, bits);
+  encoder.SetSpeedOptions(5, 5);
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeMeshToBuffer(*dm, &buffer);
+  if (!status.ok()) return Error{"Draco encoding failed: " + status.error_msg_string()};
+  return std::string(buffer.data(), buffer.size());
+}
+
+Result<std::string> encode_glb(const Mesh& mesh, bool draco, int bits) {
+  if (draco) {
+    if (Status s = check_bits(bits); !s) return s.error();
+  }
+  auto dm = to_draco(mesh);
+  if (draco) {
+    draco::DracoCompressionOptions compression;
+    compression.quantization_position.SetQuantizationBits(bits);
+    dm->SetCompressionEnabled(true);
+    dm->SetCompressionOptions(compression);
+  }
+  draco::GltfEncoder encoder;
+  draco::EncoderBuffer buffer;
+  const draco::Status status = encoder.EncodeToBuffer(*dm, &buffer);
+  if (!status.ok()) return Error{"glTF encoding failed: " + status.error_msg_string()};
+  return std::string(buffer.data(), buffer.size());
+}
+
+Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions& options) {
+  const Result<MeshFormat> format = mesh_format_from_path(path);
+  if (!format) return format.error();
+
+  switch (*format) {
+    case MeshFormat::drc: {
+      Result<std::string> bytes = encode_draco(mesh, options.draco_bits);
+      if (!bytes) return Error{path + ": " + bytes.error().message};
+      draco::DecoderBuffer in;
+      in.Init(bytes->data(), bytes->size());
+      draco::Decoder decoder;
+      auto decoded = decoder.DecodeMeshFromBuffer(&in);
+      if (!decoded.ok()) return Error{path + ": Draco cannot decode what it encoded: " +
+                                      decoded.status().error_msg_string()};
+      if (Status s = verify_decoded(mesh, from_draco(*decoded.value()), path + " (decoded)"); !s)
+        return s;
+      return write_bytes_atomically(path, *bytes);
+    }
+    case MeshFormat::glb: {
+      Result<std::string> bytes = encode_glb(mesh, options.draco, options.draco_bits);
+      if (!bytes) return Error{path + ": " + bytes.error().message};
+      if (options.draco) {
+        draco::DecoderBuffer in;
+        in.Init(bytes->data(), bytes->size());
+        draco::GltfDecoder decoder;
+        auto decoded = decoder.DecodeFromBuffer(&in);
+        if (!decoded.ok()) return Error{path + ": cannot decode the glTF just encoded: " +
+                                        decoded.status().error_msg_string()};
+        if (Status s = verify_decoded(mesh, from_draco(*decoded.value()), path + " (decoded)"); !s)
+          return s;
+      }
+      return write_bytes_atomically(path, *bytes);
+    }
+    case MeshFormat::ply:
+      return write_file_atomically(path, [&](const std::string& temp) -> Status {
+        std::FILE* f = std::fopen(temp.c_str(), "wb");
+        if (!f) return Error{path + ": cannot create file: " + std::strerror(errno)};
+        const bool written = detail::write_ply(f, mesh, options.ascii);
+        const bool closed = std::fclose(f) == 0;
+        if (!written || !closed) return Error{path + ": write failed: " + std::strerror(errno)};
+        return {};
+      });
+    default:
+      return write_file_atomically(path, [&](const std::string& temp) {
+        return write_with_openmesh(path, temp, *format, mesh, options);
+      });
+  }
+}
+
+}  // namespace lightvol

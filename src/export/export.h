@@ -1,0 +1,32 @@
+// Writing light volumes: PLY, OBJ, OFF, STL (OpenMesh writers), DRC (Draco), GLB (glTF 2.0).
+#pragma once
+
+#include <string>
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+enum class MeshFormat { ply, obj, off, stl, drc, glb };
+
+// The format a path's extension names (case-insensitive), or an Error listing the known ones.
+Result<MeshFormat> mesh_format_from_path(const std::string& path);
+
+struct ExportOptions {
+  bool ascii = false;     // PLY: ASCII instead of binary little-endian; STL: ASCII instead of binary
+  int draco_bits = 16;    // DRC and compressed GLB: position quantization bits, 1..30
+  bool draco = false;     // GLB: compress with KHR_draco_mesh_compression
+};
+
+// Writes `mesh` to `path` atomically, in the format of its extension. Lossy encodings (DRC,
+// compressed GLB) are decoded again and must come back closed, edge-manifold, oriented outward
+// and free of collapsed faces, or nothing is written and the Error says what broke.
+Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions& options = {});
+
+// Encodes `mesh` as Draco bytes (edgebreaker, `bits` position quantization).
+Result<std::string> encode_draco(const Mesh& mesh, int bits);
+// Encodes `mesh` as a GLB (glTF 2.0 binary) file's bytes, optionally Draco-compressed.
+Result<std::string> encode_glb(const Mesh& mesh, bool draco, int bits);
+
+}  // namespace lightvol

@@ -1,0 +1,18 @@
+// A streaming PLY writer over flat buffers. Internal to src/export.
+//
+// OpenMesh's PLY writer needs a half-edge kernel behind its exporter and writes value by value;
+// for 33-million-triangle volumes we stream the buffers in large blocks instead (the format is a
+// header and two arrays). Output: "vertex" with float x y z, "face" with list uchar int
+// vertex_indices, as every PLY reader expects.
+#pragma once
+
+#include <cstdio>
+
+#include <lightvol/core/mesh.h>
+
+namespace lightvol::detail {
+
+// Writes `mesh` to the open file; false on a write error (errno tells).
+bool write_ply(std::FILE* file, const Mesh& mesh, bool ascii);
+
+}  // namespace lightvol::detail

@@ -1,0 +1,439 @@
+#include <lightvol/light/light.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include <lightvol/core/check.h>
+
+namespace lightvol {
+
+std::string_view to_string(LightType type) {
+  switch (type) {
+    case LightType::spot: return "spot";
+    case LightType::directional: return "directional";
+    case LightType::omni: return "omni";
+  }
+  return "?";
+}
+
+std::string_view to_string(DepthEncoding encoding) {
+  switch (encoding) {
+    case DepthEncoding::window: return "window";
+    case DepthEncoding::linear: return "linear";
+    case DepthEncoding::radial: return "radial";
+  }
+  return "?";
+}
+
+namespace {
+
+using nlohmann::json;
+
+std::string fmt(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+// Reads typed keys out of one JSON object and words every problem as "<source>: key '<k>': ...".
+class KeyReader {
+ public:
+  KeyReader(const json& object, const std::string& source) : obj_(object), source_(source) {}
+
+  Error error(const std::string& key, const std::string& why) const {
+    return {source_ + ": key '" + key + "': " + why};
+  }
+  bool has(const std::string& key) const { return obj_.contains(key); }
+
+  Result<double> number(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    if (!v.is_number()) return error(key, "expected a number, got " + describe(v));
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) return error(key, "expected a finite number");
+    return x;
+  }
+
+  Result<Vec3d> vec3(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), is_finite_number))
+      return error(key, "expected an array of 3 finite numbers, got " + describe(v));
+    return Vec3d{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+  }
+
+  Result<std::array<double, 4>> array4(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    if (!v.is_array() || v.size() != 4 || !std::all_of(v.begin(), v.end(), is_finite_number))
+      return error(key, "expected an array of 4 finite numbers, got " + describe(v));
+    return std::array<double, 4>{v[0].get<double>(), v[1].get<double>(), v[2].get<double>(),
+                                 v[3].get<double>()};
+  }
+
+  // A 4×4 matrix, row-major: 16 numbers, or 4 rows of 4.
+  Result<Mat4d> matrix(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    std::vector<double> flat;
+    if (v.is_array() && v.size() == 16 && std::all_of(v.begin(), v.end(), is_finite_number)) {
+      for (const json& x : v) flat.push_back(x.get<double>());
+    } else if (v.is_array() && v.size() == 4) {
+      for (const json& row : v) {
+        if (!row.is_array() || row.size() != 4 ||
+            !std::all_of(row.begin(), row.end(), is_finite_number))
+          break;
+        for (const json& x : row) flat.push_back(x.get<double>());
+      }
+    }
+    if (flat.size() != 16)
+      return error(key, "expected a row-major 4x4 matrix: 16 finite numbers or 4 rows of 4");
+    Mat4d m;
+    std::copy(flat.begin(), flat.end(), m.m.begin());
+    return m;
+  }
+
+  Result<std::string> string(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    if (!v.is_string()) return error(key, "expected a string, got " + describe(v));
+    return v.get<std::string>();
+  }
+
+  Result<bool> boolean(const std::string& key) const {
+    if (!has(key)) return missing(key);
+    const json& v = obj_.at(key);
+    if (!v.is_boolean()) return error(key, "expected true or false, got " + describe(v));
+    return v.get<bool>();
+  }
+
+ private:
+  static bool is_finite_number(const json& x) {
+    return x.is_number() && std::isfinite(x.get<double>());
+  }
+  static std::string describe(const json& v) {
+    std::string s = v.dump();
+    if (s.size() > 40) s = s.substr(0, 37) + "...";
+    return std::string(v.type_name()) + " " + s;
+  }
+  Error missing(const std::string& key) const { return error(key, "missing"); }
+
+  const json& obj_;
+  const std::string& source_;
+};
+
+#define LV_TRY_ASSIGN(var, expr)            \
+  auto var##_result = (expr);               \
+  if (!var##_result) return var##_result.error(); \
+  auto var = std::move(*var##_result)
+
+constexpr const char* kAllKeys[] = {"type", "position", "direction", "up", "fov_y_deg", "aspect",
+                                    "ortho", "near", "far", "depth", "flip_y", "view",
+                                    "projection"};
+
+// Keys each type accepts in the parametric form; the matrix form swaps the geometric ones for
+// "view" and "projection".
+std::set<std::string> parametric_keys(LightType type) {
+  switch (type) {
+    case LightType::spot:
+      return {"type", "position", "direction", "up", "fov_y_deg", "aspect", "near", "far", "depth",
+              "flip_y"};
+    case LightType::directional:
+      return {"type", "position", "direction", "up", "ortho", "near", "far", "depth", "flip_y"};
+    case LightType::omni:
+      return {"type", "position", "near", "far", "depth", "flip_y"};
+  }
+  return {};
+}
+
+Result<LightType> parse_type(const KeyReader& keys) {
+  LV_TRY_ASSIGN(name, keys.string("type"));
+  if (name == "spot") return LightType::spot;
+  if (name == "directional") return LightType::directional;
+  if (name == "omni") return LightType::omni;
+  return keys.error("type", "expected \"spot\", \"directional\" or \"omni\", got \"" + name + "\"");
+}
+
+Status parse_near_far(const KeyReader& keys, bool perspective, Light* light) {
+  LV_TRY_ASSIGN(near, keys.number("near"));
+  LV_TRY_ASSIGN(far, keys.number("far"));
+  if (perspective && near <= 0)
+    return keys.error("near", "must be > 0 for a perspective light, got " + fmt(near));
+  if (!perspective && near < 0) return keys.error("near", "must be >= 0, got " + fmt(near));
+  if (near >= far)
+    return keys.error("far", "must be greater than near (" + fmt(near) + "), got " + fmt(far));
+  light->near = near;
+  light->far = far;
+  return {};
+}
+
+// Position, direction and up into a view matrix, rejecting a zero direction and a zero or parallel up.
+Status parse_frame(const KeyReader& keys, Light* light) {
+  LV_TRY_ASSIGN(position, keys.vec3("position"));
+  LV_TRY_ASSIGN(direction, keys.vec3("direction"));
+  LV_TRY_ASSIGN(up, keys.vec3("up"));
+  if (length(direction) == 0) return keys.error("direction", "must not be the zero vector");
+  if (length(up) == 0) return keys.error("up", "must not be the zero vector");
+  const Vec3d f = normalize(direction);
+  const Vec3d u = normalize(up);
+  if (length(cross(f, u)) < 1e-6) return keys.error("up", "must not be parallel to direction");
+  light->position = position;
+  light->direction = f;
+  light->view = look_at(position, f, u);
+  return {};
+}
+
+// The matrix form: "view" and "projection" replace the geometric keys.
+Status parse_matrices(const KeyReader& keys, Light* light) {
+  LV_TRY_ASSIGN(view, keys.matrix("view"));
+  LV_TRY_ASSIGN(projection, keys.matrix("projection"));
+  bool ok = false;
+  const Mat4d inv_view = inverse(view, &ok);
+  if (!ok) return keys.error("view", "is singular");
+  if (view(3, 0) != 0 || view(3, 1) != 0 || view(3, 2) != 0 || view(3, 3) != 1)
+    return keys.error("view", "must be affine: its last row must be [0, 0, 0, 1]");
+  (void)inverse(projection, &ok);
+  if (!ok) return keys.error("projection", "is singular");
+
+  const Mat4d& p = projection;
+  double near = 0, far = 0;
+  if (light->type == LightType::spot) {
+    if (p(3, 0) != 0 || p(3, 1) != 0 || p(3, 2) != -1 || p(3, 3) != 0)
+      return keys.error("projection",
+                        "a spot light needs an OpenGL perspective matrix: last row [0, 0, -1, 0]");
+    near = p(2, 3) / (p(2, 2) - 1);
+    far = p(2, 3) / (p(2, 2) + 1);
+    if (!(near > 0) || !(far > near) || !std::isfinite(far))
+      return keys.error("projection", "its near and far planes must satisfy 0 < near < far, got " +
+                                          fmt(near) + " and " + fmt(far));
+  } else {
+    if (p(3, 0) != 0 || p(3, 1) != 0 || p(3, 2) != 0 || p(3, 3) != 1)
+      return keys.error("projection",
+                        "a directional light needs an orthographic matrix: last row [0, 0, 0, 1]");
+    near = (p(2, 3) + 1) / p(2, 2);
+    far = (p(2, 3) - 1) / p(2, 2);
+    if (!(near >= 0) || !(far > near))
+      return keys.error("projection", "its near and far planes must satisfy 0 <= near < far, got " +
+                                          fmt(near) + " and " + fmt(far));
+  }
+  light->view = view;
+  light->projection = projection;
+  light->near = near;
+  light->far = far;
+  light->position = inv_view.transform_point({0, 0, 0});
+  light->direction = normalize(inv_view.transform_vector({0, 0, -1}));
+  return {};
+}
+
+}  // namespace
+
+Result<Light> parse_light(std::string_view json_text, const std::string& source) {
+  json root;
+  try {
+    root = json::parse(json_text.begin(), json_text.end());
+  } catch (const json::parse_error& e) {
+    std::string what = e.what();
+    const auto colon = what.find("parse error");
+    return Error{source + ": not valid JSON: " + (colon == std::string::npos ? what : what.substr(colon))};
+  }
+  if (!root.is_object()) return Error{source + ": expected a JSON object describing a light"};
+  const KeyReader keys(root, source);
+
+  for (const auto& [key, value] : root.items()) {
+    if (std::find(std::begin(kAllKeys), std::end(kAllKeys), key) == std::end(kAllKeys))
+      return keys.error(key, "unknown key (known: type, position, direction, up, fov_y_deg, "
+                             "aspect, ortho, near, far, depth, flip_y, view, projection)");
+  }
+
+  Light light;
+  LV_TRY_ASSIGN(type, parse_type(keys));
+  light.type = type;
+
+  const bool matrix_form = keys.has("view") || keys.has("projection");
+  if (matrix_form && type == LightType::omni)
+    return keys.error(keys.has("view") ? "view" : "projection",
+                      "an omni light is given by position, near and far, not by matrices");
+  std::set<std::string> allowed = parametric_keys(type);
+  if (matrix_form) allowed = {"type", "view", "projection", "depth", "flip_y"};
+  for (const auto& [key, value] : root.items()) {
+    if (allowed.count(key)) continue;
+    if (matrix_form && parametric_keys(type).count(key))
+      return keys.error(key, "does not go with \"view\" and \"projection\", which replace it");
+    return keys.error(key, "does not apply to a " + std::string(to_string(type)) + " light");
+  }
+
+  if (keys.has("depth")) {
+    LV_TRY_ASSIGN(name, keys.string("depth"));
+    if (name == "window") light.depth = DepthEncoding::window;
+    else if (name == "linear") light.depth = DepthEncoding::linear;
+    else if (name == "radial") light.depth = DepthEncoding::radial;
+    else return keys.error("depth", "expected \"window\", \"linear\" or \"radial\", got \"" + name + "\"");
+  }
+  if (keys.has("flip_y")) {
+    LV_TRY_ASSIGN(flip, keys.boolean("flip_y"));
+    light.flip_y = flip;
+  }
+
+  if (matrix_form) {
+    if (Status s = parse_matrices(keys, &light); !s) return s.error();
+    return light;
+  }
+
+  switch (type) {
+    case LightType::spot: {
+      if (Status s = parse_frame(keys, &light); !s) return s.error();
+      if (Status s = parse_near_far(keys, true, &light); !s) return s.error();
+      LV_TRY_ASSIGN(fov, keys.number("fov_y_deg"));
+      if (!(fov > 0 && fov < 180))
+        return keys.error("fov_y_deg", "must lie in (0, 180) degrees, got " + fmt(fov));
+      double aspect = 1.0;
+      if (keys.has("aspect")) {
+        LV_TRY_ASSIGN(a, keys.number("aspect"));
+        if (!(a > 0)) return keys.error("aspect", "must be > 0, got " + fmt(a));
+        aspect = a;
+      }
+      light.projection = perspective(fov, aspect, light.near, light.far);
+      break;
+    }
+    case LightType::directional: {
+      if (Status s = parse_frame(keys, &light); !s) return s.error();
+      if (Status s = parse_near_far(keys, false, &light); !s) return s.error();
+      LV_TRY_ASSIGN(o, keys.array4("ortho"));
+      if (!(o[0] < o[1]) || !(o[2] < o[3]))
+        return keys.error("ortho", "extents [left, right, bottom, top] must have left < right and "
+                                   "bottom < top, got [" + fmt(o[0]) + ", " + fmt(o[1]) + ", " +
+                                   fmt(o[2]) + ", " + fmt(o[3]) + "]");
+      light.projection = orthographic(o[0], o[1], o[2], o[3], light.near, light.far);
+      break;
+    }
+    case LightType::omni: {
+      LV_TRY_ASSIGN(position, keys.vec3("position"));
+      if (Status s = parse_near_far(keys, true, &light); !s) return s.error();
+      light.position = position;
+      light.direction = {0, 0, -1};
+      Mat4d translate;
+      translate.m = {1, 0, 0, -position.x, 0, 1, 0, -position.y, 0, 0, 1, -position.z, 0, 0, 0, 1};
+      light.view = translate;
+      light.projection = perspective(90.0, 1.0, light.near, light.far);
+      break;
+    }
+  }
+  return light;
+}
+
+Result<Light> load_light(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open light description: " + std::strerror(errno)};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{path + ": cannot read light description"};
+  return parse_light(text.str(), path);
+}
+
+std::string_view omni_face_tag(int face) {
+  static constexpr std::string_view tags[kOmniFaces] = {"px", "nx", "py", "ny", "pz", "nz"};
+  LV_CHECK(face >= 0 && face < kOmniFaces);
+  return tags[face];
+}
+
+Mat4d omni_face_view(const Light& light, int face) {
+  static constexpr Vec3d look[kOmniFaces] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
+                                             {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  static constexpr Vec3d up[kOmniFaces] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1},
+                                           {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+  LV_CHECK(face >= 0 && face < kOmniFaces);
+  return look_at(light.position, look[face], up[face]);
+}
+
+// ---- Unprojector --------------------------------------------------------------------------------
+
+Unprojector::Unprojector(const Light& light, int width, int height, int face, Space space)
+    : depth_(light.depth), flip_y_(light.flip_y), width_(width), height_(height) {
+  LV_CHECK(width >= 2 && height >= 2);
+  bool ok = false;
+  inv_projection_ = inverse(light.projection, &ok);
+  LV_CHECK(ok);
+  Mat4d view = light.type == LightType::omni ? omni_face_view(light, face) : light.view;
+  // Light space of an omni light keeps world axes with the origin at the light.
+  const Mat4d eye_to_world = inverse(view, &ok);
+  LV_CHECK(ok);
+  if (space == Space::world) {
+    to_out_ = eye_to_world;
+  } else if (light.type == LightType::omni) {
+    to_out_ = light.view * eye_to_world;
+  } else {
+    to_out_ = Mat4d::identity();
+  }
+  clip_to_out_ = to_out_ * inv_projection_;
+
+  // Winding: the triangle of the near-plane points of texels (0,0), (1,0), (0,1) must face away
+  // from the light (its normal along −Z in eye space); a mirroring output transform flips that.
+  const Vec3d a = eye_near(0, 0), b = eye_near(1, 0), c = eye_near(0, 1);
+  const double facing = -cross(b - a, c - a).z;
+  LV_CHECK(facing != 0);
+  double det3 = 0;
+  {
+    const Mat4d& m = to_out_;
+    det3 = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1)) -
+           m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0)) +
+           m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+  }
+  standard_winding_ = (facing > 0) == (det3 > 0);
+}
+
+Vec3d Unprojector::ndc(int col, int row) const {
+  const double x = 2.0 * (col + 0.5) / width_ - 1.0;
+  const double y_down = 2.0 * (row + 0.5) / height_ - 1.0;
+  return {x, flip_y_ ? y_down : -y_down, 0};
+}
+
+Vec3d Unprojector::eye_near(int col, int row) const {
+  const Vec3d n = ndc(col, row);
+  return inv_projection_.transform_point({n.x, n.y, -1});
+}
+
+Vec3d Unprojector::eye_far(int col, int row) const {
+  const Vec3d n = ndc(col, row);
+  return inv_projection_.transform_point({n.x, n.y, 1});
+}
+
+Vec3d Unprojector::near_point(int col, int row) const {
+  return to_out_.transform_point(eye_near(col, row));
+}
+
+Vec3d Unprojector::far_point(int col, int row) const {
+  return to_out_.transform_point(eye_far(col, row));
+}
+
+bool Unprojector::point(int col, int row, double depth, Vec3d* out) const {
+  if (depth_ == DepthEncoding::window) {
+    const Vec3d n = ndc(col, row);
+    const double z = 2.0 * std::clamp(depth, 0.0, 1.0) - 1.0;
+    *out = clip_to_out_.transform_point({n.x, n.y, z});
+    return true;
+  }
+  // Linear and radial depths: find the parameter t of the point on the near→far segment.
+  const Vec3d pn = eye_near(col, row);
+  const Vec3d pf = eye_far(col, row);
+  const Vec3d dv = pf - pn;
+  double t = 0;
+  if (depth_ == DepthEncoding::linear) {
+    t = (-depth - pn.z) / dv.z;
+  } else {
+    // |pn + t·dv| = depth, the far root (the ray leaves the light).
+    const double a = dot(dv, dv), b = 2 * dot(pn, dv), c = dot(pn, pn) - depth * depth;
+    const double disc = b * b - 4 * a * c;
+    if (disc < 0) return false;
+    t = (-b + std::sqrt(disc)) / (2 * a);
+  }
+  t = std::clamp(t, 0.0, 1.0);
+  *out = to_out_.transform_point(pn + t * dv);
+  return true;
+}
+
+}  // namespace lightvol

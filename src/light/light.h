@@ -1,0 +1,98 @@
+// The light description (LIGHT.json, DESIGN §2) and the mapping from shadow-map texels to points.
+//
+// Frames: *world*; the light's *eye* space (OpenGL: the light looks down its −Z, +Y up); *NDC*
+// after the projection; *window depth* d in [0, 1] with z_ndc = 2d − 1. The first stored image row
+// is NDC y = +1 unless flip_y. Texel (col, row) is sampled at its centre:
+// x_ndc = 2(col + ½)/W − 1, y_ndc = 1 − 2(row + ½)/H.
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+
+#include <lightvol/core/math.h>
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+enum class LightType { spot, directional, omni };
+enum class DepthEncoding {
+  window,  // OpenGL window depth, glDepthRange(0, 1)
+  linear,  // eye-space distance along the light's view axis (−z_eye)
+  radial,  // Euclidean distance to the light position (the eye origin)
+};
+
+std::string_view to_string(LightType type);
+std::string_view to_string(DepthEncoding encoding);
+
+struct Light {
+  LightType type = LightType::spot;
+  DepthEncoding depth = DepthEncoding::window;
+  bool flip_y = false;
+  Mat4d view;        // world → light eye (omni: translation to the light; faces rotate further)
+  Mat4d projection;  // light eye → clip (omni: the 90° face projection)
+  double near = 0;   // eye-space distances of the near and far planes, near < far
+  double far = 1;
+  Vec3d position;    // world: the light (spot, omni) or the view origin (directional)
+  Vec3d direction;   // world, unit: where the light looks (spot, directional)
+
+  bool is_perspective() const { return type != LightType::directional; }
+};
+
+// Parses a light description. `source` names the file in error messages. Every problem is an
+// Error naming the source and the key: unknown or missing keys, wrong types, fov outside
+// (0°, 180°), near ≥ far, zero or parallel up vectors, empty ortho extents, singular matrices.
+Result<Light> parse_light(std::string_view json_text, const std::string& source);
+
+// Reads and parses a light description file.
+Result<Light> load_light(const std::string& path);
+
+// Omni faces in the order +X −X +Y −Y +Z −Z, and their file-name tags (px nx py ny pz nz).
+inline constexpr int kOmniFaces = 6;
+std::string_view omni_face_tag(int face);
+// World → eye of omni face `face`: a 90° camera at the light position with DESIGN §2's look/up.
+Mat4d omni_face_view(const Light& light, int face);
+
+// Output frame of a volume.
+enum class Space { world, light };
+
+// Maps the texels of one W×H depth image of a light (an omni light: of one face) to points.
+class Unprojector {
+ public:
+  // `face` is the omni face (0..5) and ignored for other lights. `space` chooses the output frame:
+  // world, or the light's eye space (omni: world axes, origin at the light).
+  Unprojector(const Light& light, int width, int height, int face, Space space);
+
+  // The point of texel (col, row) whose stored depth is `depth` (finite and ≥ 0; the caller checks).
+  // Depths at or beyond the far plane give the far plane's point, depths before the near plane the
+  // near plane's. Returns false only for a radial depth that a parallel (directional) ray never
+  // reaches: one smaller than the ray's distance from the light position.
+  bool point(int col, int row, double depth, Vec3d* out) const;
+
+  // The texel ray's points on the near and far planes, in the output frame.
+  Vec3d near_point(int col, int row) const;
+  Vec3d far_point(int col, int row) const;
+
+  // The light's apex in the output frame (spot, omni): the fan's common vertex.
+  Vec3d apex() const { return to_out_.transform_point({0, 0, 0}); }
+
+  // True when the triangles (a, b, c) and (b, d, c) of the texel quad a=(i,j), b=(i+1,j),
+  // c=(i,j+1), d=(i+1,j+1) face away from the light in the output frame; false when they face it
+  // (a mirrored projection, flip_y or a mirroring view) and must be wound the other way.
+  bool standard_winding() const { return standard_winding_; }
+
+ private:
+  Vec3d ndc(int col, int row) const;
+  Vec3d eye_near(int col, int row) const;
+  Vec3d eye_far(int col, int row) const;
+
+  DepthEncoding depth_;
+  bool flip_y_;
+  int width_, height_;
+  Mat4d inv_projection_;  // clip → eye
+  Mat4d to_out_;          // eye → output frame
+  Mat4d clip_to_out_;     // clip → output frame (window depth)
+  bool standard_winding_ = true;
+};
+
+}  // namespace lightvol

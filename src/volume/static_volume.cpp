@@ -1,0 +1,144 @@
+#include <lightvol/volume/static_volume.h>
+
+#include <atomic>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <lightvol/core/check.h>
+
+namespace lightvol {
+
+VolumeCounts static_volume_counts(LightType type, int width, int height) {
+  const std::uint64_t w = static_cast<std::uint64_t>(width), h = static_cast<std::uint64_t>(height);
+  const std::uint64_t grid = 2 * (w - 1) * (h - 1);
+  const std::uint64_t border = 2 * (w - 1) + 2 * (h - 1);
+  switch (type) {
+    case LightType::spot: return {w * h + 1, grid + border};
+    case LightType::directional: return {w * h + border + 1, grid + 3 * border};
+    case LightType::omni: return {6 * w * h, 6 * grid + 12 * 2 * (w - 1) + 8};
+  }
+  return {};
+}
+
+std::vector<std::uint32_t> border_loop(int width, int height, bool standard) {
+  LV_CHECK(width >= 2 && height >= 2);
+  const auto id = [&](int col, int row) {
+    return static_cast<std::uint32_t>(row) * static_cast<std::uint32_t>(width) +
+           static_cast<std::uint32_t>(col);
+  };
+  std::vector<std::uint32_t> loop;
+  loop.reserve(2 * (width - 1) + 2 * (height - 1));
+  for (int c = 0; c < width - 1; ++c) loop.push_back(id(c, 0));
+  for (int r = 0; r < height - 1; ++r) loop.push_back(id(width - 1, r));
+  for (int c = width - 1; c > 0; --c) loop.push_back(id(c, height - 1));
+  for (int r = height - 1; r > 0; --r) loop.push_back(id(0, r));
+  if (!standard) std::reverse(loop.begin(), loop.end());
+  return loop;
+}
+
+namespace {
+
+void put(std::vector<float>& positions, std::size_t v, Vec3d p) {
+  positions[3 * v] = static_cast<float>(p.x);
+  positions[3 * v + 1] = static_cast<float>(p.y);
+  positions[3 * v + 2] = static_cast<float>(p.z);
+}
+
+}  // namespace
+
+Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
+                                 const VolumeOptions& options, const std::string& source) {
+  LV_CHECK(light.type != LightType::omni);
+  const int w = depth.width, h = depth.height;
+  LV_CHECK(w >= 2 && h >= 2);
+  const Unprojector unproject(light, w, h, 0, options.space);
+  const VolumeCounts counts = static_volume_counts(light.type, w, h);
+  LV_CHECK_LT(counts.vertices, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});
+
+  Mesh mesh;
+  mesh.positions.resize(3 * counts.vertices);
+  mesh.indices.resize(3 * counts.triangles);
+  const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+
+  // Grid vertices, row by row; remember the first texel a parallel ray cannot reach.
+  std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      for (int c = 0; c < w; ++c) {
+        const std::size_t v = static_cast<std::size_t>(r) * w + c;
+        Vec3d p;
+        if (!unproject.point(c, r, depth.values[v], &p)) {
+          std::size_t seen = first_bad.load();
+          while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
+          }
+          p = unproject.near_point(c, r);
+        }
+        put(mesh.positions, v, p);
+      }
+    }
+  });
+  if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
+    return Error{source + ": pixel (" + std::to_string(bad % w) + ", " + std::to_string(bad / w) +
+                 "): radial depth " + std::to_string(depth.values[bad]) +
+                 " is shorter than the texel ray's distance from the light position"};
+  }
+
+  // Grid triangles: two per texel quad, wound to face away from the light.
+  const bool standard = unproject.standard_winding();
+  std::uint32_t* idx = mesh.indices.data();
+  const std::uint32_t uw = static_cast<std::uint32_t>(w);
+  tbb::parallel_for(tbb::blocked_range<int>(0, h - 1), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      std::uint32_t* out = idx + 6 * static_cast<std::size_t>(r) * (w - 1);
+      for (std::uint32_t c = 0; c + 1 < uw; ++c) {
+        const std::uint32_t a = static_cast<std::uint32_t>(r) * uw + c, b = a + 1, cc = a + uw,
+                            d = cc + 1;
+        if (standard) {
+          out[0] = a, out[1] = b, out[2] = cc, out[3] = b, out[4] = d, out[5] = cc;
+        } else {
+          out[0] = a, out[1] = cc, out[2] = b, out[3] = b, out[4] = cc, out[5] = d;
+        }
+        out += 6;
+      }
+    }
+  });
+
+  // Closing: fan to the apex (spot) or walls and a cap on the near plane (directional).
+  const std::vector<std::uint32_t> loop = border_loop(w, h, standard);
+  const std::size_t nb = loop.size();
+  std::uint32_t* out = idx + 6 * static_cast<std::size_t>(w - 1) * (h - 1);
+  const auto col_of = [&](std::uint32_t v) { return static_cast<int>(v % uw); };
+  const auto row_of = [&](std::uint32_t v) { return static_cast<int>(v / uw); };
+  if (light.type == LightType::spot) {
+    const std::uint32_t apex = static_cast<std::uint32_t>(grid_vertices);
+    put(mesh.positions, apex, unproject.apex());
+    for (std::size_t k = 0; k < nb; ++k) {
+      const std::uint32_t cur = loop[k], next = loop[(k + 1) % nb];
+      *out++ = next, *out++ = cur, *out++ = apex;
+    }
+  } else {
+    // Near-plane copies of the border, in loop order, then the cap's centre.
+    const std::uint32_t base = static_cast<std::uint32_t>(grid_vertices);
+    for (std::size_t k = 0; k < nb; ++k)
+      put(mesh.positions, base + k, unproject.near_point(col_of(loop[k]), row_of(loop[k])));
+    const Vec3d centre = 0.25 * (unproject.near_point(0, 0) + unproject.near_point(w - 1, 0) +
+                                 unproject.near_point(0, h - 1) + unproject.near_point(w - 1, h - 1));
+    const std::uint32_t cap = base + static_cast<std::uint32_t>(nb);
+    put(mesh.positions, cap, centre);
+    for (std::size_t k = 0; k < nb; ++k) {
+      const std::size_t k1 = (k + 1) % nb;
+      const std::uint32_t cur = loop[k], next = loop[k1];
+      const std::uint32_t cur_n = base + static_cast<std::uint32_t>(k);
+      const std::uint32_t next_n = base + static_cast<std::uint32_t>(k1);
+      *out++ = next, *out++ = cur, *out++ = cur_n;
+      *out++ = next, *out++ = cur_n, *out++ = next_n;
+      *out++ = next_n, *out++ = cur_n, *out++ = cap;
+    }
+  }
+  LV_CHECK_EQ(static_cast<std::size_t>(out - idx), mesh.indices.size());
+  return mesh;
+}
+
+}  // namespace lightvol

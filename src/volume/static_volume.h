@@ -1,0 +1,40 @@
+// The static light volume (DESIGN §3): one vertex per texel, closed to the light.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/light/light.h>
+
+namespace lightvol {
+
+struct VolumeOptions {
+  Space space = Space::world;
+};
+
+// Triangle and vertex counts of the static volume of a W×H map, in closed form.
+// spot: W·H + 1 vertices, 2(W−1)(H−1) + B triangles, B = 2(W−1) + 2(H−1) border edges.
+// directional: W·H + B + 1 vertices, 2(W−1)(H−1) + 3B triangles (walls 2B, cap B).
+struct VolumeCounts {
+  std::uint64_t vertices = 0;
+  std::uint64_t triangles = 0;
+};
+VolumeCounts static_volume_counts(LightType type, int width, int height);
+
+// The texel ring around a W×H grid: vertex indices (row-major, row·W + col) of the border, in the
+// direction the grid's boundary edges run when `standard` winding is used: top row left to right,
+// right column down, bottom row right to left, left column up. Reversed otherwise.
+std::vector<std::uint32_t> border_loop(int width, int height, bool standard);
+
+// Builds the static volume of a spot or directional light from its depth image:
+// grid vertices at each texel centre's ray and depth (Unprojector), triangulated quad by quad;
+// spot: a fan from the border to the light position; directional: the border extruded to the
+// near plane and capped by a fan around the cap's centre. Closed, edge-manifold, outward.
+// `source` names the depth image in errors (a radial depth no parallel ray reaches).
+Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
+                                 const VolumeOptions& options, const std::string& source);
+
+}  // namespace lightvol
