@@ -1,0 +1,81 @@
+// The headless GL context: a context can be had here (llvmpipe), float targets take additive
+// negative contributions, programs report compile errors, and read() returns top row first.
+#include <lightvol/gl/context.h>
+
+#include <gtest/gtest.h>
+
+namespace lightvol::gl {
+namespace {
+
+// A context per test binary: EGL contexts are cheap to keep, slow-ish to make.
+Context* shared_context() {
+  static Result<std::unique_ptr<Context>> ctx = Context::create();
+  return ctx ? ctx->get() : nullptr;
+}
+
+#define REQUIRE_GL()                                                                      \
+  if (shared_context() == nullptr)                                                        \
+    GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << Context::create().error().message
+
+const char* kTriangleVs = R"(#version 450 core
+void main() {
+  vec2 p = vec2((gl_VertexID == 1) ? 3.0 : -1.0, (gl_VertexID == 2) ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+})";
+
+TEST(GlContext, ReportsAFourFiveCoreContext) {
+  REQUIRE_GL();
+  EXPECT_FALSE(shared_context()->renderer().empty());
+  EXPECT_EQ(shared_context()->version().rfind("4.5", 0), 0u) << shared_context()->version();
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  EXPECT_GE(major * 10 + minor, 45);
+}
+
+TEST(GlContext, AdditiveFloatBlendingTakesNegativeValues) {
+  REQUIRE_GL();
+  Result<Program> program = Program::compile(kTriangleVs, R"(#version 450 core
+uniform float value;
+layout(location = 0) out float result;
+void main() { result = value * (gl_FragCoord.y < 2.0 ? 1.0 : 2.0); })", "test");
+  ASSERT_TRUE(program) << program.error().message;
+  Result<Framebuffer> fb = Framebuffer::create(3, 4, {GL_R32F}, false);
+  ASSERT_TRUE(fb) << fb.error().message;
+  fb->bind();
+  glClearColor(0, 0, 0, 0);
+  glClear(GL_COLOR_BUFFER_BIT);
+  glEnable(GL_BLEND);
+  glBlendFunc(GL_ONE, GL_ONE);
+  GLuint vao = 0;
+  glGenVertexArrays(1, &vao);
+  glBindVertexArray(vao);
+  program->use();
+  for (float v : {1.5f, -4.0f, 0.25f}) {
+    glUniform1f(program->uniform("value"), v);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glDisable(GL_BLEND);
+  glDeleteVertexArrays(1, &vao);
+  const std::vector<float> pixels = fb->read(0, 1);
+  ASSERT_EQ(pixels.size(), 12u);
+  // GL row 0 and 1 (y < 2) are the bottom two image rows; read() puts the top row first.
+  for (int row = 0; row < 4; ++row)
+    for (int col = 0; col < 3; ++col)
+      EXPECT_FLOAT_EQ(pixels[static_cast<std::size_t>(row * 3 + col)], row >= 2 ? -2.25f : -4.5f)
+          << "pixel " << col << "," << row;
+  EXPECT_EQ(pending_error(), "");
+}
+
+TEST(GlContext, CompileErrorsCarryTheLog) {
+  REQUIRE_GL();
+  Result<Program> program = Program::compile(kTriangleVs, "#version 450 core\nvoid main() { nope; }",
+                                             "broken");
+  ASSERT_FALSE(program);
+  EXPECT_NE(program.error().message.find("broken: fragment shader does not compile"),
+            std::string::npos)
+      << program.error().message;
+}
+
+}  // namespace
+}  // namespace lightvol::gl
