@@ -1,6 +1,7 @@
 #include <lightvol/depth/depth_image.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <filesystem>
 
@@ -103,7 +104,23 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   return image;
 }
 
+namespace {
+// OpenImageIO reads PFM but has no PFM writer: the format is a text header and little-endian
+// floats, rows stored bottom to top.
+static_assert(std::endian::native == std::endian::little, "PFM output assumes little-endian");
+Status write_pfm(const std::string& path, const DepthImage& image) {
+  std::string bytes = "Pf\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+  const std::size_t row_bytes = sizeof(float) * static_cast<std::size_t>(image.width);
+  for (int r = image.height - 1; r >= 0; --r)
+    bytes.append(reinterpret_cast<const char*>(&image.values[static_cast<std::size_t>(r) * image.width]), row_bytes);
+  return write_bytes_atomically(path, bytes);
+}
+}  // namespace
+
 Status write_depth_image(const std::string& path, const DepthImage& image) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+  if (extension == ".pfm") return write_pfm(path, image);
   return write_file_atomically(path, [&](const std::string& temp_path) -> Status {
     auto out = OIIO::ImageOutput::create(path);
     if (!out) return Error{path + ": cannot write images of this type: " + oiio_message(OIIO::geterror())};

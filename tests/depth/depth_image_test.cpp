@@ -1,0 +1,114 @@
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include <lightvol/depth/depth_image.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+DepthImage ramp(int w, int h) {
+  return test::make_depth(w, h, [](int c, int r) { return 0.01f * static_cast<float>(c + 10 * r); });
+}
+
+// Writes an image with the given channels through OpenImageIO directly.
+void write_raw(const std::string& path, int w, int h, const std::vector<std::string>& names,
+               OIIO::TypeDesc format, const std::vector<float>& pixels) {
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out);
+  OIIO::ImageSpec spec(w, h, static_cast<int>(names.size()), format);
+  spec.channelnames = names;
+  ASSERT_TRUE(out->open(path, spec));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+  ASSERT_TRUE(out->close());
+}
+
+void expect_error(const Result<DepthImage>& r, const std::string& needle) {
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find(needle), std::string::npos) << r.error().message;
+}
+
+TEST(DepthImage, FloatFormatsRoundTripExactly) {
+  test::TempDir dir;
+  const DepthImage in = ramp(7, 5);
+  for (const char* name : {"d.exr", "d.tif", "d.pfm"}) {
+    ASSERT_TRUE(write_depth_image(dir.file(name), in).ok()) << name;
+    Result<DepthImage> out = read_depth_image(dir.file(name));
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    EXPECT_EQ(out->width, 7);
+    EXPECT_EQ(out->height, 5);
+    EXPECT_EQ(out->values, in.values) << name;
+  }
+}
+
+TEST(DepthImage, Png16IsNormalizedWindowDepth) {
+  test::TempDir dir;
+  const DepthImage in = test::make_depth(4, 3, [](int c, int r) { return static_cast<float>(c * 3 + r) / 65535.0f * 1000; });
+  ASSERT_TRUE(write_depth_image(dir.file("d.png"), in).ok());
+  Result<DepthImage> out = read_depth_image(dir.file("d.png"));
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  for (std::size_t i = 0; i < in.values.size(); ++i) EXPECT_NEAR(out->values[i], in.values[i], 0.5 / 65535);
+}
+
+TEST(DepthImage, ChannelSelection) {
+  test::TempDir dir;
+  std::vector<float> px(3 * 2 * 2);
+  for (std::size_t i = 0; i < px.size(); ++i) px[i] = static_cast<float>(i);
+  const std::string path = dir.file("rgb.exr");
+  write_raw(path, 2, 2, {"R", "G", "B"}, OIIO::TypeDesc::FLOAT, px);
+  expect_error(read_depth_image(path), "choose the depth channel with --channel");
+  Result<DepthImage> g = read_depth_image(path, {"G"});
+  ASSERT_TRUE(g.ok()) << g.error().message;
+  EXPECT_EQ(g->values, (std::vector<float>{1, 4, 7, 10}));
+  expect_error(read_depth_image(path, {"Q"}), "no channel named 'Q'");
+
+  const std::string zpath = dir.file("rgbz.exr");
+  std::vector<float> pz(4 * 2 * 2, 0.5f);
+  write_raw(zpath, 2, 2, {"R", "G", "B", "Z"}, OIIO::TypeDesc::FLOAT, pz);
+  EXPECT_TRUE(read_depth_image(zpath).ok()) << "a channel named Z is the depth";
+}
+
+TEST(DepthImage, BadPixelsNameTheFirstOne) {
+  test::TempDir dir;
+  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.5f}) {
+    DepthImage in = ramp(6, 4);
+    in.values[2 * 6 + 3] = bad;
+    in.values[3 * 6 + 5] = bad;
+    ASSERT_TRUE(write_depth_image(dir.file("bad.exr"), in).ok());
+    const Result<DepthImage> r = read_depth_image(dir.file("bad.exr"));
+    expect_error(r, "pixel (3, 2)");
+    expect_error(r, dir.file("bad.exr"));
+  }
+}
+
+TEST(DepthImage, RejectsMissingTruncatedJunkTinyAnd8Bit) {
+  test::TempDir dir;
+  expect_error(read_depth_image(dir.file("none.exr")), "no such file");
+  expect_error(read_depth_image(dir.write("junk.exr", "this is not an image")), "junk.exr");
+  expect_error(read_depth_image(dir.path()), "is a directory");
+
+  const DepthImage big = test::make_depth(256, 256, [](int c, int r) { return 0.001f * static_cast<float>(c * r % 997); });
+  ASSERT_TRUE(write_depth_image(dir.file("full.exr"), big).ok());
+  std::string bytes;
+  {
+    std::ifstream in(dir.file("full.exr"), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  std::ofstream(dir.file("cut.exr"), std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  expect_error(read_depth_image(dir.file("cut.exr")), "cut.exr");
+
+  ASSERT_TRUE(write_depth_image(dir.file("tiny.exr"), test::constant_depth(1, 5, 0.5f)).ok());
+  expect_error(read_depth_image(dir.file("tiny.exr")), "at least 2x2");
+
+  write_raw(dir.file("eight.png"), 3, 3, {"Y"}, OIIO::TypeDesc::UINT8, std::vector<float>(9, 0.5f));
+  expect_error(read_depth_image(dir.file("eight.png")), "8-bit");
+}
+
+}  // namespace
+}  // namespace lightvol

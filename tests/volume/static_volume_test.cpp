@@ -1,0 +1,154 @@
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/volume/static_volume.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+constexpr double kTan30 = 0.57735026918962576;
+
+Mesh build(const Light& light, const DepthImage& depth, Space space = Space::world) {
+  Result<Mesh> m = build_static_volume(light, depth, {space}, "depth.exr");
+  EXPECT_TRUE(m.ok()) << (m.ok() ? "" : m.error().message);
+  return m.ok() ? std::move(*m) : Mesh{};
+}
+
+// A depth map with a raised box occluder and a sloped floor: not flat anywhere it matters.
+DepthImage occluded(int w, int h) {
+  return test::make_depth(w, h, [w, h](int c, int r) {
+    const bool box = c > w / 4 && c < w / 2 && r > h / 3 && r < 2 * h / 3;
+    return box ? 2.0f : 3.0f + 0.05f * static_cast<float>(c) + 0.02f * static_cast<float>(r);
+  });
+}
+
+TEST(StaticVolume, ClosedFormCounts) {
+  EXPECT_EQ(static_volume_counts(LightType::spot, 1024, 1024).triangles, 2'093'058u + 4 * 1023u);
+  EXPECT_EQ(static_volume_counts(LightType::spot, 1024, 1024).triangles, 2u * 1024 * 1024 - 2);
+  EXPECT_EQ(static_volume_counts(LightType::spot, 4096, 4096).triangles - 4 * 4095u, 33'538'050u);
+}
+
+TEST(StaticVolume, SpotExactCountsClosedOutwardNoDegenerates) {
+  const Light light = test::light_from_json(test::spot_json("linear", 1.3));
+  for (auto [w, h] : {std::pair{2, 2}, {3, 3}, {4, 4}, {5, 3}, {2, 7}, {16, 9}, {33, 32}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    const Mesh m = build(light, occluded(w, h));
+    EXPECT_EQ(m.num_vertices(), static_cast<std::size_t>(w * h + 1));
+    EXPECT_EQ(m.num_triangles(), static_cast<std::size_t>(2 * (w - 1) * (h - 1) + 2 * (w - 1) + 2 * (h - 1)));
+    if (w == h) {
+      EXPECT_EQ(m.num_triangles(), static_cast<std::size_t>(2 * w * w - 2));
+    }
+    EXPECT_TRUE(test::is_closed_and_oriented(m));
+    EXPECT_TRUE(test::has_no_degenerate_triangles(m));
+    EXPECT_GT(signed_volume(m), 0);
+  }
+}
+
+TEST(StaticVolume, DirectionalExactCountsClosedOutward) {
+  const Light light = test::light_from_json(test::directional_json("linear"));
+  for (auto [w, h] : {std::pair{2, 2}, {3, 3}, {6, 4}, {3, 8}, {17, 17}}) {
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+    const Mesh m = build(light, occluded(w, h));
+    const std::size_t border = 2 * (w - 1) + 2 * (h - 1);
+    EXPECT_EQ(m.num_vertices(), static_cast<std::size_t>(w * h) + border + 1);
+    EXPECT_EQ(m.num_triangles(), static_cast<std::size_t>(2 * (w - 1) * (h - 1)) + 3 * border);
+    EXPECT_TRUE(test::is_closed_and_oriented(m));
+    EXPECT_TRUE(test::has_no_degenerate_triangles(m));
+    EXPECT_GT(signed_volume(m), 0);
+  }
+}
+
+TEST(StaticVolume, SpotOverFlatFloorIsThePyramid) {
+  // Floor at eye distance 4 (world y = 0): the grid is the rectangle through the texel centres,
+  // the volume the pyramid over it with height 4.
+  for (auto [w, h] : {std::pair{2, 2}, {9, 7}, {64, 48}}) {
+    const double aspect = 1.25;
+    const Light light = test::light_from_json(test::spot_json("linear", aspect));
+    const Mesh m = build(light, test::constant_depth(w, h, 4.0f));
+    const double half_x = 4 * kTan30 * aspect * (1.0 - 1.0 / w);
+    const double half_y = 4 * kTan30 * (1.0 - 1.0 / h);
+    const double pyramid = (2 * half_x) * (2 * half_y) * 4 / 3;
+    EXPECT_NEAR(signed_volume(m), pyramid, 1e-5 * pyramid) << w << "x" << h;
+  }
+}
+
+TEST(StaticVolume, DirectionalVolumeIsTheHeightFieldIntegral) {
+  // Linear depth z(c, r) below the near plane (near 0): the volume between the cap and a
+  // triangulated height field is Σ area · mean height over the grid triangles.
+  const int w = 9, h = 6;
+  const DepthImage d = occluded(w, h);
+  const Mesh m = build(test::light_from_json(test::directional_json("linear")), d);
+  const double dx = 10.0 / w, dy = 8.0 / h;
+  double expected = 0;
+  for (int r = 0; r + 1 < h; ++r)
+    for (int c = 0; c + 1 < w; ++c) {
+      const double a = d.at(c, r), b = d.at(c + 1, r), cc = d.at(c, r + 1), dd = d.at(c + 1, r + 1);
+      expected += 0.5 * dx * dy * ((a + b + cc) / 3 + (b + dd + cc) / 3);
+    }
+  EXPECT_NEAR(signed_volume(m), expected, 1e-5 * expected);
+}
+
+TEST(StaticVolume, FlipYAndLightSpaceStayOutward) {
+  Light light = test::light_from_json(test::spot_json("window"));
+  const DepthImage d = test::make_depth(8, 5, [](int c, int r) { return 0.9f + 0.01f * static_cast<float>((c * 7 + r * 3) % 5); });
+  const double reference = signed_volume(build(light, d));
+  light.flip_y = true;
+  const Mesh flipped = build(light, d);
+  EXPECT_TRUE(test::is_closed_and_oriented(flipped));
+  EXPECT_GT(signed_volume(flipped), 0);
+  const Mesh eye = build(light, d, Space::light);
+  EXPECT_TRUE(test::is_closed_and_oriented(eye));
+  EXPECT_NEAR(signed_volume(eye), signed_volume(flipped), 1e-4 * reference);
+}
+
+TEST(StaticVolume, MirroringViewMatrixStaysOutward) {
+  // A view matrix with a negative determinant (x mirrored) must still give an outward volume.
+  const Light base = test::light_from_json(test::spot_json("linear"));
+  std::string view = "[", proj = "[";
+  Mat4d mirror = Mat4d::identity();
+  mirror(0, 0) = -1;
+  const Mat4d v = mirror * base.view;
+  for (int i = 0; i < 16; ++i) {
+    view += std::to_string(v.m[i]) + (i < 15 ? "," : "]");
+    proj += std::to_string(base.projection.m[i]) + (i < 15 ? "," : "]");
+  }
+  const Light light = test::light_from_json(R"({"type":"spot","depth":"linear","view":)" + view + R"(,"projection":)" + proj + "}");
+  const Mesh m = build(light, occluded(6, 5));
+  EXPECT_TRUE(test::is_closed_and_oriented(m));
+  EXPECT_GT(signed_volume(m), 0);
+}
+
+TEST(StaticVolume, VerticesSitOnTheirTexelRays) {
+  const Light light = test::light_from_json(test::spot_json("radial"));
+  const DepthImage d = occluded(5, 4);
+  const Mesh m = build(light, d);
+  const Unprojector u(light, 5, 4, 0, Space::world);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) {
+      Vec3d p;
+      ASSERT_TRUE(u.point(c, r, d.at(c, r), &p));
+      const auto v = m.vertex(static_cast<std::size_t>(r * 5 + c));
+      EXPECT_NEAR(v[0], p.x, 1e-5);
+      EXPECT_NEAR(v[1], p.y, 1e-5);
+      EXPECT_NEAR(v[2], p.z, 1e-5);
+      EXPECT_NEAR(length(Vec3d{v[0], v[1] - 4.0, v[2]}), d.at(c, r), 1e-5);
+    }
+  const auto apex = m.vertex(20);
+  EXPECT_EQ(apex, (std::array<float, 3>{0, 4, 0}));
+}
+
+TEST(StaticVolume, UnreachableRadialDepthNamesThePixel) {
+  const Light light = test::light_from_json(test::directional_json("radial"));
+  DepthImage d = test::constant_depth(4, 4, 8.0f);
+  d.values[1 * 4 + 2] = 0.1f;
+  Result<Mesh> m = build_static_volume(light, d, {}, "rad.exr");
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.error().message.find("rad.exr: pixel (2, 1)"), std::string::npos) << m.error().message;
+}
+
+}  // namespace
+}  // namespace lightvol
