@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs what lightvol needs to build and test on Debian bookworm (as root, or through sudo).
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config git time bc python3
+  libopenmesh-dev libdraco-dev libtinygltf-dev libopenimageio-dev openimageio-tools
+  libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtbb-dev
+  nlohmann-json3-dev libcli11-dev
+  libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "installing: ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
