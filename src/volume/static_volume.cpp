@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/volume/closing.h>
 
 namespace lightvol {
 
@@ -58,9 +59,9 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   LV_CHECK_LT(counts.vertices, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});
 
   Mesh mesh;
-  mesh.positions.resize(3 * counts.vertices);
-  mesh.indices.resize(3 * counts.triangles);
   const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  mesh.positions.resize(3 * grid_vertices);
+  mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
 
   // Grid vertices, row by row; remember the first texel a parallel ray cannot reach.
   std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
@@ -106,38 +107,12 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   });
 
   // Closing: fan to the apex (spot) or walls and a cap on the near plane (directional).
-  const std::vector<std::uint32_t> loop = border_loop(w, h, standard);
-  const std::size_t nb = loop.size();
-  std::uint32_t* out = idx + 6 * static_cast<std::size_t>(w - 1) * (h - 1);
-  const auto col_of = [&](std::uint32_t v) { return static_cast<int>(v % uw); };
-  const auto row_of = [&](std::uint32_t v) { return static_cast<int>(v / uw); };
-  if (light.type == LightType::spot) {
-    const std::uint32_t apex = static_cast<std::uint32_t>(grid_vertices);
-    put(mesh.positions, apex, unproject.apex());
-    for (std::size_t k = 0; k < nb; ++k) {
-      const std::uint32_t cur = loop[k], next = loop[(k + 1) % nb];
-      *out++ = next, *out++ = cur, *out++ = apex;
-    }
-  } else {
-    // Near-plane copies of the border, in loop order, then the cap's centre.
-    const std::uint32_t base = static_cast<std::uint32_t>(grid_vertices);
-    for (std::size_t k = 0; k < nb; ++k)
-      put(mesh.positions, base + k, unproject.near_point(col_of(loop[k]), row_of(loop[k])));
-    const Vec3d centre = 0.25 * (unproject.near_point(0, 0) + unproject.near_point(w - 1, 0) +
-                                 unproject.near_point(0, h - 1) + unproject.near_point(w - 1, h - 1));
-    const std::uint32_t cap = base + static_cast<std::uint32_t>(nb);
-    put(mesh.positions, cap, centre);
-    for (std::size_t k = 0; k < nb; ++k) {
-      const std::size_t k1 = (k + 1) % nb;
-      const std::uint32_t cur = loop[k], next = loop[k1];
-      const std::uint32_t cur_n = base + static_cast<std::uint32_t>(k);
-      const std::uint32_t next_n = base + static_cast<std::uint32_t>(k1);
-      *out++ = next, *out++ = cur, *out++ = cur_n;
-      *out++ = next, *out++ = cur_n, *out++ = next_n;
-      *out++ = next_n, *out++ = cur_n, *out++ = cap;
-    }
-  }
-  LV_CHECK_EQ(static_cast<std::size_t>(out - idx), mesh.indices.size());
+  std::vector<BorderVertex> ring;
+  for (const std::uint32_t v : border_loop(w, h, standard))
+    ring.push_back({v, static_cast<int>(v % uw), static_cast<int>(v / uw)});
+  append_closing(light.type, unproject, w, h, ring, &mesh);
+  LV_CHECK_EQ(mesh.num_vertices(), counts.vertices);
+  LV_CHECK_EQ(mesh.num_triangles(), counts.triangles);
   return mesh;
 }
 

@@ -1,0 +1,124 @@
+// Adaptive tessellation of one depth image's texel grid (DESIGN §3 "Adaptive"; paper §4.1).
+//
+// The grid's vertices are texels (col, row); a quadtree of cells covers the (W−1)×(H−1) quads.
+// A cell of level L spans 2^L quads per side, clipped at the far edges of a grid whose size is not
+// 2^k + 1, so every cell corner is a texel. A cell is split while its measure exceeds the bound:
+//   - max_error: the largest world distance, over the texels the cell covers, between the texel's
+//     point and the point of its ray on the cell's triangles, whose window depth is interpolated
+//     linearly (a plane of the scene stays a plane in window depth, and a flat triangle of the
+//     emitted mesh is exactly such an interpolation along every ray);
+//   - laplacian: the paper's edge map, the largest |discrete Laplacian| of window depth over the
+//     cell's texels.
+// Both measures form a pyramid (each cell: max of its own value and its children's), built once and
+// thresholded for any bound. Cells are then 2:1 balanced across edges (restricted quadtree), and
+// each leaf emits the one of 16 edge-split configurations (2 to 6 triangles) that uses the
+// midpoints of the edges its finer neighbours split: no T-junctions. In max_error mode, a leaf
+// whose split configuration breaks the bound is split too, so the bound holds for exactly the
+// triangles emitted.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <lightvol/core/result.h>
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/light/light.h>
+
+namespace lightvol {
+
+// Window depth of every texel of one depth image, and the world distance between points of a
+// texel's ray at two window depths. For linear and radial encodings the stored depth is converted
+// to the window depth of the light's projection (omni: of face `face`).
+class TexelDepths {
+ public:
+  // Errors name `source` and the pixel: a radial depth that a parallel ray never reaches.
+  static Result<TexelDepths> create(const Light& light, const DepthImage& depth, int face,
+                                    const std::string& source);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // The texel's window depth, clamped to [0, 1] (its vertex lies on the far plane at 1).
+  double window_depth(int col, int row) const { return depth_[index(col, row)]; }
+  // World distance between the point of texel (col, row)'s ray at window depth `d` and its own point.
+  double error(int col, int row, double d) const;
+
+  // For the row loops of the tessellator: the error is |d − depth|·scale / |w0 + d·w1| with
+  // w0 = w0_c + col·w0_dc + row·w0_dr; with `uniform()`, scale = uniform_scale() and the
+  // denominator is 1 everywhere (orthographic projections).
+  bool uniform() const { return uniform_; }
+  double uniform_scale() const { return uniform_scale_; }
+  const double* depth_row(int row) const { return depth_.data() + index(0, row); }
+  const double* scale_row(int row) const { return scale_.data() + index(0, row); }
+  double w0(int col, int row) const { return w0_c_ + col * w0_dc_ + row * w0_dr_; }
+  double w0_dc() const { return w0_dc_; }
+  double w1() const { return w1_; }
+
+ private:
+  std::size_t index(int col, int row) const {
+    return static_cast<std::size_t>(row) * static_cast<std::size_t>(width_) +
+           static_cast<std::size_t>(col);
+  }
+  int width_ = 0, height_ = 0;
+  std::vector<double> depth_;  // window depth per texel
+  std::vector<double> scale_;  // per texel, empty when uniform
+  bool uniform_ = false;
+  double uniform_scale_ = 0;
+  double w0_c_ = 1, w0_dc_ = 0, w0_dr_ = 0, w1_ = 0;
+};
+
+enum class Refinement { max_error, laplacian };
+
+// Sides of a grid: top is row 0, right column W−1, bottom row H−1, left column 0.
+enum GridSide : int { kTop = 0, kRight = 1, kBottom = 2, kLeft = 3 };
+
+// Texels on each side that must be vertices (positions along the side: columns for top and
+// bottom, rows for left and right), e.g. the border vertices of a neighbouring omni face.
+struct BorderSplits {
+  std::vector<int> side[4];
+};
+
+// One tessellated grid: the texels used as vertices and the triangles over them.
+struct AdaptiveGrid {
+  int width = 0, height = 0;
+  std::vector<std::uint32_t> vertices;  // texel ids row·W + col of the vertices, ascending
+  std::vector<std::uint32_t> indices;   // three per triangle, into `vertices`, wound like the
+                                        // static grid (Unprojector::standard_winding())
+  std::vector<int> border[4];           // per GridSide, ascending positions of its vertices
+                                        // (both corners included): what a closing or seam uses
+  std::uint64_t leaves = 0;             // quadtree leaves (cells emitted)
+  int fixup_rounds = 0;                 // rounds of splitting leaves whose configuration broke the bound
+  double balance_seconds = 0;           // threshold, balance and fix-up
+  double emit_seconds = 0;
+
+  std::size_t num_triangles() const { return indices.size() / 3; }
+  // Index in `vertices` of texel (col, row), which must be a vertex.
+  std::uint32_t vertex_index(int col, int row) const;
+};
+
+// The pyramid of a refinement measure over one grid, reusable for any number of bounds.
+class RefinementPyramid {
+ public:
+  RefinementPyramid(TexelDepths texels, Refinement refinement);
+
+  const TexelDepths& texels() const { return texels_; }
+  Refinement refinement() const { return refinement_; }
+  double seconds() const { return seconds_; }  // time to build the pyramid
+
+  // Tessellates at `bound` (max_error: world units; laplacian: the threshold T). `standard`
+  // chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
+  AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
+
+  // The largest world distance, over all texels, between a texel's point and its ray's point on
+  // the grid's triangles (measured on the triangles themselves, not on the quadtree).
+  double measure(const AdaptiveGrid& grid) const;
+
+ private:
+  TexelDepths texels_;
+  Refinement refinement_;
+  int top_ = 0;                            // level of the root cell
+  std::vector<std::vector<float>> value_;  // per level ≥ 1, per cell (row-major): the measure
+  double seconds_ = 0;
+};
+
+}  // namespace lightvol
