@@ -1,0 +1,365 @@
+#include <lightvol/airlight/airlight.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include <lightvol/core/check.h>
+
+namespace lightvol {
+
+std::string_view to_string(PhaseType type) {
+  switch (type) {
+    case PhaseType::isotropic: return "isotropic";
+    case PhaseType::hg: return "hg";
+    case PhaseType::schlick: return "schlick";
+  }
+  return "?";
+}
+
+double Phase::operator()(double cos_theta) const {
+  constexpr double inv4pi = 1.0 / (4.0 * std::numbers::pi);
+  switch (type) {
+    case PhaseType::isotropic: return inv4pi;
+    case PhaseType::hg: {
+      const double denom = 1.0 + g * g - 2.0 * g * cos_theta;
+      return inv4pi * (1.0 - g * g) / (denom * std::sqrt(denom));
+    }
+    case PhaseType::schlick: {
+      const double denom = 1.0 - k * cos_theta;
+      return inv4pi * (1.0 - k * k) / (denom * denom);
+    }
+  }
+  return inv4pi;
+}
+
+// ---- JSON ---------------------------------------------------------------------------------------
+
+namespace {
+
+using nlohmann::json;
+
+std::string fmt(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+Result<std::string> read_text(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open " + what + ": " + std::strerror(errno)};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{path + ": cannot read " + what};
+  return text.str();
+}
+
+Result<json> parse_object(std::string_view text, const std::string& source, const char* what) {
+  json root;
+  try {
+    root = json::parse(text.begin(), text.end());
+  } catch (const json::parse_error& e) {
+    std::string message = e.what();
+    const auto at = message.find("parse error");
+    return Error{source + ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
+  }
+  if (!root.is_object()) return Error{source + ": expected a JSON object describing " + what};
+  return root;
+}
+
+Error key_error(const std::string& source, const std::string& key, const std::string& why) {
+  return {source + ": key '" + key + "': " + why};
+}
+
+Result<double> number(const json& obj, const std::string& key, const std::string& source) {
+  const json& v = obj.at(key);
+  if (!v.is_number() || !std::isfinite(v.get<double>()))
+    return key_error(source, key, "expected a finite number, got " + v.dump());
+  return v.get<double>();
+}
+
+}  // namespace
+
+Result<Medium> parse_medium(std::string_view json_text, const std::string& source) {
+  Result<json> root = parse_object(json_text, source, "a medium");
+  if (!root) return root.error();
+  Medium medium;
+  for (const auto& [key, value] : root->items()) {
+    if (key != "scattering" && key != "absorption" && key != "intensity" && key != "phase")
+      return key_error(source, key, "unknown key (known: scattering, absorption, intensity, phase)");
+  }
+  if (!root->contains("scattering")) return key_error(source, "scattering", "missing");
+  for (const char* key : {"scattering", "absorption", "intensity"}) {
+    if (!root->contains(key)) continue;
+    Result<double> x = number(*root, key, source);
+    if (!x) return x.error();
+    if (*x < 0) return key_error(source, key, "must be >= 0, got " + fmt(*x));
+    if (std::strcmp(key, "scattering") == 0) medium.scattering = *x;
+    if (std::strcmp(key, "absorption") == 0) medium.absorption = *x;
+    if (std::strcmp(key, "intensity") == 0) medium.intensity = *x;
+  }
+  if (root->contains("phase")) {
+    const json& phase = root->at("phase");
+    if (!phase.is_object())
+      return key_error(source, "phase", "expected an object {\"type\": ..., \"g\" or \"k\": ...}");
+    for (const auto& [key, value] : phase.items()) {
+      if (key != "type" && key != "g" && key != "k")
+        return key_error(source, "phase." + key, "unknown key (known: type, g, k)");
+    }
+    if (!phase.contains("type")) return key_error(source, "phase.type", "missing");
+    if (!phase.at("type").is_string())
+      return key_error(source, "phase.type", "expected a string, got " + phase.at("type").dump());
+    const std::string type = phase.at("type").get<std::string>();
+    std::string parameter;
+    if (type == "isotropic") {
+      medium.phase.type = PhaseType::isotropic;
+    } else if (type == "hg") {
+      medium.phase.type = PhaseType::hg;
+      parameter = "g";
+    } else if (type == "schlick") {
+      medium.phase.type = PhaseType::schlick;
+      parameter = "k";
+    } else {
+      return key_error(source, "phase.type",
+                       "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + type + "\"");
+    }
+    for (const char* key : {"g", "k"}) {
+      if (!phase.contains(key)) continue;
+      if (parameter != key)
+        return key_error(source, std::string("phase.") + key,
+                         "does not apply to a phase of type \"" + type + "\"");
+      Result<double> x = number(phase, key, source);
+      if (!x) return key_error(source, std::string("phase.") + key, "expected a finite number");
+      if (!(std::abs(*x) < 1))
+        return key_error(source, std::string("phase.") + key, "must lie in (-1, 1), got " + fmt(*x));
+      (parameter == "g" ? medium.phase.g : medium.phase.k) = *x;
+    }
+  }
+  return medium;
+}
+
+Result<Medium> load_medium(const std::string& path) {
+  Result<std::string> text = read_text(path, "medium description");
+  if (!text) return text.error();
+  return parse_medium(*text, path);
+}
+
+Result<Camera> parse_camera(std::string_view json_text, const std::string& source) {
+  Result<json> root = parse_object(json_text, source, "a camera");
+  if (!root) return root.error();
+  Camera camera;
+  for (const char* key : {"width", "height"}) {
+    if (!root->contains(key)) return key_error(source, key, "missing");
+    const json& v = root->at(key);
+    if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 16384)
+      return key_error(source, key, "expected an integer in [1, 16384], got " + v.dump());
+    (std::strcmp(key, "width") == 0 ? camera.width : camera.height) = v.get<int>();
+    root->erase(key);
+  }
+  if (!root->contains("type")) (*root)["type"] = "spot";
+  if (root->at("type") == "omni") return key_error(source, "type", "a camera cannot be an omni light");
+  Result<Light> view = parse_light(root->dump(), source);
+  if (!view) return view.error();
+  camera.view = *view;
+  return camera;
+}
+
+Result<Camera> load_camera(const std::string& path) {
+  Result<std::string> text = read_text(path, "camera description");
+  if (!text) return text.error();
+  return parse_camera(*text, path);
+}
+
+// ---- camera rays --------------------------------------------------------------------------------
+
+Ray pixel_ray(const Camera& camera, int col, int row) {
+  // Pixel centre in NDC, sampled as Unprojector samples texels.
+  const double x = 2.0 * (col + 0.5) / camera.width - 1.0;
+  const double y_down = 2.0 * (row + 0.5) / camera.height - 1.0;
+  const double y = camera.view.flip_y ? y_down : -y_down;
+  bool ok = false;
+  const Mat4d inv = inverse(camera.view.projection * camera.view.view, &ok);
+  LV_CHECK(ok);
+  const Vec3d near = inv.transform_point({x, y, -1});
+  const Vec3d far = inv.transform_point({x, y, 1});
+  Ray ray;
+  ray.direction = normalize(far - near);
+  ray.origin = camera.view.is_perspective() ? camera.view.position : near;
+  return ray;
+}
+
+Result<std::vector<double>> surface_distances(const Camera& camera, const std::vector<float>& depth,
+                                              int width, int height, const std::string& source) {
+  if (width != camera.width || height != camera.height)
+    return Error{source + ": camera depth image is " + std::to_string(width) + "x" +
+                 std::to_string(height) + " but the camera is " + std::to_string(camera.width) +
+                 "x" + std::to_string(camera.height)};
+  LV_CHECK_EQ(depth.size(), static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  const Light& v = camera.view;
+  bool ok = false;
+  const Mat4d inv_p = inverse(v.projection, &ok);
+  LV_CHECK(ok);
+  std::vector<double> t(depth.size(), std::numeric_limits<double>::infinity());
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * width + col;
+      const double d = depth[i];
+      if (!std::isfinite(d) || d < 0)
+        return Error{source + ": pixel (" + std::to_string(col) + ", " + std::to_string(row) +
+                     "): depth " + fmt(d) + " is not a finite non-negative number"};
+      const Ray ray = pixel_ray(camera, col, row);
+      const bool far = (v.depth == DepthEncoding::window && d >= 1.0) ||
+                       (v.depth == DepthEncoding::linear && d >= v.far);
+      if (far) continue;
+      if (v.depth == DepthEncoding::radial) {
+        t[i] = d;  // Euclidean distance from the eye (perspective camera)
+        if (d >= v.far) t[i] = std::numeric_limits<double>::infinity();
+        continue;
+      }
+      // Window or linear depth: the point on the ray whose eye-space −z is the stored distance.
+      double z_eye = d;
+      if (v.depth == DepthEncoding::window) {
+        z_eye = -inv_p.transform_point({0, 0, 2.0 * d - 1.0}).z;
+      }
+      const Vec3d dir_eye = v.view.transform_vector(ray.direction);  // rotation only
+      const Vec3d origin_eye = v.view.transform_point(ray.origin);
+      // −(origin_eye.z + t·dir_eye.z) = z_eye
+      t[i] = (-z_eye - origin_eye.z) / dir_eye.z;
+      if (t[i] < 0) t[i] = 0;
+    }
+  }
+  return t;
+}
+
+// ---- quadrature ---------------------------------------------------------------------------------
+
+namespace {
+
+// Gauss–Legendre nodes and weights on [−1, 1], by Newton's method on P_n.
+struct GaussLegendre {
+  std::vector<double> x, w;
+  explicit GaussLegendre(int n) {
+    x.resize(n);
+    w.resize(n);
+    for (int i = 0; i < n; ++i) {
+      double z = std::cos(std::numbers::pi * (i + 0.75) / (n + 0.5));
+      double dp = 0;
+      for (int iter = 0; iter < 100; ++iter) {
+        double p0 = 1, p1 = z;
+        for (int k = 2; k <= n; ++k) {
+          const double p2 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p0) / k;
+          p0 = p1;
+          p1 = p2;
+        }
+        dp = n * (z * p1 - p0) / (z * z - 1);
+        const double dz = p1 / dp;
+        z -= dz;
+        if (std::abs(dz) < 1e-16) break;
+      }
+      x[i] = z;
+      w[i] = 2.0 / ((1 - z * z) * dp * dp);
+    }
+  }
+};
+
+const GaussLegendre& gl8() {
+  static const GaussLegendre rule(8);
+  return rule;
+}
+
+template <class F>
+double gauss(const F& f, double a, double b) {
+  const GaussLegendre& r = gl8();
+  const double mid = 0.5 * (a + b), half = 0.5 * (b - a);
+  double s = 0;
+  for (std::size_t i = 0; i < r.x.size(); ++i) s += r.w[i] * f(mid + half * r.x[i]);
+  return s * half;
+}
+
+template <class F>
+double adaptive(const F& f, double a, double b, double whole, double tol, int depth) {
+  const double mid = 0.5 * (a + b);
+  const double left = gauss(f, a, mid), right = gauss(f, mid, b);
+  if (depth <= 0 || std::abs(left + right - whole) <= tol) return left + right;
+  return adaptive(f, a, mid, left, 0.5 * tol, depth - 1) +
+         adaptive(f, mid, b, right, 0.5 * tol, depth - 1);
+}
+
+// ∫ₐᵇ f with panels of at most 0.1 rad, each refined adaptively to ~1e-13 of the integrand scale.
+template <class F>
+double integrate(const F& f, double a, double b, double scale) {
+  if (a == b) return 0;
+  const double sign = b > a ? 1.0 : -1.0;
+  if (b < a) std::swap(a, b);
+  const int panels = std::max(1, static_cast<int>(std::ceil((b - a) / 0.1)));
+  const double width = (b - a) / panels;
+  double sum = 0;
+  for (int i = 0; i < panels; ++i) {
+    const double lo = a + i * width, hi = (i + 1 == panels) ? b : lo + width;
+    sum += adaptive(f, lo, hi, gauss(f, lo, hi), 1e-13 * scale * (hi - lo), 20);
+  }
+  return sign * sum;
+}
+
+}  // namespace
+
+double sun_f(double u, double v) {
+  LV_CHECK(u >= 0);
+  return integrate([u](double xi) { return std::exp(-u * std::tan(xi)); }, 0.0, v, 1.0);
+}
+
+double phase_integral(const Phase& phase, double u, double a, double b) {
+  const double scale = std::max(phase(1.0), phase(-1.0));
+  return integrate(
+      [&](double xi) { return phase(std::cos(2.0 * xi)) * std::exp(-u * std::tan(xi)); }, a, b,
+      scale);
+}
+
+// ---- RayAirlight --------------------------------------------------------------------------------
+
+RayAirlight::RayAirlight(const Light& light, const Medium& medium, const Ray& ray)
+    : directional_(light.type == LightType::directional), medium_(medium) {
+  const double st = medium.extinction();
+  if (directional_) {
+    const Vec3d f = light.direction;
+    const double k = dot(ray.direction, f);
+    const double z_eye = dot(ray.origin - light.position, f) - light.near;
+    dir_scale_ = medium.scattering * medium.intensity * medium.phase(-k) * std::exp(-st * z_eye);
+    dir_rate_ = st * (1.0 + k);
+    return;
+  }
+  const Vec3d to_light = light.position - ray.origin;
+  s0_ = dot(to_light, ray.direction);
+  h_ = length(cross(ray.direction, to_light));
+  // A ray through the light itself: keep h positive (the airlight is then very large, as it is).
+  h_ = std::max(h_, 1e-12 * std::max(1.0, length(to_light)));
+  const double gamma = std::atan2(h_, s0_);
+  xi0_ = 0.5 * gamma;
+  scale_ = 2.0 * medium.scattering * medium.intensity * std::exp(-st * s0_) / h_;
+}
+
+double RayAirlight::xi(double t) const {
+  if (std::isinf(t)) return 0.5 * std::numbers::pi;
+  return 0.25 * std::numbers::pi + 0.5 * std::atan((t - s0_) / h_);
+}
+
+double RayAirlight::operator()(double t) const {
+  if (!(t > 0)) return 0;
+  if (directional_) {
+    if (std::isinf(t)) return dir_rate_ > 0 ? dir_scale_ / dir_rate_ : std::numeric_limits<double>::infinity();
+    const double x = dir_rate_ * t;
+    // (1 − e^(−x)) / rate, with its limit t for x → 0.
+    return dir_scale_ * (std::abs(x) < 1e-8 ? t * (1 - 0.5 * x) : -std::expm1(-x) / dir_rate_);
+  }
+  const double u = medium_.extinction() * h_;
+  return scale_ * phase_integral(medium_.phase, u, xi0_, xi(t));
+}
+
+}  // namespace lightvol

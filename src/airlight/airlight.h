@@ -1,0 +1,116 @@
+// Single-scattering airlight in a homogeneous medium (DESIGN §6), in double precision, and the
+// medium and camera descriptions that `lightvol render` reads.
+//
+// A ray leaves the eye E along the unit direction ω; La(0, t) is the light scattered toward the eye
+// from its first t world units. Summed with signs over a light volume's fragments along the ray
+// (+ for back faces, − for front faces, t clamped to the visible surface), it is the pixel's
+// airlight with respect to the shadow map.
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <lightvol/core/math.h>
+#include <lightvol/core/result.h>
+#include <lightvol/light/light.h>
+
+namespace lightvol {
+
+// ---- phase functions ----------------------------------------------------------------------------
+
+enum class PhaseType { isotropic, hg, schlick };
+std::string_view to_string(PhaseType type);
+
+// Phase function over cos θ, θ the angle between the light's propagation direction and the
+// direction toward the eye (θ = 0: forward scattering). Normalized over the sphere (1/sr).
+struct Phase {
+  PhaseType type = PhaseType::isotropic;
+  double g = 0;  // Henyey–Greenstein asymmetry, (−1, 1)
+  double k = 0;  // Schlick parameter, (−1, 1)
+
+  double operator()(double cos_theta) const;
+};
+
+// ---- medium -------------------------------------------------------------------------------------
+
+struct Medium {
+  double scattering = 0.05;  // σs, 1/world unit
+  double absorption = 0.0;   // σa, 1/world unit
+  double intensity = 1.0;    // I: W/sr for spot and omni lights, W/m² for directional lights
+  Phase phase;
+
+  double extinction() const { return scattering + absorption; }  // σt
+};
+
+// Parses {"scattering", "absorption", "intensity", "phase": {"type": "isotropic"|"hg"|"schlick",
+// "g" | "k"}}. All keys optional except "scattering"; defaults as above. Errors name `source` and
+// the key: unknown keys, negative coefficients, |g| or |k| ≥ 1, a parameter of another phase type.
+Result<Medium> parse_medium(std::string_view json_text, const std::string& source);
+Result<Medium> load_medium(const std::string& path);
+
+// ---- camera -------------------------------------------------------------------------------------
+
+// A camera is a light description (DESIGN §2, "type" defaults to "spot"; a directional type gives an
+// orthographic camera) plus the image size. Its "depth" key is the encoding of the camera depth
+// image that `lightvol render --depth` reads.
+struct Camera {
+  Light view;  // position, direction, projection, near/far, depth encoding, flip_y
+  int width = 0;
+  int height = 0;
+};
+
+// Errors name `source` and the key: missing or non-integer "width"/"height" (1..16384), omni
+// cameras, and everything parse_light rejects.
+Result<Camera> parse_camera(std::string_view json_text, const std::string& source);
+Result<Camera> load_camera(const std::string& path);
+
+// A world-space ray through the centre of pixel (col, row) (first row = top unless flip_y).
+struct Ray {
+  Vec3d origin;     // perspective: the eye; orthographic: the pixel's point on the near plane
+  Vec3d direction;  // unit
+};
+Ray pixel_ray(const Camera& camera, int col, int row);
+
+// Distance along each pixel's ray to the visible surface, from the camera's depth image (its size
+// must be the camera's). Depths at or beyond the far plane ("nothing hit") give +infinity. The
+// result is row-major, first row first. Errors name `source` and the size mismatch.
+Result<std::vector<double>> surface_distances(const Camera& camera, const std::vector<float>& depth,
+                                              int width, int height, const std::string& source);
+
+// ---- airlight -----------------------------------------------------------------------------------
+
+// Sun et al. 2005: F(u, v) = ∫₀ᵛ exp(−u tan ξ) dξ for u ≥ 0, 0 ≤ v ≤ π/2, by Gauss–Legendre.
+double sun_f(double u, double v);
+
+// ∫ from a to b of p(cos 2ξ)·exp(−u tan ξ) dξ (0 ≤ a, b ≤ π/2), composite Gauss–Legendre to
+// about 1e-12 relative. The point-light integrand of DESIGN §6.
+double phase_integral(const Phase& phase, double u, double a, double b);
+
+// La(0, t) along one ray for one light and medium, in double precision.
+class RayAirlight {
+ public:
+  // `light` gives the type (spot and omni use the point-light formula, directional the closed
+  // form), position and direction. `ray.direction` must be unit.
+  RayAirlight(const Light& light, const Medium& medium, const Ray& ray);
+
+  // La(0, t) for t ≥ 0 (t = +infinity allowed); 0 for t ≤ 0.
+  double operator()(double t) const;
+
+  // Point lights: the distance h of the light from the ray's line, the ray parameter s0 of the
+  // point closest to it, and ξ(t) = π/4 + ½·atan((t − s0)/h) (ξ(0) = γ/2).
+  double h() const { return h_; }
+  double s0() const { return s0_; }
+  double xi(double t) const;
+
+ private:
+  bool directional_;
+  Medium medium_;
+  // point
+  double h_ = 0, s0_ = 0, scale_ = 0, xi0_ = 0;
+  // directional
+  double dir_scale_ = 0, dir_rate_ = 0;
+};
+
+}  // namespace lightvol

@@ -1,0 +1,133 @@
+#include "render/analytic_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+namespace lightvol::test {
+
+double cast_scene(Vec3d o, Vec3d d, const Box& box) {
+  double best = std::numeric_limits<double>::infinity();
+  if (d.y != 0) {
+    const double t = -o.y / d.y;
+    if (t > 0) best = t;
+  }
+  // Slab test for the box.
+  double t0 = 0, t1 = std::numeric_limits<double>::infinity();
+  for (int c = 0; c < 3; ++c) {
+    const double oc = o[c], dc = d[c], lo = box.lo[c], hi = box.hi[c];
+    if (dc == 0) {
+      if (oc < lo || oc > hi) return best;
+      continue;
+    }
+    double a = (lo - oc) / dc, b = (hi - oc) / dc;
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+  }
+  if (t0 <= t1 && t0 > 0) best = std::min(best, t0);
+  return best;
+}
+
+DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box) {
+  EXPECT_EQ(light.depth, DepthEncoding::linear);
+  const Unprojector un(light, width, height, 0, Space::world);
+  DepthImage image;
+  image.width = width;
+  image.height = height;
+  image.values.resize(static_cast<std::size_t>(width) * height);
+  for (int row = 0; row < height; ++row)
+    for (int col = 0; col < width; ++col) {
+      const Vec3d a = un.near_point(col, row), b = un.far_point(col, row);
+      const Vec3d dir = normalize(b - a);
+      const Vec3d origin = light.is_perspective() ? light.position : a;
+      const double t = cast_scene(origin, dir, box);
+      double depth = light.far;
+      if (std::isfinite(t)) depth = -light.view.transform_point(origin + t * dir).z;
+      image.values[static_cast<std::size_t>(row) * width + col] =
+          static_cast<float>(std::clamp(depth, light.near, light.far));
+    }
+  return image;
+}
+
+bool scene_lit(const Light& light, int width, int height, Vec3d x, const Box& box) {
+  const Vec3d eye = light.view.transform_point(x);
+  if (-eye.z < light.near || -eye.z > light.far) return false;
+  const Vec3d ndc = light.projection.transform_point(eye);
+  if (std::abs(ndc.x) > 1.0 - 1.0 / width || std::abs(ndc.y) > 1.0 - 1.0 / height) return false;
+  Vec3d origin = light.position, dir;
+  double dist = 0;
+  if (light.is_perspective()) {
+    dist = length(x - origin);
+    dir = (1.0 / dist) * (x - origin);
+  } else {
+    dir = light.direction;
+    dist = dot(x - light.position, dir);
+    origin = x - dist * dir;
+  }
+  return cast_scene(origin, dir, box) >= dist * (1 - 1e-12);
+}
+
+Camera make_camera(Vec3d position, Vec3d target, int width, int height, double fov_y_deg) {
+  Camera camera;
+  camera.width = width;
+  camera.height = height;
+  Light& v = camera.view;
+  v.type = LightType::spot;
+  v.depth = DepthEncoding::linear;
+  v.near = 0.05;
+  v.far = 100;
+  v.position = position;
+  v.direction = normalize(target - position);
+  v.view = look_at(position, v.direction, {0, 1, 0});
+  v.projection = perspective(fov_y_deg, double(width) / height, v.near, v.far);
+  return camera;
+}
+
+RenderScene make_render_scene(const Camera& camera, const Light& light, const Medium& medium,
+                              const Box& box) {
+  RenderScene scene;
+  scene.camera = camera;
+  scene.light = light;
+  scene.medium = medium;
+  scene.surface.resize(static_cast<std::size_t>(camera.width) * camera.height);
+  for (int row = 0; row < camera.height; ++row)
+    for (int col = 0; col < camera.width; ++col) {
+      const Ray ray = pixel_ray(camera, col, row);
+      scene.surface[static_cast<std::size_t>(row) * camera.width + col] =
+          cast_scene(ray.origin, ray.direction, box);
+    }
+  return scene;
+}
+
+double brute_force_airlight(const RenderScene& scene, int width, int height, int col, int row,
+                            int steps, double max_t, const Box& box) {
+  const Ray ray = pixel_ray(scene.camera, col, row);
+  const double end = std::min(max_t, scene.surface[static_cast<std::size_t>(row) * scene.camera.width + col]);
+  const Medium& m = scene.medium;
+  const double st = m.extinction();
+  const double ds = end / steps;
+  double sum = 0;
+  for (int i = 0; i < steps; ++i) {
+    const double s = (i + 0.5) * ds;
+    const Vec3d x = ray.origin + s * ray.direction;
+    if (!scene_lit(scene.light, width, height, x, box)) continue;
+    double radiance = 0;
+    if (scene.light.is_perspective()) {
+      const Vec3d to_x = x - scene.light.position;
+      const double d = length(to_x);
+      const double cos_theta = dot((1.0 / d) * to_x, -1.0 * ray.direction);
+      radiance = m.intensity * std::exp(-st * d) / (d * d) * m.phase(cos_theta);
+    } else {
+      const double z = dot(x - scene.light.position, scene.light.direction) - scene.light.near;
+      radiance = m.intensity * std::exp(-st * z) * m.phase(dot(scene.light.direction, -1.0 * ray.direction));
+    }
+    sum += m.scattering * radiance * std::exp(-st * s) * ds;
+  }
+  return sum;
+}
+
+}  // namespace lightvol::test

@@ -1,0 +1,79 @@
+// The CPU reference against brute-force integration with analytic visibility, on a floor and a box
+// lit by a spot and a directional light.
+#include <lightvol/render/reference.h>
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/volume/static_volume.h>
+
+#include "render/analytic_scene.h"
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+Medium test_medium(Phase phase) {
+  Medium m;
+  m.scattering = 0.06;
+  m.absorption = 0.02;
+  m.intensity = 20;
+  m.phase = phase;
+  return m;
+}
+
+struct Case {
+  const char* name;
+  std::string light_json;
+  Vec3d eye, target;
+  Phase phase;
+};
+
+void expect_reference_matches_brute_force(const Case& c) {
+  SCOPED_TRACE(c.name);
+  constexpr int kMap = 512, kW = 24, kH = 18;
+  const Light light = test::light_from_json(c.light_json);
+  const DepthImage shadow = test::scene_shadow_map(light, kMap, kMap);
+  Result<Mesh> volume = build_static_volume(light, shadow, {}, "shadow");
+  ASSERT_TRUE(volume) << volume.error().message;
+  const RenderScene scene = test::make_render_scene(test::make_camera(c.eye, c.target, kW, kH),
+                                                    light, test_medium(c.phase));
+  const Image ref = render_reference(*volume, scene);
+  Image brute = ref;
+  for (int row = 0; row < kH; ++row)
+    for (int col = 0; col < kW; ++col)
+      brute.values[static_cast<std::size_t>(row) * kW + col] =
+          test::brute_force_airlight(scene, kMap, kMap, col, row, 20000, 60.0);
+  const ImageDifference diff = compare_images(ref, brute);
+  double total = 0;
+  for (double v : brute.values) total += v;
+  EXPECT_GT(total, 0);
+  EXPECT_LT(diff.relative_l2, 0.01) << "max abs " << diff.max_abs << " psnr " << diff.psnr_db;
+}
+
+TEST(Reference, SpotLightMatchesBruteForceFromOutside) {
+  expect_reference_matches_brute_force(
+      {"spot outside", test::spot_json("linear"), {6, 3, 6}, {0, 1, 0}, {PhaseType::hg, 0.4, 0}});
+}
+
+TEST(Reference, SpotLightMatchesBruteForceFromInside) {
+  expect_reference_matches_brute_force(
+      {"spot inside", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}});
+}
+
+TEST(Reference, DirectionalLightMatchesBruteForce) {
+  expect_reference_matches_brute_force({"directional", test::directional_json("linear"),
+                                        {7, 4, 5}, {0, 0.5, 0}, {PhaseType::schlick, 0, 0.3}});
+}
+
+TEST(Reference, EmptyVolumeGivesZero) {
+  const Light light = test::light_from_json(test::spot_json("linear"));
+  const RenderScene scene = test::make_render_scene(test::make_camera({6, 3, 6}, {0, 1, 0}, 8, 6),
+                                                    light, test_medium({}));
+  const Image image = render_reference(Mesh{}, scene);
+  for (double v : image.values) EXPECT_EQ(v, 0);
+}
+
+}  // namespace
+}  // namespace lightvol
