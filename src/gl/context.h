@@ -75,6 +75,7 @@ namespace lightvol::gl {
   X(PFNGLUNIFORM3FPROC, glUniform3f)                                     \
   X(PFNGLUNIFORM4FPROC, glUniform4f)                                     \
   X(PFNGLUNIFORM1FVPROC, glUniform1fv)                                   \
+  X(PFNGLUNIFORMMATRIX3FVPROC, glUniformMatrix3fv)                       \
   X(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)                       \
   X(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays)                         \
   X(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)                         \

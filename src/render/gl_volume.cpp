@@ -1,0 +1,434 @@
+#include <lightvol/render/gl_volume.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include <lightvol/core/check.h>
+
+namespace lightvol {
+
+using namespace gl;
+
+// ---- shared GLSL --------------------------------------------------------------------------------
+
+const char* const kGlslCommon = R"(
+const float PI = 3.14159265358979;
+const float HALF_PI_BELOW = 1.5707960;  // largest float below π/2: tan stays positive
+
+uniform mat4 inv_projection;   // camera clip -> camera eye
+uniform mat3 eye_to_world;     // camera eye -> world rotation
+uniform vec3 camera_position;  // world: the eye (perspective) or the eye-space origin (ortho)
+uniform int perspective;
+uniform vec2 viewport;
+uniform int flip_y;
+
+uniform int light_type;        // 0 point (spot, omni), 1 directional
+uniform vec3 light_position;
+uniform vec3 light_direction;
+uniform float light_near;
+uniform float sigma_s;
+uniform float sigma_t;
+uniform float intensity;
+uniform int phase_type;        // 0 isotropic, 1 Henyey-Greenstein, 2 Schlick
+uniform float phase_param;     // g or k
+
+uniform sampler2D f_table;
+uniform float f_u_max;
+
+// The world-space ray of this fragment's pixel centre.
+void pixel_ray(out vec3 origin, out vec3 dir) {
+  vec2 ndc = 2.0 * gl_FragCoord.xy / viewport - 1.0;
+  if (flip_y == 1) ndc.y = -ndc.y;
+  vec4 n = inv_projection * vec4(ndc, -1.0, 1.0);
+  vec3 near_eye = n.xyz / n.w;
+  if (perspective == 1) {
+    origin = camera_position;
+    dir = normalize(eye_to_world * near_eye);
+  } else {
+    origin = camera_position + eye_to_world * near_eye;
+    dir = normalize(eye_to_world * vec3(0.0, 0.0, -1.0));
+  }
+}
+
+float phase(float c) {
+  const float inv4pi = 1.0 / (4.0 * PI);
+  if (phase_type == 1) {
+    float g = phase_param;
+    float d = 1.0 + g * g - 2.0 * g * c;
+    return inv4pi * (1.0 - g * g) / (d * sqrt(d));
+  }
+  if (phase_type == 2) {
+    float k = phase_param;
+    float d = 1.0 - k * c;
+    return inv4pi * (1.0 - k * k) / (d * d);
+  }
+  return inv4pi;
+}
+
+// Point light seen along a ray: distance h of the light from the ray's line, parameter s0 of the
+// closest point, and the Sun et al. optical thickness u = σt·h.
+void point_setup(vec3 origin, vec3 dir, out float h, out float s0) {
+  vec3 to_light = light_position - origin;
+  s0 = dot(to_light, dir);
+  h = max(length(cross(dir, to_light)), 1e-6 * max(1.0, length(to_light)));
+}
+
+const float GL_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                               0.9602898564975363);
+const float GL_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                               0.1012285362903763);
+
+float integrand(float xi, float u) { return phase(cos(2.0 * xi)) * exp(-u * tan(xi)); }
+
+// ∫ from a to b of p(cos 2ξ)·exp(−u tan ξ) dξ, `panels` 8-point Gauss–Legendre panels.
+float quadrature(float a, float b, float u, int panels) {
+  a = min(a, HALF_PI_BELOW);
+  b = min(b, HALF_PI_BELOW);
+  float width = (b - a) / float(panels);
+  float half_width = 0.5 * width;
+  float sum = 0.0;
+  for (int p = 0; p < panels; ++p) {
+    float mid = a + (float(p) + 0.5) * width;
+    for (int i = 0; i < 4; ++i) {
+      float dx = half_width * GL_X[i];
+      sum += GL_W[i] * (integrand(mid - dx, u) + integrand(mid + dx, u));
+    }
+  }
+  return sum * half_width;
+}
+
+// Sun et al.'s F(u, v) from the table: bilinear with float weights (texelFetch, no filtering).
+float sun_f(float u, float v) {
+  ivec2 size = textureSize(f_table, 0);
+  vec2 p = vec2(clamp(v, 0.0, 0.5 * PI) / (0.5 * PI) * float(size.x - 1),
+                sqrt(u / f_u_max) * float(size.y - 1));
+  ivec2 i = min(ivec2(p), size - 2);
+  vec2 f = p - vec2(i);
+  float f00 = texelFetch(f_table, i, 0).r;
+  float f10 = texelFetch(f_table, i + ivec2(1, 0), 0).r;
+  float f01 = texelFetch(f_table, i + ivec2(0, 1), 0).r;
+  float f11 = texelFetch(f_table, i + ivec2(1, 1), 0).r;
+  return mix(mix(f00, f10, f.x), mix(f01, f11, f.x), f.y);
+}
+
+float angular_integral(float a, float b, float u, int panels) {
+  if (phase_type == 0 && u <= f_u_max) return (sun_f(u, b) - sun_f(u, a)) * (1.0 / (4.0 * PI));
+  return quadrature(a, b, u, panels);
+}
+)";
+
+void set_scene_uniforms(const Program& program, const RenderScene& scene) {
+  const Camera& cam = scene.camera;
+  bool ok = false;
+  const Mat4d inv_p = inverse(cam.view.projection, &ok);
+  LV_CHECK(ok);
+  const Mat4d inv_v = inverse(cam.view.view, &ok);
+  LV_CHECK(ok);
+  float m4[16], m3[9];
+  for (int i = 0; i < 16; ++i) m4[i] = static_cast<float>(inv_p.m[i]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m3[3 * r + c] = static_cast<float>(inv_v(r, c));
+  auto f = [](double x) { return static_cast<float>(x); };
+  const Vec3d origin = inv_v.transform_point({0, 0, 0});
+  glUniformMatrix4fv(program.uniform("inv_projection"), 1, GL_TRUE, m4);
+  glUniformMatrix3fv(program.uniform("eye_to_world"), 1, GL_TRUE, m3);
+  glUniform3f(program.uniform("camera_position"), f(origin.x), f(origin.y), f(origin.z));
+  glUniform1i(program.uniform("perspective"), cam.view.is_perspective() ? 1 : 0);
+  glUniform2f(program.uniform("viewport"), f(cam.width), f(cam.height));
+  glUniform1i(program.uniform("flip_y"), cam.view.flip_y ? 1 : 0);
+  const Light& light = scene.light;
+  glUniform1i(program.uniform("light_type"), light.type == LightType::directional ? 1 : 0);
+  glUniform3f(program.uniform("light_position"), f(light.position.x), f(light.position.y),
+              f(light.position.z));
+  glUniform3f(program.uniform("light_direction"), f(light.direction.x), f(light.direction.y),
+              f(light.direction.z));
+  glUniform1f(program.uniform("light_near"), f(light.near));
+  const Medium& m = scene.medium;
+  glUniform1f(program.uniform("sigma_s"), f(m.scattering));
+  glUniform1f(program.uniform("sigma_t"), f(m.extinction()));
+  glUniform1f(program.uniform("intensity"), f(m.intensity));
+  glUniform1i(program.uniform("phase_type"), static_cast<int>(m.phase.type));
+  glUniform1f(program.uniform("phase_param"),
+              f(m.phase.type == PhaseType::hg ? m.phase.g : m.phase.k));
+  glUniform1f(program.uniform("f_u_max"), f(sun_table().u_max));
+}
+
+// ---- the F(u, v) table --------------------------------------------------------------------------
+
+const SunTable& sun_table() {
+  static const SunTable table = [] {
+    SunTable t;
+    t.rows = 512;
+    t.cols = 1024;
+    t.u_max = 32;
+    t.values.resize(static_cast<std::size_t>(t.rows) * t.cols);
+    static constexpr double x[4] = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                    0.9602898564975363};
+    static constexpr double w[4] = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                    0.1012285362903763};
+    const double dv = 0.5 * std::numbers::pi / (t.cols - 1);
+    for (int i = 0; i < t.rows; ++i) {
+      const double a = static_cast<double>(i) / (t.rows - 1);
+      const double u = t.u_max * a * a;
+      double sum = 0;
+      t.values[static_cast<std::size_t>(i) * t.cols] = 0;
+      for (int j = 1; j < t.cols; ++j) {
+        // ∫ over [v_{j−1}, v_j] of exp(−u tan ξ), two 8-point panels.
+        const double lo = (j - 1) * dv;
+        for (int p = 0; p < 2; ++p) {
+          const double mid = lo + (p + 0.5) * 0.5 * dv, half = 0.25 * dv;
+          for (int k = 0; k < 4; ++k)
+            sum += half * w[k] * (std::exp(-u * std::tan(mid - half * x[k])) +
+                                  std::exp(-u * std::tan(mid + half * x[k])));
+        }
+        t.values[static_cast<std::size_t>(i) * t.cols + j] = static_cast<float>(sum);
+      }
+    }
+    return t;
+  }();
+  return table;
+}
+
+// ---- helpers ------------------------------------------------------------------------------------
+
+TextureHandle make_surface_texture(const RenderScene& scene) {
+  const int w = scene.camera.width, h = scene.camera.height;
+  std::vector<float> rows(static_cast<std::size_t>(w) * h);
+  for (int r = 0; r < h; ++r) {
+    // GL row 0 is NDC y = −1: the image's last row, or its first for flip_y cameras.
+    const int src = scene.camera.view.flip_y ? r : h - 1 - r;
+    for (int c = 0; c < w; ++c) {
+      const double t = scene.surface[static_cast<std::size_t>(src) * w + c];
+      rows[static_cast<std::size_t>(r) * w + c] = std::isfinite(t) ? static_cast<float>(t) : 3e38f;
+    }
+  }
+  return make_texture_2d(w, h, GL_R32F, rows.data(), 1);
+}
+
+Image image_from_gl(const RenderScene& scene, const std::vector<float>& top_first) {
+  Image image;
+  image.width = scene.camera.width;
+  image.height = scene.camera.height;
+  image.values.resize(top_first.size());
+  const std::size_t w = static_cast<std::size_t>(image.width);
+  for (int r = 0; r < image.height; ++r) {
+    const int src = scene.camera.view.flip_y ? image.height - 1 - r : r;
+    for (std::size_t c = 0; c < w; ++c) image.values[r * w + c] = top_first[src * w + c];
+  }
+  return image;
+}
+
+// ---- the renderer -------------------------------------------------------------------------------
+
+namespace {
+
+const char* const kVolumeVs = R"(#version 450 core
+layout(location = 0) in vec3 position;
+uniform mat4 view_projection;
+out vec3 world;
+void main() {
+  world = position;
+  gl_Position = view_projection * vec4(position, 1.0);
+}
+)";
+
+const char* const kVolumeFs = R"(
+in vec3 world;
+layout(location = 0) out vec2 result;  // (signed angular integral, signed fragment count)
+uniform sampler2D surface;
+uniform int baseline;
+uniform int panels;
+uniform float facing_sign;
+void main() {
+  vec3 origin, dir;
+  pixel_ray(origin, dir);
+  float t_surface = texelFetch(surface, ivec2(gl_FragCoord.xy), 0).r;
+  float t = clamp(dot(world - origin, dir), 0.0, t_surface);
+  float s = (gl_FrontFacing ? -1.0 : 1.0) * facing_sign;
+  if (light_type == 1) {
+    float rate = sigma_t * (1.0 + dot(dir, light_direction));
+    float x = rate * t;
+    float v = abs(x) < 1e-3 ? t * (1.0 - 0.5 * x + x * x / 6.0) : (1.0 - exp(-x)) / rate;
+    result = vec2(s * v, s);
+    return;
+  }
+  float h, s0;
+  point_setup(origin, dir, h, s0);
+  float xi = 0.25 * PI + 0.5 * atan((t - s0) / h);
+  float from = baseline == 1 ? 0.25 * PI : 0.5 * atan(h, s0);
+  result = vec2(s * angular_integral(from, xi, sigma_t * h, panels), s);
+}
+)";
+
+const char* const kResolveVs = R"(#version 450 core
+void main() {
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+)";
+
+const char* const kResolveFs = R"(
+layout(location = 0) out float airlight;
+uniform sampler2D accumulated;
+uniform int baseline;
+void main() {
+  vec2 a = texelFetch(accumulated, ivec2(gl_FragCoord.xy), 0).rg;
+  vec3 origin, dir;
+  pixel_ray(origin, dir);
+  if (light_type == 1) {
+    float k = dot(dir, light_direction);
+    float z = dot(origin - light_position, light_direction) - light_near;
+    airlight = sigma_s * intensity * phase(-k) * exp(-sigma_t * z) * a.r;
+    return;
+  }
+  float h, s0;
+  point_setup(origin, dir, h, s0);
+  float c = 2.0 * sigma_s * intensity * exp(-sigma_t * s0) / h;
+  float base = 0.0;
+  if (baseline == 1 && a.g != 0.0) base = angular_integral(0.5 * atan(h, s0), 0.25 * PI, sigma_t * h, 8);
+  airlight = c * (a.r + a.g * base);
+}
+)";
+
+std::string fragment_source(const char* body) {
+  return std::string("#version 450 core\n") + kGlslCommon + body;
+}
+
+}  // namespace
+
+struct GlVolumeRenderer::State {
+  RenderScene scene;
+  GlVolumeOptions options;
+  Program volume, resolve;
+  Framebuffer accumulate, output;
+  TextureHandle surface, table;
+  VertexArrayHandle vao, empty_vao;
+  BufferHandle positions, indices;
+  GLsizei index_count = 0;
+  float view_projection[16] = {};
+  float facing_sign = 1;
+};
+
+GlVolumeRenderer::~GlVolumeRenderer() = default;
+
+Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderScene& scene,
+                                                                   const GlVolumeOptions& options) {
+  std::unique_ptr<GlVolumeRenderer> r(new GlVolumeRenderer());
+  r->state_ = std::make_unique<State>();
+  State& s = *r->state_;
+  s.scene = scene;
+  s.options = options;
+  Result<Program> volume = Program::compile(kVolumeVs, fragment_source(kVolumeFs), "volume");
+  if (!volume) return volume.error();
+  s.volume = std::move(*volume);
+  Result<Program> resolve = Program::compile(kResolveVs, fragment_source(kResolveFs), "resolve");
+  if (!resolve) return resolve.error();
+  s.resolve = std::move(*resolve);
+  const int w = scene.camera.width, h = scene.camera.height;
+  Result<Framebuffer> acc = Framebuffer::create(w, h, {GL_RG32F}, false);
+  if (!acc) return acc.error();
+  s.accumulate = std::move(*acc);
+  Result<Framebuffer> out = Framebuffer::create(w, h, {GL_R32F}, false);
+  if (!out) return out.error();
+  s.output = std::move(*out);
+  s.surface = make_surface_texture(scene);
+  const SunTable& table = sun_table();
+  s.table = make_texture_2d(table.cols, table.rows, GL_R32F, table.values.data(), 1);
+
+  const Mat4d vp = scene.camera.view.projection * scene.camera.view.view;
+  for (int i = 0; i < 16; ++i) s.view_projection[i] = static_cast<float>(vp.m[i]);
+  // A mirroring camera turns GL's counter-clockwise front faces into back faces.
+  const double det3 = vp(0, 0) * (vp(1, 1) * vp(2, 2) - vp(1, 2) * vp(2, 1)) -
+                      vp(0, 1) * (vp(1, 0) * vp(2, 2) - vp(1, 2) * vp(2, 0)) +
+                      vp(0, 2) * (vp(1, 0) * vp(2, 1) - vp(1, 1) * vp(2, 0));
+  s.facing_sign = det3 < 0 ? 1.0f : -1.0f;
+
+  GLuint id = 0;
+  glGenVertexArrays(1, &id);
+  s.vao = VertexArrayHandle(id);
+  glGenVertexArrays(1, &id);
+  s.empty_vao = VertexArrayHandle(id);
+  glGenBuffers(1, &id);
+  s.positions = BufferHandle(id);
+  glGenBuffers(1, &id);
+  s.indices = BufferHandle(id);
+  glBindVertexArray(s.vao.id());
+  glBindBuffer(GL_ARRAY_BUFFER, s.positions.id());
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glEnableVertexAttribArray(0);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.indices.id());
+  glBindVertexArray(0);
+
+  for (const Program* p : {&s.volume, &s.resolve}) {
+    p->use();
+    set_scene_uniforms(*p, scene);
+    glUniform1i(p->uniform("baseline"), options.baseline ? 1 : 0);
+    glUniform1i(p->uniform("f_table"), 1);
+  }
+  s.volume.use();
+  glUniform1i(s.volume.uniform("surface"), 0);
+  glUniform1i(s.volume.uniform("panels"), options.panels);
+  glUniform1f(s.volume.uniform("facing_sign"), s.facing_sign);
+  glUniformMatrix4fv(s.volume.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
+  s.resolve.use();
+  glUniform1i(s.resolve.uniform("accumulated"), 0);
+  glUseProgram(0);
+  if (std::string e = pending_error(); !e.empty()) return Error{"OpenGL: setting up the volume renderer: " + e};
+  return r;
+}
+
+void GlVolumeRenderer::set_volume(const Mesh& volume) {
+  State& s = *state_;
+  glBindVertexArray(s.vao.id());
+  glBindBuffer(GL_ARRAY_BUFFER, s.positions.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(volume.positions.size() * sizeof(float)),
+               volume.positions.data(), GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(volume.indices.size() * sizeof(std::uint32_t)),
+               volume.indices.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  s.index_count = static_cast<GLsizei>(volume.indices.size());
+}
+
+Image GlVolumeRenderer::render(double* seconds) {
+  State& s = *state_;
+  const auto start = std::chrono::steady_clock::now();
+  // Pass 1: every fragment of the volume, additive, no depth test, no clipping in depth.
+  s.accumulate.bind();
+  glClearColor(0, 0, 0, 0);
+  glClear(GL_COLOR_BUFFER_BIT);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_CULL_FACE);
+  glEnable(GL_DEPTH_CLAMP);
+  glEnable(GL_BLEND);
+  glBlendEquation(GL_FUNC_ADD);
+  glBlendFunc(GL_ONE, GL_ONE);
+  s.volume.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, s.surface.id());
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, s.table.id());
+  glBindVertexArray(s.vao.id());
+  glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  glDisable(GL_BLEND);
+  glDisable(GL_DEPTH_CLAMP);
+  // Pass 2: per-pixel constants and the baseline.
+  s.output.bind();
+  s.resolve.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, s.accumulate.color_texture(0));
+  glBindVertexArray(s.empty_vao.id());
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glFinish();
+  if (seconds)
+    *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  glBindVertexArray(0);
+  glUseProgram(0);
+  const Image image = image_from_gl(s.scene, s.output.read(0, 1));
+  LV_CHECK_EQ(pending_error(), std::string());
+  return image;
+}
+
+}  // namespace lightvol
