@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
@@ -30,6 +31,7 @@ struct BuildOptions {
   int draco_bits = 16;
   bool quiet = false;
   bool json = false;
+  bool no_check = false;
 };
 
 nlohmann::json stage_json(const StageLog& log) {
@@ -69,6 +71,19 @@ int run_build(const BuildOptions& o) {
   Result<Mesh> mesh = build_static_volume(*light, *depth, vo, depth_path);
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
+
+  if (!o.no_check) {
+    // The linear-time checks with the light: refuse to write a volume that is not sound.
+    progress.begin("checking");
+    const Light frame_light = light_in_space(*light, vo.space);
+    const CheckReport check = check_volume_linear(*mesh, &frame_light);
+    if (!check.valid()) {
+      std::fprintf(stderr, "lightvol: %s: the built volume fails its checks, nothing written: %s\n",
+                   o.out_path.c_str(), check.first_failure().c_str());
+      return 1;
+    }
+    progress.end("valid");
+  }
 
   progress.begin("writing " + o.out_path);
   ExportOptions eo;
@@ -138,6 +153,8 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_option("--report", o->report_path,
                   "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
+  cmd->add_flag("--no-check", o->no_check,
+                "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress lines and no summary");
   cmd->callback([o, run] { *run = [o] { return run_build(*o); }; });
 }

@@ -19,6 +19,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/export/flat_exporter.h>
 #include <lightvol/export/ply_writer.h>
+#include <lightvol/io/draco_mesh.h>
 
 namespace lightvol {
 
@@ -57,20 +58,6 @@ std::unique_ptr<draco::Mesh> to_draco(const Mesh& mesh) {
     out->SetFace(draco::FaceIndex(static_cast<std::uint32_t>(t)), face);
   }
   return out;
-}
-
-// A decoded Draco mesh back to flat buffers, positions welded (Draco may split points).
-Mesh from_draco(const draco::Mesh& in) {
-  Mesh out;
-  const draco::PointAttribute* position = in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (!position) return out;
-  out.positions.resize(3 * static_cast<std::size_t>(in.num_points()));
-  for (draco::PointIndex p(0); p < in.num_points(); ++p)
-    position->GetMappedValue(p, &out.positions[3 * static_cast<std::size_t>(p.value())]);
-  out.indices.reserve(3 * static_cast<std::size_t>(in.num_faces()));
-  for (draco::FaceIndex f(0); f < in.num_faces(); ++f)
-    for (int k = 0; k < 3; ++k) out.indices.push_back(in.face(f)[k].value());
-  return weld_identical_positions(out);
 }
 
 Status check_bits(int bits) {
@@ -164,7 +151,7 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       auto decoded = decoder.DecodeMeshFromBuffer(&in);
       if (!decoded.ok()) return Error{path + ": Draco cannot decode what it encoded: " +
                                       decoded.status().error_msg_string()};
-      if (Status s = verify_decoded(mesh, from_draco(*decoded.value()), path + " (decoded)"); !s)
+      if (Status s = verify_decoded(mesh, detail::from_draco(*decoded.value()), path + " (decoded)"); !s)
         return s;
       return write_bytes_atomically(path, *bytes);
     }
@@ -178,7 +165,7 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
         auto decoded = decoder.DecodeFromBuffer(&in);
         if (!decoded.ok()) return Error{path + ": cannot decode the glTF just encoded: " +
                                         decoded.status().error_msg_string()};
-        if (Status s = verify_decoded(mesh, from_draco(*decoded.value()), path + " (decoded)"); !s)
+        if (Status s = verify_decoded(mesh, detail::from_draco(*decoded.value()), path + " (decoded)"); !s)
           return s;
       }
       return write_bytes_atomically(path, *bytes);

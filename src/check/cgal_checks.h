@@ -1,0 +1,36 @@
+// CGAL's checks behind a CGAL-free interface: CGAL stays in cgal_checks.cpp, the one translation
+// unit that converts the flat Mesh to a CGAL::Surface_mesh. Internal to src/check.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <lightvol/core/mesh.h>
+
+namespace lightvol::detail {
+
+struct CgalChecks {
+  bool built = false;       // the mesh converted to a Surface_mesh (edge-manifold and oriented)
+  std::string why_not;      // why it did not
+  std::uint64_t intersecting_pairs = 0;
+  bool pairs_truncated = false;  // stopped counting at the limit
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> first_pairs;  // face indices
+  bool ran_volume_test = false;  // closed and free of self-intersections
+  bool bounds_a_volume = false;
+  std::size_t components = 0;
+};
+
+// Self-intersections (PMP::self_intersections, parallel with TBB, exact predicates), and when
+// `closed` and none were found, PMP::does_bound_a_volume. Stops counting intersecting pairs at
+// 10,000; keeps the first `max_pairs`.
+CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs);
+
+// Self-intersection test alone (PMP::does_self_intersect, parallel): true when two faces
+// intersect other than along shared edges and vertices, or when `mesh` is not edge-manifold and
+// oriented. For benchmarks.
+bool cgal_does_self_intersect(const Mesh& mesh);
+
+}  // namespace lightvol::detail

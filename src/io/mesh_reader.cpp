@@ -1,0 +1,261 @@
+#include <lightvol/io/mesh_reader.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include <OpenMesh/Core/IO/IOManager.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+#include <draco/compression/decode.h>
+#include <draco/io/gltf_decoder.h>
+
+#include <lightvol/check/topology.h>
+#include <lightvol/export/export.h>
+#include <lightvol/io/draco_mesh.h>
+
+namespace lightvol {
+namespace {
+
+namespace fs = std::filesystem;
+
+// An OpenMesh importer that appends to the flat Mesh: no half-edge structure is built, so a
+// multi-million-triangle volume reads in the memory of its two arrays. Faces are fan-triangulated;
+// a face naming a vertex that was never added is remembered as the first error.
+class FlatImporter final : public OpenMesh::IO::BaseImporter {
+ public:
+  using VH = OpenMesh::VertexHandle;
+  using FH = OpenMesh::FaceHandle;
+  using HH = OpenMesh::HalfedgeHandle;
+  using EH = OpenMesh::EdgeHandle;
+  using Vec3f = OpenMesh::Vec3f;
+  using Vec3d = OpenMesh::Vec3d;
+  using StatusInfo = OpenMesh::Attributes::StatusInfo;
+
+  explicit FlatImporter(Mesh* mesh) : mesh_(mesh) {}
+
+  std::string error;           // the first bad face, if any
+  std::size_t polygons = 0;    // faces as read, before triangulation
+
+  VH add_vertex(const Vec3f& p) override {
+    mesh_->positions.insert(mesh_->positions.end(), {p[0], p[1], p[2]});
+    return VH(static_cast<int>(mesh_->num_vertices() - 1));
+  }
+  VH add_vertex(const Vec3d& p) override {
+    return add_vertex(Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]),
+                            static_cast<float>(p[2])));
+  }
+  VH add_vertex() override { return add_vertex(Vec3f(0, 0, 0)); }
+  void set_point(VH v, const Vec3f& p) override {
+    if (v.idx() < 0 || static_cast<std::size_t>(v.idx()) >= mesh_->num_vertices()) return;
+    std::copy(p.data(), p.data() + 3, &mesh_->positions[3 * static_cast<std::size_t>(v.idx())]);
+  }
+
+  FH add_face(const VHandles& vs) override {
+    const std::size_t face = polygons++;
+    if (vs.size() < 3) {
+      if (error.empty())
+        error = "face " + std::to_string(face) + " has " + std::to_string(vs.size()) + " vertices";
+      return FH();
+    }
+    const std::size_t nv = mesh_->num_vertices();
+    for (const VH v : vs) {
+      if (v.idx() < 0 || static_cast<std::size_t>(v.idx()) >= nv) {
+        if (error.empty())
+          error = "face " + std::to_string(face) + " names vertex " + std::to_string(v.idx()) +
+                  ", but there are " + std::to_string(nv);
+        return FH();
+      }
+    }
+    for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
+      mesh_->indices.insert(mesh_->indices.end(),
+                            {static_cast<std::uint32_t>(vs[0].idx()),
+                             static_cast<std::uint32_t>(vs[k].idx()),
+                             static_cast<std::uint32_t>(vs[k + 1].idx())});
+    }
+    return FH(static_cast<int>(mesh_->num_triangles() - 1));
+  }
+  FH add_face(HH) override { return FH(); }
+  HH add_edge(VH, VH) override { return HH(); }
+
+  // Everything else a reader may offer is dropped.
+  void add_face_texcoords(FH, VH, const std::vector<OpenMesh::Vec2f>&) override {}
+  void add_face_texcoords(FH, VH, const std::vector<Vec3f>&) override {}
+  void set_face_texindex(FH, int) override {}
+  void set_halfedge(VH, HH) override {}
+  void set_normal(VH, const Vec3f&) override {}
+  void set_normal(VH, const Vec3d&) override {}
+  void set_color(VH, const OpenMesh::Vec3uc&) override {}
+  void set_color(VH, const OpenMesh::Vec4uc&) override {}
+  void set_color(VH, const Vec3f&) override {}
+  void set_color(VH, const OpenMesh::Vec4f&) override {}
+  void set_texcoord(VH, const OpenMesh::Vec2f&) override {}
+  void set_status(VH, const StatusInfo&) override {}
+  void set_next(HH, HH) override {}
+  void set_face(HH, FH) override {}
+  void request_face_texcoords2D() override {}
+  void set_texcoord(HH, const OpenMesh::Vec2f&) override {}
+  void set_texcoord(VH, const Vec3f&) override {}
+  void set_texcoord(HH, const Vec3f&) override {}
+  void set_status(HH, const StatusInfo&) override {}
+  void set_color(EH, const OpenMesh::Vec3uc&) override {}
+  void set_color(EH, const OpenMesh::Vec4uc&) override {}
+  void set_color(EH, const Vec3f&) override {}
+  void set_color(EH, const OpenMesh::Vec4f&) override {}
+  void set_status(EH, const StatusInfo&) override {}
+  void set_normal(FH, const Vec3f&) override {}
+  void set_normal(FH, const Vec3d&) override {}
+  void set_color(FH, const OpenMesh::Vec3uc&) override {}
+  void set_color(FH, const OpenMesh::Vec4uc&) override {}
+  void set_color(FH, const Vec3f&) override {}
+  void set_color(FH, const OpenMesh::Vec4f&) override {}
+  void set_status(FH, const StatusInfo&) override {}
+  void add_texture_information(int, std::string) override {}
+
+  bool is_triangle_mesh() const override { return false; }
+  void reserve(unsigned int nv, unsigned int, unsigned int nf) override {
+    // Headers can lie: reserve only what a sane file of this size could hold.
+    constexpr unsigned int kCap = 1u << 26;
+    mesh_->positions.reserve(3 * static_cast<std::size_t>(std::min(nv, kCap)));
+    mesh_->indices.reserve(3 * static_cast<std::size_t>(std::min(nf, kCap)));
+  }
+  size_t n_vertices() const override { return mesh_->num_vertices(); }
+  size_t n_faces() const override { return polygons; }
+  size_t n_edges() const override { return 0; }
+
+ private:
+  Mesh* mesh_;
+};
+
+// The first `n` bytes of a file (fewer if it is shorter).
+std::string file_head(const std::string& path, std::size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(n, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(n));
+  head.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return head;
+}
+
+bool starts_with(const std::string& s, const char* prefix) {
+  return s.rfind(prefix, 0) == 0;
+}
+
+// Cheap sanity checks before handing a file to OpenMesh, whose readers trust their input: the
+// magic words of PLY and OFF, STL's size arithmetic, and text for OBJ.
+Status check_header(const std::string& path, MeshFormat format, std::uintmax_t size) {
+  const std::string head = file_head(path, 512);
+  switch (format) {
+    case MeshFormat::ply:
+      if (!starts_with(head, "ply\n") && !starts_with(head, "ply\r\n"))
+        return Error{path + ": not a PLY file (it does not start with 'ply')"};
+      if (head.find("element vertex") == std::string::npos &&
+          file_head(path, 1 << 16).find("element vertex") == std::string::npos)
+        return Error{path + ": PLY header declares no 'element vertex'"};
+      return {};
+    case MeshFormat::off: {
+      const std::size_t at = head.find("OFF");
+      if (at == std::string::npos || at > 4)
+        return Error{path + ": not an OFF file (no 'OFF' keyword at its start)"};
+      return {};
+    }
+    case MeshFormat::stl: {
+      if (size >= 84) {
+        std::uint32_t n = 0;
+        std::memcpy(&n, head.data() + 80, sizeof(n));
+        if (size == 84 + 50 * static_cast<std::uintmax_t>(n)) return {};  // binary
+      }
+      std::size_t first = head.find_first_not_of(" \t\r\n");
+      if (first != std::string::npos && head.compare(first, 5, "solid") == 0 &&
+          head.find('\0') == std::string::npos)
+        return {};  // ASCII
+      return Error{path + ": not an STL file (binary size does not match its triangle count, and "
+                          "it does not start with 'solid')"};
+    }
+    case MeshFormat::obj:
+      if (head.find('\0') != std::string::npos)
+        return Error{path + ": not an OBJ file (binary data in a text format)"};
+      return {};
+    default: return {};
+  }
+}
+
+Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std::uintmax_t size) {
+  if (Status s = check_header(path, format, size); !s) return s.error();
+  // OpenMesh chats (and complains) on its log streams; the Error says what went wrong instead.
+  omlog().disable();
+  omout().disable();
+  omerr().disable();
+  Mesh mesh;
+  FlatImporter importer(&mesh);
+  OpenMesh::IO::Options options;
+  bool read = false;
+  try {
+    read = OpenMesh::IO::IOManager().read(path, importer, options);
+  } catch (const std::exception& e) {
+    return Error{path + ": cannot read: " + e.what()};
+  }
+  if (!importer.error.empty()) return Error{path + ": " + importer.error};
+  if (!read) return Error{path + ": cannot read: malformed or truncated file"};
+  return mesh;
+}
+
+Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) return Error{path + ": cannot read: " + std::strerror(errno)};
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  std::unique_ptr<draco::Mesh> decoded;
+  if (format == MeshFormat::drc) {
+    draco::Decoder decoder;
+    auto result = decoder.DecodeMeshFromBuffer(&buffer);
+    if (!result.ok())
+      return Error{path + ": not a Draco mesh: " + result.status().error_msg_string()};
+    decoded = std::move(result).value();
+  } else {
+    if (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0)
+      return Error{path + ": not a GLB file (no 'glTF' magic)"};
+    draco::GltfDecoder decoder;
+    auto result = decoder.DecodeFromBuffer(&buffer);
+    if (!result.ok())
+      return Error{path + ": cannot decode glTF: " + result.status().error_msg_string()};
+    decoded = std::move(result).value();
+  }
+  if (!decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION))
+    return Error{path + ": the mesh has no POSITION attribute"};
+  return detail::from_draco(*decoded);
+}
+
+}  // namespace
+
+Result<Mesh> read_mesh(const std::string& path) {
+  const Result<MeshFormat> format = mesh_format_from_path(path);
+  if (!format) return format.error();
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) return Error{path + ": no such file"};
+  if (!fs::is_regular_file(st)) return Error{path + ": not a regular file"};
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return Error{path + ": cannot read: " + ec.message()};
+  if (size == 0) return Error{path + ": empty file"};
+  if (std::ifstream probe(path, std::ios::binary); !probe)
+    return Error{path + ": cannot open: " + std::strerror(errno)};
+
+  Result<Mesh> mesh = (*format == MeshFormat::drc || *format == MeshFormat::glb)
+                          ? read_with_draco(path, *format)
+                          : read_with_openmesh(path, *format, size);
+  if (!mesh) return mesh;
+  if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};
+  if (mesh->num_vertices() >= std::numeric_limits<std::uint32_t>::max())
+    return Error{path + ": has too many vertices"};
+  for (const float x : mesh->positions) {
+    if (!std::isfinite(x)) return Error{path + ": has a vertex with a non-finite coordinate"};
+  }
+  return weld_identical_positions(*mesh);
+}
+
+}  // namespace lightvol

@@ -1,0 +1,401 @@
+// lightvol check: a sound volume passes both ways (light proof and CGAL), and each kind of broken
+// volume is rejected with its own named failure, with and without the light.
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/check/check.h>
+#include <lightvol/check/topology.h>
+#include <lightvol/export/export.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::TempDir;
+
+// A 9×7 spot map: floor at window depth 0.98 (≈ 4.3 below the light) with a 3×3 occluder at
+// 0.95 (≈ 1.9 below it).
+DepthImage occluded_depth() {
+  return test::make_depth(9, 7, [](int c, int r) {
+    return (c >= 3 && c <= 5 && r >= 2 && r <= 4) ? 0.95f : 0.98f;
+  });
+}
+
+Light spot_light() { return test::light_from_json(test::spot_json()); }
+
+Mesh sound_spot_volume() {
+  Result<Mesh> mesh = build_static_volume(spot_light(), occluded_depth(), {}, "test.exr");
+  EXPECT_TRUE(mesh.ok());
+  return *mesh;
+}
+
+CheckStatus status_of(const CheckReport& r, std::string_view name) {
+  const CheckResult* c = r.find(name);
+  EXPECT_NE(c, nullptr) << name;
+  return c ? c->status : CheckStatus::skipped;
+}
+
+std::uint32_t add_vertex(Mesh& mesh, std::array<float, 3> p) {
+  mesh.positions.insert(mesh.positions.end(), p.begin(), p.end());
+  return static_cast<std::uint32_t>(mesh.num_vertices() - 1);
+}
+
+void set_triangle(Mesh& mesh, std::size_t t, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  mesh.indices[3 * t] = a, mesh.indices[3 * t + 1] = b, mesh.indices[3 * t + 2] = c;
+}
+
+// Both ways: with the light (linear proof) and without it (CGAL).
+struct BothWays {
+  CheckReport with_light, without_light;
+};
+BothWays check_both(const Mesh& mesh, const Light& light) {
+  return {check_volume(mesh, &light), check_volume(mesh, nullptr)};
+}
+
+// ---- the sound volumes ------------------------------------------------------------------------
+
+TEST(CheckVolume, SoundSpotVolumePassesBothWays) {
+  const Mesh mesh = sound_spot_volume();
+  const Light light = spot_light();
+  const BothWays r = check_both(mesh, light);
+  for (const CheckReport* report : {&r.with_light, &r.without_light}) {
+    EXPECT_TRUE(report->valid()) << report->first_failure();
+    for (const CheckResult& c : report->checks) {
+      EXPECT_EQ(c.status, CheckStatus::passed) << c.name << ": " << c.detail;
+      EXPECT_EQ(c.count, 0u) << c.name;
+    }
+    EXPECT_EQ(report->triangles, 2u * 8 * 6 + 2 * 8 + 2 * 6);
+    EXPECT_EQ(report->vertices, 9u * 7 + 1);
+    EXPECT_GT(report->volume, 0);
+  }
+  EXPECT_EQ(r.with_light.proof, NestingProof::solid_angles);
+  EXPECT_EQ(r.without_light.proof, NestingProof::cgal);
+
+  // The light is the apex: the grid's solid angles add up to the pyramid through the border
+  // texel centres, half-angles atan(tan 30° · 8/9) and atan(tan 30° · 6/7):
+  // Ω = 4 asin(sin α sin β).
+  const double t30 = std::tan(std::numbers::pi / 6);
+  const double alpha = std::atan(t30 * 8 / 9), beta = std::atan(t30 * 6 / 7);
+  const double pyramid = 4 * std::asin(std::sin(alpha) * std::sin(beta));
+  EXPECT_NEAR(r.with_light.light_expected, pyramid, 1e-6);
+  EXPECT_NEAR(r.with_light.light_sum, pyramid, 1e-6);
+}
+
+TEST(CheckVolume, SoundDirectionalVolumePassesBothWays) {
+  const Light light = test::light_from_json(test::directional_json());
+  const DepthImage depth = test::make_depth(
+      9, 7, [](int c, int r) { return (c >= 2 && c <= 4 && r >= 1 && r <= 3) ? 0.3f : 0.8f; });
+  Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
+  ASSERT_TRUE(mesh.ok());
+  const BothWays r = check_both(*mesh, light);
+  EXPECT_TRUE(r.with_light.valid()) << r.with_light.first_failure();
+  EXPECT_TRUE(r.without_light.valid()) << r.without_light.first_failure();
+  EXPECT_EQ(r.with_light.proof, NestingProof::projected_areas);
+  // Exits and entries both cover the cap: the texel-centre rectangle of the ortho window,
+  // 10·(8/9) by 8·(6/7).
+  const double cap = 10.0 * 8 / 9 * 8.0 * 6 / 7;
+  EXPECT_NEAR(r.with_light.light_expected, cap, 1e-4);
+  EXPECT_NEAR(r.with_light.light_sum, cap, 1e-4);
+
+  // Turned inside out, it fails both as inward and as seen from the wrong side.
+  Mesh inverted = *mesh;
+  for (std::size_t t = 0; t < inverted.num_triangles(); ++t)
+    std::swap(inverted.indices[3 * t + 1], inverted.indices[3 * t + 2]);
+  const CheckReport bad = check_volume(inverted, &light);
+  EXPECT_EQ(status_of(bad, kCheckOutward), CheckStatus::failed);
+  EXPECT_EQ(status_of(bad, kCheckNesting), CheckStatus::failed);
+}
+
+TEST(CheckVolume, LinearChecksSkipCgal) {
+  const Mesh mesh = sound_spot_volume();
+  const Light light = spot_light();
+  const CheckReport r = check_volume_linear(mesh, &light);
+  EXPECT_TRUE(r.valid()) << r.first_failure();
+  EXPECT_EQ(r.find(kCheckSelfIntersections), nullptr);
+  // Without a light the linear checks cannot prove non-self-nesting.
+  const CheckReport none = check_volume_linear(mesh, nullptr);
+  EXPECT_FALSE(none.valid());
+  EXPECT_EQ(status_of(none, kCheckNesting), CheckStatus::skipped);
+}
+
+// An omni light inside a closed box: solid angles add up to 4π; outside it, to 0.
+TEST(CheckVolume, OmniLightInsideAndOutsideABox) {
+  Mesh box;
+  for (int i = 0; i < 8; ++i)
+    add_vertex(box, {i & 1 ? 1.f : -1.f, i & 2 ? 1.f : -1.f, i & 4 ? 1.f : -1.f});
+  // Outward quads, each split in two.
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    box.indices.insert(box.indices.end(), {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
+    box.indices.insert(box.indices.end(), {std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
+  }
+  Light inside = test::light_from_json(
+      R"({"type": "omni", "position": [0.2, -0.3, 0.1], "near": 0.1, "far": 30, "depth": "radial"})");
+  const CheckReport r = check_volume(box, &inside);
+  EXPECT_TRUE(r.valid()) << r.first_failure();
+  EXPECT_NEAR(r.light_sum, 4 * std::numbers::pi, 1e-9);
+
+  Light outside = inside;
+  outside.position = {3, 0, 0};
+  const CheckReport o = check_volume(box, &outside);
+  EXPECT_FALSE(o.valid());
+  const CheckResult* nesting = o.find(kCheckNesting);
+  ASSERT_NE(nesting, nullptr);
+  EXPECT_EQ(nesting->status, CheckStatus::failed);
+  EXPECT_EQ(nesting->count, 2u) << nesting->detail;  // the two faces of the x = 1 side face it
+}
+
+// ---- each broken kind, with and without the light ----------------------------------------------
+
+class BrokenVolume : public ::testing::Test {
+ protected:
+  Mesh mesh = sound_spot_volume();
+  Light light = spot_light();
+  // Grid vertex (col, row) of the 9-wide grid.
+  static std::uint32_t grid(int col, int row) { return static_cast<std::uint32_t>(row * 9 + col); }
+  // Expects `name` failed both ways and neither report is valid.
+  void expect_rejected(std::string_view name) {
+    const BothWays r = check_both(mesh, light);
+    EXPECT_FALSE(r.with_light.valid());
+    EXPECT_FALSE(r.without_light.valid());
+    EXPECT_EQ(status_of(r.with_light, name), CheckStatus::failed) << name;
+    EXPECT_EQ(status_of(r.without_light, name), CheckStatus::failed) << name;
+    with_light = r.with_light;
+    without_light = r.without_light;
+  }
+  CheckReport with_light, without_light;
+};
+
+TEST_F(BrokenVolume, OneFaceFlipped) {
+  std::swap(mesh.indices[3 * 20 + 1], mesh.indices[3 * 20 + 2]);
+  expect_rejected(kCheckOriented);
+  const CheckResult* c = with_light.find(kCheckOriented);
+  EXPECT_EQ(c->count, 3u);  // all three of its edges
+  ASSERT_FALSE(c->offenders.empty());
+  EXPECT_EQ(c->offenders.front().faces.size(), 2u);
+  EXPECT_TRUE(c->offenders.front().faces[0] == 20 || c->offenders.front().faces[1] == 20);
+  EXPECT_EQ(status_of(with_light, kCheckClosed), CheckStatus::passed);
+  EXPECT_EQ(status_of(with_light, kCheckNesting), CheckStatus::skipped);
+}
+
+TEST_F(BrokenVolume, OneFaceRemoved) {
+  const auto [a, b, c] = mesh.triangle(30);
+  mesh.indices.erase(mesh.indices.begin() + 3 * 30, mesh.indices.begin() + 3 * 31);
+  expect_rejected(kCheckClosed);
+  const CheckResult* closed = with_light.find(kCheckClosed);
+  EXPECT_EQ(closed->count, 3u);
+  // The boundary edges are the removed face's, reversed.
+  for (const Offender& o : closed->offenders) {
+    ASSERT_EQ(o.vertices.size(), 2u);
+    const bool matches = (o.vertices[0] == b && o.vertices[1] == a) ||
+                         (o.vertices[0] == c && o.vertices[1] == b) ||
+                         (o.vertices[0] == a && o.vertices[1] == c);
+    EXPECT_TRUE(matches) << o.vertices[0] << "-" << o.vertices[1];
+  }
+  EXPECT_EQ(status_of(with_light, kCheckTJunctions), CheckStatus::passed);
+  EXPECT_EQ(status_of(with_light, kCheckManifold), CheckStatus::passed);
+}
+
+TEST_F(BrokenVolume, TJunction) {
+  // Split face 0 = (a, b, c) at the midpoint m of its edge a-b, but not its neighbour across a-b.
+  const auto [a, b, c] = mesh.triangle(0);
+  const auto pa = mesh.vertex(a), pb = mesh.vertex(b);
+  const std::uint32_t m = add_vertex(mesh, {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2});
+  set_triangle(mesh, 0, a, m, c);
+  mesh.indices.insert(mesh.indices.end(), {m, b, c});
+  expect_rejected(kCheckTJunctions);
+  const CheckResult* t = with_light.find(kCheckTJunctions);
+  EXPECT_EQ(t->count, 1u);
+  ASSERT_EQ(t->offenders.size(), 1u);
+  ASSERT_EQ(t->offenders[0].vertices.size(), 3u);
+  EXPECT_EQ(t->offenders[0].vertices[0], m);
+  EXPECT_TRUE((t->offenders[0].vertices[1] == b && t->offenders[0].vertices[2] == a) ||
+              (t->offenders[0].vertices[1] == a && t->offenders[0].vertices[2] == b));
+}
+
+TEST_F(BrokenVolume, VertexDraggedAcrossItsNeighbours) {
+  // Grid vertex (2, 3) moved beyond its right neighbours, onto the floor between (5, 3) and (6, 4).
+  const auto p5 = mesh.vertex(grid(5, 3)), p6 = mesh.vertex(grid(6, 4));
+  const std::uint32_t v = grid(2, 3);
+  for (int k = 0; k < 3; ++k) mesh.positions[3 * v + k] = 0.5f * (p5[k] + p6[k]);
+  const BothWays r = check_both(mesh, light);
+  EXPECT_FALSE(r.with_light.valid());
+  EXPECT_FALSE(r.without_light.valid());
+  EXPECT_EQ(status_of(r.with_light, kCheckNesting), CheckStatus::failed);
+  EXPECT_GT(r.with_light.find(kCheckNesting)->count, 0u);
+  EXPECT_EQ(status_of(r.without_light, kCheckSelfIntersections), CheckStatus::failed);
+  EXPECT_EQ(status_of(r.without_light, kCheckNesting), CheckStatus::failed);
+  // The topology is untouched.
+  for (std::string_view name : {kCheckClosed, kCheckManifold, kCheckOriented, kCheckDegenerate})
+    EXPECT_EQ(status_of(r.with_light, name), CheckStatus::passed) << name;
+}
+
+TEST_F(BrokenVolume, TwoNestedOutwardShells) {
+  // A copy scaled by 0.2 about a point 1 below the light: strictly inside, also outward.
+  const std::uint32_t n = static_cast<std::uint32_t>(mesh.num_vertices());
+  const std::size_t nt = mesh.num_triangles();
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const auto p = mesh.vertex(v);
+    add_vertex(mesh, {0.2f * p[0], 3 + 0.2f * (p[1] - 3), 0.2f * p[2]});
+  }
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto [a, b, c] = mesh.triangle(t);
+    mesh.indices.insert(mesh.indices.end(), {a + n, b + n, c + n});
+  }
+  const BothWays r = check_both(mesh, light);
+  EXPECT_FALSE(r.with_light.valid());
+  EXPECT_FALSE(r.without_light.valid());
+  EXPECT_EQ(status_of(r.with_light, kCheckNesting), CheckStatus::failed);
+  EXPECT_EQ(status_of(r.without_light, kCheckBoundsVolume), CheckStatus::failed);
+  EXPECT_EQ(status_of(r.without_light, kCheckNesting), CheckStatus::failed);
+  EXPECT_EQ(status_of(r.without_light, kCheckSelfIntersections), CheckStatus::passed);
+  EXPECT_EQ(status_of(r.with_light, kCheckOutward), CheckStatus::passed);
+}
+
+TEST_F(BrokenVolume, WholeMeshInverted) {
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t)
+    std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
+  expect_rejected(kCheckOutward);
+  EXPECT_LT(with_light.volume, 0);
+  EXPECT_EQ(status_of(with_light, kCheckNesting), CheckStatus::failed);
+  // Every grid face now faces the light.
+  EXPECT_EQ(with_light.find(kCheckNesting)->count, 2u * 8 * 6);
+}
+
+TEST_F(BrokenVolume, ZeroAreaFace) {
+  // Find a grid edge a-b whose float midpoint is exactly on it, then split the face (a, b, c)
+  // into (a, m, c), (m, b, c) and the sliver (b, m, a), which closes the mesh again.
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const auto [a, b, c] = mesh.triangle(t);
+    const auto pa = mesh.vertex(a), pb = mesh.vertex(b);
+    const std::array<float, 3> pm = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+    double u[3], w[3];
+    for (int k = 0; k < 3; ++k) u[k] = double(pb[k]) - pa[k], w[k] = double(pm[k]) - pa[k];
+    if (u[1] * w[2] - u[2] * w[1] != 0 || u[2] * w[0] - u[0] * w[2] != 0 ||
+        u[0] * w[1] - u[1] * w[0] != 0)
+      continue;
+    const std::uint32_t m = add_vertex(mesh, pm);
+    set_triangle(mesh, t, a, m, c);
+    mesh.indices.insert(mesh.indices.end(), {m, b, c, b, m, a});
+    expect_rejected(kCheckDegenerate);
+    const CheckResult* d = with_light.find(kCheckDegenerate);
+    EXPECT_EQ(d->count, 1u);
+    ASSERT_EQ(d->offenders.size(), 1u);
+    EXPECT_EQ(d->offenders[0].faces, std::vector<std::int64_t>{std::int64_t(mesh.num_triangles() - 1)});
+    for (std::string_view name : {kCheckClosed, kCheckManifold, kCheckOriented, kCheckOutward})
+      EXPECT_EQ(status_of(with_light, name), CheckStatus::passed) << name;
+    return;
+  }
+  FAIL() << "no edge with an exactly representable midpoint";
+}
+
+TEST_F(BrokenVolume, CollapsedFace) {
+  // A face naming one vertex twice: degenerate (and its edges no longer pair up).
+  mesh.indices[3 * 5 + 2] = mesh.indices[3 * 5];
+  expect_rejected(kCheckDegenerate);
+}
+
+TEST_F(BrokenVolume, EdgeSharedByThreeFaces) {
+  const auto [a, b, c] = mesh.triangle(10);
+  const auto pc = mesh.vertex(c);
+  const std::uint32_t x = add_vertex(mesh, {pc[0] + 0.5f, pc[1], pc[2] + 0.5f});
+  mesh.indices.insert(mesh.indices.end(), {b, a, x});
+  expect_rejected(kCheckManifold);
+  const CheckResult* e = with_light.find(kCheckManifold);
+  EXPECT_EQ(e->count, 1u);
+  ASSERT_EQ(e->offenders.size(), 1u);
+  EXPECT_EQ(e->offenders[0].faces.size(), 3u);
+  EXPECT_EQ(std::min(e->offenders[0].vertices[0], e->offenders[0].vertices[1]), std::min(a, b));
+  EXPECT_EQ(std::max(e->offenders[0].vertices[0], e->offenders[0].vertices[1]), std::max(a, b));
+}
+
+TEST_F(BrokenVolume, IndexOutOfRange) {
+  mesh.indices[7] = static_cast<std::uint32_t>(mesh.num_vertices() + 3);
+  expect_rejected(kCheckIndices);
+  EXPECT_EQ(status_of(with_light, kCheckClosed), CheckStatus::skipped);
+}
+
+TEST_F(BrokenVolume, LightAwayFromTheApex) {
+  // The volume checked against a light above its apex, outside it: the fan faces the light and
+  // the solid angles add up to 0, not to the cone.
+  light.position = {0, 5, 0};
+  const CheckReport r = check_volume(mesh, &light);
+  EXPECT_FALSE(r.valid());
+  EXPECT_EQ(status_of(r, kCheckNesting), CheckStatus::failed);
+  EXPECT_NEAR(r.light_sum, 0, 1e-9);
+  EXPECT_NEAR(r.light_expected, 4 * std::numbers::pi, 1e-12);
+  // Below the apex, inside: the volume is star-shaped from there too, and the sum is 4π.
+  light.position = {0, 3.5, 0};
+  const CheckReport inside = check_volume(mesh, &light);
+  EXPECT_TRUE(inside.valid()) << inside.first_failure();
+  EXPECT_NEAR(inside.light_sum, 4 * std::numbers::pi, 1e-9);
+}
+
+// ---- the command line ------------------------------------------------------------------------
+
+TEST(CheckCommand, ExitCodesAndReports) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  const Mesh sound = sound_spot_volume();
+  ASSERT_TRUE(write_mesh(dir.file("sound.ply"), sound).ok());
+  Mesh flipped = sound;
+  std::swap(flipped.indices[4], flipped.indices[5]);
+  ASSERT_TRUE(write_mesh(dir.file("flipped.obj"), flipped).ok());
+
+  auto r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" + light + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("valid"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("non-self-nesting"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"valid\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("CGAL"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --light '" + light + "' --json");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.out.find("\"valid\": false"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"first_failure\": \"oriented"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --quiet");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("oriented"), std::string::npos) << r.err;
+
+  // Unreadable input and bad usage: 2, with the file named.
+  const std::string junk = dir.write("junk.ply", "this is not a mesh\n");
+  r = test::run_lightvol("check '" + junk + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("junk.ply"), std::string::npos) << r.err;
+  r = test::run_lightvol("check '" + dir.file("missing.ply") + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.ply: no such file"), std::string::npos) << r.err;
+  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" + dir.file("nolight.json") + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  r = test::run_lightvol("check");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(BuildCommand, ChecksWhatItWrites) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  ASSERT_TRUE(write_depth_image(dir.file("depth.exr"), occluded_depth()).ok());
+  auto r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light +
+                              "' --out '" + dir.file("v.ply") + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"checking\""), std::string::npos) << r.out;
+  r = test::run_lightvol("check '" + dir.file("v.ply") + "' --light '" + light + "' -q");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light + "' --out '" +
+                         dir.file("w.ply") + "' --no-check --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("\"checking\""), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace lightvol

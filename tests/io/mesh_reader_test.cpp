@@ -1,0 +1,158 @@
+// read_mesh: every format write_mesh writes comes back with the same triangles at the same
+// positions; polygons are fan-triangulated; junk, empty, truncated and missing files are Errors
+// naming the file.
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/check/check.h>
+#include <lightvol/export/export.h>
+#include <lightvol/io/mesh_reader.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::TempDir;
+
+Mesh sample_volume() {
+  const Light light = test::light_from_json(test::spot_json());
+  const DepthImage depth = test::make_depth(
+      6, 5, [](int c, int r) { return (c == 2 && r >= 1 && r <= 3) ? 0.95f : 0.98f - 0.001f * static_cast<float>(c); });
+  Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
+  EXPECT_TRUE(mesh.ok());
+  return *mesh;
+}
+
+// Same triangle count and, triangle by triangle, the same corner positions (vertex numbering may
+// differ: STL stores corners, and welding numbers vertices in order of first use).
+::testing::AssertionResult same_triangles(const Mesh& a, const Mesh& b) {
+  if (a.num_vertices() != b.num_vertices())
+    return ::testing::AssertionFailure() << a.num_vertices() << " vs " << b.num_vertices() << " vertices";
+  if (a.num_triangles() != b.num_triangles())
+    return ::testing::AssertionFailure() << a.num_triangles() << " vs " << b.num_triangles() << " triangles";
+  for (std::size_t t = 0; t < a.num_triangles(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (a.vertex(a.triangle(t)[k]) != b.vertex(b.triangle(t)[k]))
+        return ::testing::AssertionFailure() << "triangle " << t << " corner " << k << " moved";
+  return ::testing::AssertionSuccess();
+}
+
+struct Case {
+  const char* name;
+  bool ascii;
+};
+
+class RoundTrip : public ::testing::TestWithParam<Case> {};
+
+TEST_P(RoundTrip, SameTrianglesAndPositions) {
+  TempDir dir;
+  const Mesh mesh = sample_volume();
+  const std::string path = dir.file(GetParam().name);
+  ExportOptions options;
+  options.ascii = GetParam().ascii;
+  ASSERT_TRUE(write_mesh(path, mesh, options).ok());
+  Result<Mesh> back = read_mesh(path);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_triangles(mesh, *back));
+  const Light light = test::light_from_json(test::spot_json());
+  const CheckReport report = check_volume_linear(*back, &light);
+  EXPECT_TRUE(report.valid()) << report.first_failure();
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, RoundTrip,
+                         ::testing::Values(Case{"v.ply", false}, Case{"v_ascii.ply", true},
+                                           Case{"v.obj", false}, Case{"v.off", false},
+                                           Case{"v.stl", false}, Case{"v_ascii.stl", true},
+                                           Case{"v.glb", false}, Case{"V.PLY", false}),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param.name;
+                           for (char& c : n) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+                           return n;
+                         });
+
+// Draco quantizes positions: same counts, positions within the quantization step, still sound.
+TEST(ReadMesh, DracoFormatsKeepCountsAndStaySound) {
+  TempDir dir;
+  const Mesh mesh = sample_volume();
+  const Light light = test::light_from_json(test::spot_json());
+  const Bounds box = bounding_box(mesh);
+  double extent = 0;
+  for (int k = 0; k < 3; ++k) extent = std::max(extent, box.max[k] - box.min[k]);
+  for (const char* name : {"v.drc", "v_draco.glb"}) {
+    ExportOptions options;
+    options.draco = std::string(name) == "v_draco.glb";
+    options.draco_bits = 20;
+    const std::string path = dir.file(name);
+    ASSERT_TRUE(write_mesh(path, mesh, options).ok()) << name;
+    Result<Mesh> back = read_mesh(path);
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->num_triangles(), mesh.num_triangles()) << name;
+    EXPECT_EQ(back->num_vertices(), mesh.num_vertices()) << name;
+    EXPECT_NEAR(signed_volume(*back), signed_volume(mesh), 1e-4 * signed_volume(mesh)) << name;
+    const Bounds b = bounding_box(*back);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(b.min[k], box.min[k], extent * 1e-5) << name;
+      EXPECT_NEAR(b.max[k], box.max[k], extent * 1e-5) << name;
+    }
+    const CheckReport report = check_volume_linear(*back, &light);
+    EXPECT_TRUE(report.valid()) << name << ": " << report.first_failure();
+  }
+}
+
+TEST(ReadMesh, PolygonsAreFanTriangulated) {
+  TempDir dir;
+  // A cube of six quads, and one pentagon-free OBJ with negative (relative) indices.
+  const std::string off = dir.write("cube.off",
+                                    "OFF\n8 6 0\n"
+                                    "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+                                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+  Result<Mesh> cube = read_mesh(off);
+  ASSERT_TRUE(cube.ok()) << cube.error().message;
+  EXPECT_EQ(cube->num_triangles(), 12u);
+  EXPECT_EQ(cube->num_vertices(), 8u);
+  EXPECT_EQ(cube->triangle(0), (std::array<std::uint32_t, 3>{0, 2, 3}));
+  EXPECT_EQ(cube->triangle(1), (std::array<std::uint32_t, 3>{0, 3, 1}));
+  EXPECT_DOUBLE_EQ(signed_volume(*cube), 8.0);
+
+  const std::string obj = dir.write("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+  Result<Mesh> quad = read_mesh(obj);
+  ASSERT_TRUE(quad.ok()) << quad.error().message;
+  EXPECT_EQ(quad->num_triangles(), 2u);
+}
+
+TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
+  TempDir dir;
+  const auto expect_error = [](const std::string& path, const std::string& what) {
+    Result<Mesh> mesh = read_mesh(path);
+    ASSERT_FALSE(mesh.ok()) << path;
+    EXPECT_NE(mesh.error().message.find(path), std::string::npos) << mesh.error().message;
+    EXPECT_NE(mesh.error().message.find(what), std::string::npos) << mesh.error().message;
+  };
+  expect_error(dir.file("missing.ply"), "no such file");
+  expect_error(dir.write("empty.obj", ""), "empty file");
+  expect_error(dir.write("junk.ply", "this is not a mesh\n"), "not a PLY file");
+  expect_error(dir.write("junk.off", "hello world\n1 2 3\n"), "not an OFF file");
+  expect_error(dir.write("junk.stl", std::string(200, '\x7f')), "not an STL file");
+  expect_error(dir.write("junk.obj", std::string("v 1 2 3\n\0\0\0", 11)), "not an OBJ file");
+  expect_error(dir.write("junk.drc", "DRACO but not really"), "not a Draco mesh");
+  expect_error(dir.write("junk.glb", "glTF but truncated"), "glTF");
+  expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
+  expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
+  expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");
+  expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "face 0 names vertex");
+
+  // A binary PLY cut short: the header promises more than the body holds.
+  const Mesh mesh = sample_volume();
+  const std::string ply = dir.file("cut.ply");
+  ASSERT_TRUE(write_mesh(ply, mesh).ok());
+  std::ifstream in(ply, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  dir.write("cut.ply", bytes.substr(0, bytes.size() / 2));
+  expect_error(ply, "cut.ply");
+}
+
+}  // namespace
+}  // namespace lightvol
