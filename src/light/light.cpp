@@ -410,6 +410,40 @@ Vec3d Unprojector::far_point(int col, int row) const {
   return to_out_.transform_point(eye_far(col, row));
 }
 
+int Unprojector::row_points(int row, const float* depths, float* out) const {
+  int first_bad = -1;
+  if (depth_ == DepthEncoding::window) {
+    // clip_to_out · (x, y, z, 1) with y fixed along the row and x stepping by 2/W.
+    const Mat4d& m = clip_to_out_;
+    const double y = ndc(0, row).y;
+    double base[4], dx[4], dz[4];
+    for (int i = 0; i < 4; ++i) {
+      base[i] = m(i, 1) * y + m(i, 3) - m(i, 2) + m(i, 0) * (1.0 / width_ - 1.0);
+      dx[i] = m(i, 0) * (2.0 / width_);
+      dz[i] = 2.0 * m(i, 2);  // z_ndc = 2d − 1: the −1 is folded into base
+    }
+    for (int c = 0; c < width_; ++c) {
+      const double d = std::clamp(static_cast<double>(depths[c]), 0.0, 1.0);
+      const double x = static_cast<double>(c);
+      const double inv_w = 1.0 / (base[3] + dx[3] * x + dz[3] * d);
+      for (int i = 0; i < 3; ++i)
+        out[3 * c + i] = static_cast<float>((base[i] + dx[i] * x + dz[i] * d) * inv_w);
+    }
+    return first_bad;
+  }
+  for (int c = 0; c < width_; ++c) {
+    Vec3d p;
+    if (!point(c, row, depths[c], &p)) {
+      if (first_bad < 0) first_bad = c;
+      p = near_point(c, row);
+    }
+    out[3 * c] = static_cast<float>(p.x);
+    out[3 * c + 1] = static_cast<float>(p.y);
+    out[3 * c + 2] = static_cast<float>(p.z);
+  }
+  return first_bad;
+}
+
 bool Unprojector::point(int col, int row, double depth, Vec3d* out) const {
   if (depth_ == DepthEncoding::window) {
     const Vec3d n = ndc(col, row);

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/buffer.h>
 #include <lightvol/volume/closing.h>
 
 namespace lightvol {
@@ -39,15 +40,6 @@ std::vector<std::uint32_t> border_loop(int width, int height, bool standard) {
   return loop;
 }
 
-namespace {
-
-void put(std::vector<float>& positions, std::size_t v, Vec3d p) {
-  positions[3 * v] = static_cast<float>(p.x);
-  positions[3 * v + 1] = static_cast<float>(p.y);
-  positions[3 * v + 2] = static_cast<float>(p.z);
-}
-
-}  // namespace
 
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  const VolumeOptions& options, const std::string& source) {
@@ -60,6 +52,8 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
 
   Mesh mesh;
   const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  reserve_large(mesh.positions, 3 * counts.vertices);
+  reserve_large(mesh.indices, 3 * counts.triangles);
   mesh.positions.resize(3 * grid_vertices);
   mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
 
@@ -67,16 +61,12 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r) {
-      for (int c = 0; c < w; ++c) {
-        const std::size_t v = static_cast<std::size_t>(r) * w + c;
-        Vec3d p;
-        if (!unproject.point(c, r, depth.values[v], &p)) {
-          std::size_t seen = first_bad.load();
-          while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
-          }
-          p = unproject.near_point(c, r);
-        }
-        put(mesh.positions, v, p);
+      const std::size_t row_start = static_cast<std::size_t>(r) * w;
+      const int bad_col = unproject.row_points(r, &depth.values[row_start], &mesh.positions[3 * row_start]);
+      if (bad_col < 0) continue;
+      const std::size_t v = row_start + static_cast<std::size_t>(bad_col);
+      std::size_t seen = first_bad.load();
+      while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
       }
     }
   });
