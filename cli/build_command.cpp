@@ -11,6 +11,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
+#include <lightvol/tessellate/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "commands.h"
@@ -31,6 +32,10 @@ struct BuildOptions {
   int draco_bits = 16;
   bool quiet = false;
   bool json = false;
+  bool adaptive = false;      // --adaptive
+  double max_error = -1;      // --max-error, world units
+  std::string refine = "error";  // --refine error|laplacian
+  double threshold = -1;      // --threshold, for --refine laplacian
   bool no_check = false;
 };
 
@@ -50,6 +55,17 @@ int run_build(const BuildOptions& o) {
   if (o.ascii && *format != MeshFormat::ply && *format != MeshFormat::stl)
     return fail("--ascii: applies to .ply and .stl output only");
 
+  if (o.refine == "error" && o.adaptive && o.max_error < 0)
+    return fail("--adaptive: needs --max-error E (world units along the texel rays)");
+  if (o.refine == "error" && !o.adaptive && o.max_error >= 0)
+    return fail("--max-error: applies with --adaptive only");
+  if (o.refine == "laplacian" && o.threshold < 0)
+    return fail("--refine laplacian: needs --threshold T");
+  if (o.refine == "laplacian" && o.max_error >= 0)
+    return fail("--max-error: does not apply to --refine laplacian (use --threshold)");
+  if (o.refine == "error" && o.threshold >= 0)
+    return fail("--threshold: applies with --refine laplacian only");
+
   progress.begin("reading " + o.light_path);
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
@@ -65,10 +81,23 @@ int run_build(const BuildOptions& o) {
   if (!depth) return fail(depth.error().message);
   progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
 
-  progress.begin("building static volume");
   VolumeOptions vo;
   vo.space = o.space == "light" ? Space::light : Space::world;
-  Result<Mesh> mesh = build_static_volume(*light, *depth, vo, depth_path);
+  const bool adaptive = o.adaptive || o.refine == "laplacian";
+  AdaptiveReport adaptive_report;
+  Result<Mesh> mesh = Error{""};
+  if (adaptive) {
+    AdaptiveOptions ao;
+    ao.refinement = o.refine == "laplacian" ? Refinement::laplacian : Refinement::max_error;
+    ao.max_error = o.max_error;
+    ao.threshold = o.threshold;
+    ao.measure = true;
+    progress.begin("building adaptive volume");
+    mesh = build_adaptive_volume(*light, *depth, vo, ao, depth_path, &adaptive_report);
+  } else {
+    progress.begin("building static volume");
+    mesh = build_static_volume(*light, *depth, vo, depth_path);
+  }
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
@@ -102,7 +131,7 @@ int run_build(const BuildOptions& o) {
       {"space", o.space},
       {"width", depth->width},
       {"height", depth->height},
-      {"mode", "static"},
+      {"mode", adaptive ? "adaptive" : "static"},
       {"vertices", mesh->num_vertices()},
       {"triangles", mesh->num_triangles()},
       {"bounds", {{"min", box.min}, {"max", box.max}}},
@@ -111,6 +140,20 @@ int run_build(const BuildOptions& o) {
       {"total_seconds", progress.log().total_seconds()},
       {"peak_memory_bytes", peak_memory_bytes()},
   };
+  if (adaptive) {
+    const AdaptiveReport& a = adaptive_report;
+    report["adaptive"] = {
+        {"refine", o.refine},
+        {"max_error", o.refine == "laplacian" ? nlohmann::json(nullptr) : nlohmann::json(o.max_error)},
+        {"threshold", o.refine == "laplacian" ? nlohmann::json(o.threshold) : nlohmann::json(nullptr)},
+        {"max_error_reached", a.max_error_reached},
+        {"grid_triangles", a.grid_triangles},
+        {"leaves", a.leaves},
+        {"fixup_rounds", a.fixup_rounds},
+        {"seconds", {{"error_pyramid", a.pyramid_seconds}, {"balance", a.balance_seconds},
+                     {"emit", a.emit_seconds}, {"measure", a.measure_seconds},
+                     {"assemble", a.assemble_seconds}}}};
+  }
   if (!o.report_path.empty()) {
     if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
       return fail(s.error().message);
@@ -153,6 +196,18 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_option("--report", o->report_path,
                   "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
+  cmd->add_flag("--adaptive", o->adaptive,
+                "Adaptive tessellation: a quadtree whose cells stay coarse while every texel they cover "
+                "lies within --max-error world units of the surface (no T-junctions)");
+  cmd->add_option("--max-error", o->max_error, "Error bound of --adaptive, in world units along each texel ray")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--refine", o->refine,
+                  "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
+                  "implies --adaptive)")
+      ->check(CLI::IsMember({"error", "laplacian"}));
+  cmd->add_option("--threshold", o->threshold,
+                  "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-check", o->no_check,
                 "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress lines and no summary");

@@ -11,6 +11,7 @@ namespace lightvol::cli {
 using Runner = std::function<int()>;
 
 void add_build_command(CLI::App& app, Runner* run);
+void add_stats_command(CLI::App& app, Runner* run);
 void add_check_command(CLI::App& app, Runner* run);
 void add_demo_command(CLI::App& app, Runner* run);
 

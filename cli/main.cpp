@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
 
   Runner run;
   add_build_command(app, &run);
+  add_stats_command(app, &run);
   add_check_command(app, &run);
   add_demo_command(app, &run);
 

@@ -54,6 +54,10 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   }
 
   const bool window = light.depth == DepthEncoding::window;
+  const Mat4d& pj = light.projection;
+  const bool linear_fast = light.depth == DepthEncoding::linear && pj(2, 0) == 0 && pj(2, 1) == 0 &&
+                           pj(3, 0) == 0 && pj(3, 1) == 0;
+  const double pz = pj(2, 2), pzc = pj(2, 3), pw = pj(3, 2), pwc = pj(3, 3);
   const Unprojector unproject(light, w, h, face, Space::world);
   std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
@@ -64,6 +68,10 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         double d = 0;
         if (window) {
           d = std::clamp(stored, 0.0, 1.0);
+        } else if (linear_fast) {
+          // The projection's z and w rows see only the eye depth z = −stored.
+          const double z = -std::clamp(stored, light.near, light.far);
+          d = std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
         } else {
           Vec3d p;
           if (!unproject.point(c, r, stored, &p)) {
@@ -156,17 +164,19 @@ double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, 
     const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
     double m = 0;
     if constexpr (kUniform) {
+#pragma omp simd reduction(max : m)
       for (int x = x0; x <= x1; ++x) {
         const double e = std::abs(base + gx * (x - x0) - dt[x]);
-        m = e > m ? e : m;
+        m = m > e ? m : e;
       }
     } else {
       const double* k = t.scale_row(y);
       const double w0 = t.w0(x0, y), dw = t.w0_dc(), w1 = t.w1();
+#pragma omp simd reduction(max : m)
       for (int x = x0; x <= x1; ++x) {
         const double d = base + gx * (x - x0);
         const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0 + dw * (x - x0) + d * w1);
-        m = e > m ? e : m;
+        m = m > e ? m : e;
       }
     }
     worst = std::max(worst, m);
@@ -218,6 +228,73 @@ struct Quadtree {
     return {i * s, j * s, std::min(i * s + s, cw), std::min(j * s + s, ch)};
   }
 };
+
+// The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
+// triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
+// general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
+template <bool kUniform>
+double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
+  const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
+               dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
+  const double g1x = (db - da) / wx, g1y = (dc - da) / wy;  // a + g1·(p − a)
+  const double g2x = (dd - dc) / wx, g2y = (dd - db) / wy;  // d + g2·(p − d)
+  double worst = 0;
+  for (int y = y_begin; y < y_end; ++y) {
+    const int s = y - b.y0;
+    const int xs = b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
+    const double* dt = t.depth_row(y);
+    const double base1 = da + g1y * s, base2 = dd + g2y * (y - b.y1);
+    double m = 0;
+    if constexpr (kUniform) {
+#pragma omp simd reduction(max : m)
+      for (int x = b.x0; x <= xs; ++x) {
+        const double e = std::abs(base1 + g1x * (x - b.x0) - dt[x]);
+        m = m > e ? m : e;
+      }
+#pragma omp simd reduction(max : m)
+      for (int x = xs + 1; x <= b.x1; ++x) {
+        const double e = std::abs(base2 + g2x * (x - b.x1) - dt[x]);
+        m = m > e ? m : e;
+      }
+    } else {
+      const double* k = t.scale_row(y);
+      const double w1 = t.w1();
+      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
+#pragma omp simd reduction(max : m)
+      for (int x = b.x0; x <= xs; ++x) {
+        const double d = base1 + g1x * (x - b.x0);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+      }
+#pragma omp simd reduction(max : m)
+      for (int x = xs + 1; x <= b.x1; ++x) {
+        const double d = base2 + g2x * (x - b.x1);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+      }
+    }
+    worst = std::max(worst, m);
+  }
+  if constexpr (kUniform) worst *= t.uniform_scale();
+  return worst;
+}
+
+double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+  return t.uniform() ? box_error_rows_t<true>(t, b, y_begin, y_end)
+                     : box_error_rows_t<false>(t, b, y_begin, y_end);
+}
+
+double box_error(const TexelDepths& t, const Quadtree::Box& b) {
+  if (static_cast<std::int64_t>(b.x1 - b.x0) * (b.y1 - b.y0) < (1 << 16))
+    return box_error_rows(t, b, b.y0, b.y1 + 1);
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(b.y0, b.y1 + 1, 16), 0.0,
+      [&](const tbb::blocked_range<int>& r, double m) {
+        return std::max(m, box_error_rows(t, b, r.begin(), r.end()));
+      },
+      [](double p, double q) { return std::max(p, q); });
+}
 
 // Edge-split bits of a cell's configuration.
 enum : unsigned { kSplitTop = 1, kSplitRight = 2, kSplitBottom = 4, kSplitLeft = 8 };
@@ -296,36 +373,53 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
     });
   }
 
-  for (int level = 1; level <= top_; ++level) {
-    const int nx = q.nx(level);
-    std::vector<float>& out = value_[level];
-    out.assign(q.cells(level), 0.0f);
-    const std::vector<float>* below = level > 1 ? &value_[level - 1] : nullptr;
-    const int nx_below = q.nx(level - 1), ny_below = q.ny(level - 1);
-    const std::size_t grain = level >= 8 ? 1 : (level >= 4 ? 16 : 256);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), grain),
+  for (int level = 1; level <= top_; ++level) value_[level].assign(q.cells(level), 0.0f);
+
+  // One cell: its own measure (max_error: over both triangles of its unsplit configuration;
+  // laplacian, level 1: the edge map over its texels), then the max with its children.
+  const auto compute = [&](int level, int i, int j, bool parallel_rows) {
+    const Quadtree::Box b = q.box(level, i, j);
+    float v = 0;
+    if (refinement_ == Refinement::max_error) {
+      v = round_up(parallel_rows ? box_error(texels_, b) : box_error_rows(texels_, b, b.y0, b.y1 + 1));
+    } else if (level == 1) {
+      for (int y = b.y0; y <= b.y1; ++y)
+        for (int x = b.x0; x <= b.x1; ++x) v = std::max(v, edges[static_cast<std::size_t>(y) * w + x]);
+    }
+    if (level > 1) {
+      const std::vector<float>& below = value_[level - 1];
+      const int nxb = q.nx(level - 1), nyb = q.ny(level - 1);
+      for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
+        for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
+          v = std::max(v, below[static_cast<std::size_t>(cj) * nxb + ci]);
+    }
+    value_[level][static_cast<std::size_t>(j) * q.nx(level) + i] = v;
+  };
+
+  // Levels 1..K tile by tile (a level-K cell's texels stay in cache while its whole sub-pyramid
+  // is computed); the levels above K cell by cell, large cells splitting their rows.
+  const int tile = std::min(top_, 7);
+  if (tile >= 1) {
+    const int ntx = q.nx(tile);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.cells(tile)),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t cell = range.begin(); cell != range.end(); ++cell) {
-        const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
-        const Quadtree::Box b = q.box(level, i, j);
-        float v = 0;
-        if (refinement_ == Refinement::max_error) {
-          std::array<Pt, 3> tri[6];
-          const int n = cell_triangles(b, 1 << (level - 1), 0, tri);
-          double e = 0;
-          for (int k = 0; k < n; ++k) e = std::max(e, triangle_error(texels_, tri[k][0], tri[k][1], tri[k][2]));
-          v = round_up(e);
-        } else if (level == 1) {
-          for (int y = b.y0; y <= b.y1; ++y)
-            for (int x = b.x0; x <= b.x1; ++x) v = std::max(v, edges[static_cast<std::size_t>(y) * w + x]);
+      for (std::size_t t = range.begin(); t != range.end(); ++t) {
+        const int ti = static_cast<int>(t % ntx), tj = static_cast<int>(t / ntx);
+        for (int level = 1; level <= tile; ++level) {
+          const int span = 1 << (tile - level);
+          const int i1 = std::min((ti + 1) * span, q.nx(level)), j1 = std::min((tj + 1) * span, q.ny(level));
+          for (int j = tj * span; j < j1; ++j)
+            for (int i = ti * span; i < i1; ++i) compute(level, i, j, false);
         }
-        if (below) {
-          for (int cj = 2 * j; cj < std::min(2 * j + 2, ny_below); ++cj)
-            for (int ci = 2 * i; ci < std::min(2 * i + 2, nx_below); ++ci)
-              v = std::max(v, (*below)[static_cast<std::size_t>(cj) * nx_below + ci]);
-        }
-        out[cell] = v;
       }
+    });
+  }
+  for (int level = tile + 1; level <= top_; ++level) {
+    const int nx = q.nx(level);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.cells(level), 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t cell = range.begin(); cell != range.end(); ++cell)
+        compute(level, static_cast<int>(cell % nx), static_cast<int>(cell / nx), true);
     });
   }
   seconds_ = seconds_since(start);
@@ -393,9 +487,30 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
     }
     return config;
   };
-  const auto is_leaf = [&](int level, int i, int j) {
-    if (level < top && !is_split(level + 1, i >> 1, j >> 1)) return false;
-    return !is_split(level, i, j);
+
+  // Leaves by blocks: a block is one row of level-(L+1) cells, whose unsplit children are the
+  // leaves of level L there (the root alone for the top level). Order: coarse levels first, rows
+  // and cells in order: deterministic.
+  struct Block {
+    int level, row;
+  };
+  std::vector<Block> blocks{{top, 0}};
+  for (int level = top - 1; level >= 0; --level)
+    for (int j = 0; j < q.ny(level + 1); ++j) blocks.push_back({level, j});
+  const auto for_each_leaf = [&](const Block& blk, auto&& fn) {
+    const int level = blk.level;
+    if (level == top) {
+      if (!is_split(top, 0, 0)) fn(0, 0);
+      return;
+    }
+    const int pnx = q.nx(level + 1), nx = q.nx(level), ny = q.ny(level);
+    const std::uint8_t* prow = split[level + 1].data() + static_cast<std::size_t>(blk.row) * pnx;
+    for (int pi = 0; pi < pnx; ++pi) {
+      if (!prow[pi]) continue;
+      for (int cj = 2 * blk.row; cj < std::min(2 * blk.row + 2, ny); ++cj)
+        for (int ci = 2 * pi; ci < std::min(2 * pi + 2, nx); ++ci)
+          if (!is_split(level, ci, cj)) fn(ci, cj);
+    }
   };
 
   const bool bounded = refinement_ == Refinement::max_error;
@@ -426,34 +541,31 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
     // Fix-up: a leaf whose split configuration breaks the bound splits as well (its children meet
     // the bound with their own triangles: the pyramid's values never grow downwards).
     std::vector<std::vector<std::uint8_t>> fail(split.size());
-    bool any_fail = false;
-    for (int level = 1; level <= top; ++level) {
-      const int nx = q.nx(level);
-      fail[level].assign(split[level].size(), 0);
-      const bool failed = tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, split[level].size(), level >= 6 ? 1 : 256), false,
-          [&](const tbb::blocked_range<std::size_t>& range, bool acc) {
-            for (std::size_t cell = range.begin(); cell != range.end(); ++cell) {
-              const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
-              if (!is_leaf(level, i, j)) continue;
+    for (int level = 1; level <= top; ++level) fail[level].assign(split[level].size(), 0);
+    const bool any_fail = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, blocks.size(), 1), false,
+        [&](const tbb::blocked_range<std::size_t>& range, bool acc) {
+          for (std::size_t k = range.begin(); k != range.end(); ++k) {
+            const int level = blocks[k].level;
+            if (level == 0) continue;
+            for_each_leaf(blocks[k], [&](int i, int j) {
               const Quadtree::Box b = q.box(level, i, j);
               const unsigned config = config_of(level, i, j, b);
-              if (config == 0) continue;
+              if (config == 0) return;
               std::array<Pt, 3> tri[6];
               const int n = cell_triangles(b, 1 << (level - 1), config, tri);
-              for (int k = 0; k < n; ++k) {
-                if (triangle_error(texels_, tri[k][0], tri[k][1], tri[k][2]) > bound) {
-                  fail[level][cell] = 1;
+              for (int t = 0; t < n; ++t) {
+                if (triangle_error(texels_, tri[t][0], tri[t][1], tri[t][2]) > bound) {
+                  fail[level][static_cast<std::size_t>(j) * q.nx(level) + i] = 1;
                   acc = true;
-                  break;
+                  return;
                 }
               }
-            }
-            return acc;
-          },
-          [](bool a, bool b) { return a || b; });
-      any_fail = any_fail || failed;
-    }
+            });
+          }
+          return acc;
+        },
+        [](bool a, bool b) { return a || b; });
     if (!any_fail) break;
     ++grid.fixup_rounds;
     for (int level = 1; level <= top; ++level)
@@ -464,12 +576,6 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
 
   // ---- emission: leaves level by level (coarse first), rows of cells in order ----------------
   const auto emit_start = std::chrono::steady_clock::now();
-  struct RowBlock {
-    int level, row;
-  };
-  std::vector<RowBlock> blocks;
-  for (int level = top; level >= 0; --level)
-    for (int j = 0; j < q.ny(level); ++j) blocks.push_back({level, j});
   std::vector<std::uint64_t> block_triangles(blocks.size() + 1, 0), block_leaves(blocks.size(), 0);
 
   // Vertex bitmap, one bit per texel, rows padded to 64-bit words.
@@ -483,10 +589,9 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const int level = blocks[k].level, j = blocks[k].row;
+      const int level = blocks[k].level;
       std::uint64_t tris = 0, leaves = 0;
-      for (int i = 0; i < q.nx(level); ++i) {
-        if (!is_leaf(level, i, j)) continue;
+      for_each_leaf(blocks[k], [&](int i, int j) {
         const Quadtree::Box b = q.box(level, i, j);
         const unsigned config = config_of(level, i, j, b);
         ++leaves;
@@ -497,7 +602,7 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
         if (config & kSplitBottom) mark({b.x0 + half, b.y1});
         if (config & kSplitLeft) mark({b.x0, b.y0 + half});
         if (config & kSplitRight) mark({b.x1, b.y0 + half});
-      }
+      });
       block_triangles[k + 1] = tris;
       block_leaves[k] = leaves;
     }
@@ -534,10 +639,9 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const int level = blocks[k].level, j = blocks[k].row;
+      const int level = blocks[k].level;
       std::uint32_t* out = grid.indices.data() + 3 * block_triangles[k];
-      for (int i = 0; i < q.nx(level); ++i) {
-        if (!is_leaf(level, i, j)) continue;
+      for_each_leaf(blocks[k], [&](int i, int j) {
         const Quadtree::Box b = q.box(level, i, j);
         std::array<Pt, 3> tri[6];
         const int n = cell_triangles(b, level > 0 ? 1 << (level - 1) : 0,
@@ -550,7 +654,7 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
             *out++ = a, *out++ = c, *out++ = bb;
           }
         }
-      }
+      });
       LV_CHECK_EQ(out, grid.indices.data() + 3 * block_triangles[k + 1]);
     }
   });
