@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   add_stats_command(app, &run);
   add_check_command(app, &run);
   add_demo_command(app, &run);
+  add_render_command(app, &run);
 
   try {
     app.parse(argc, argv);

@@ -72,6 +72,7 @@ namespace lightvol::gl {
   X(PFNGLUNIFORM1IPROC, glUniform1i)                                     \
   X(PFNGLUNIFORM1FPROC, glUniform1f)                                     \
   X(PFNGLUNIFORM2FPROC, glUniform2f)                                     \
+  X(PFNGLUNIFORM2IPROC, glUniform2i)                                     \
   X(PFNGLUNIFORM3FPROC, glUniform3f)                                     \
   X(PFNGLUNIFORM4FPROC, glUniform4f)                                     \
   X(PFNGLUNIFORM1FVPROC, glUniform1fv)                                   \

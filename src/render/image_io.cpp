@@ -1,0 +1,87 @@
+#include <lightvol/render/image_io.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/imageio.h>
+
+#include <lightvol/core/atomic_file.h>
+
+namespace lightvol {
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+double srgb(double x) {
+  return x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1.0 / 2.4) - 0.055;
+}
+
+}  // namespace
+
+Status write_image(const std::string& path, const Image& image, double exposure) {
+  const std::string ext = lower_extension(path);
+  const bool eight_bit = ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "bmp" || ext == "tga";
+  const std::size_t n = image.values.size();
+  return write_file_atomically(path, [&](const std::string& temp) -> Status {
+    auto out = OIIO::ImageOutput::create(temp);
+    if (!out) return Error{path + ": cannot write images of this type (" + OIIO::geterror() + ")"};
+    OIIO::ImageSpec spec(image.width, image.height, 3,
+                         eight_bit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
+    bool ok = out->open(temp, spec);
+    if (eight_bit) {
+      double scale = exposure;
+      if (!(scale > 0)) {
+        std::vector<double> sorted;
+        for (double v : image.values)
+          if (v > 0) sorted.push_back(v);
+        double p = 0;
+        if (!sorted.empty()) {
+          const std::size_t k = std::min(sorted.size() - 1, sorted.size() * 995 / 1000);
+          std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+          p = sorted[k];
+        }
+        scale = p > 0 ? 4.0 / p : 1.0;
+      }
+      std::vector<unsigned char> pixels(3 * n);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = std::max(0.0, image.values[i] * scale);
+        const double v = std::clamp(srgb(x / (1 + x)), 0.0, 1.0);
+        pixels[3 * i] = pixels[3 * i + 1] = pixels[3 * i + 2] =
+            static_cast<unsigned char>(std::lround(255 * v));
+      }
+      ok = ok && out->write_image(OIIO::TypeDesc::UINT8, pixels.data());
+    } else {
+      std::vector<float> pixels(3 * n);
+      for (std::size_t i = 0; i < n; ++i)
+        pixels[3 * i] = pixels[3 * i + 1] = pixels[3 * i + 2] = static_cast<float>(image.values[i]);
+      ok = ok && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    }
+    ok = out->close() && ok;
+    if (!ok) return Error{path + ": cannot write image: " + out->geterror()};
+    return {};
+  });
+}
+
+Result<Image> read_image(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return Error{path + ": cannot read image: " + OIIO::geterror()};
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8)
+    return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
+  Image image;
+  image.width = spec.width;
+  image.height = spec.height;
+  std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height);
+  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, pixels.data()))
+    return Error{path + ": cannot read image: " + in->geterror()};
+  image.values.assign(pixels.begin(), pixels.end());
+  return image;
+}
+
+}  // namespace lightvol

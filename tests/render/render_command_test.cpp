@@ -1,0 +1,135 @@
+// `lightvol render` end to end on the analytic floor-and-box scene written to files: the volume
+// method against the reference through --compare, PNG and EXR outputs, the alternatives, and bad
+// input rejected with a message naming the file.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/export/export.h>
+#include <lightvol/render/image_io.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "render/analytic_scene.h"
+#include "render/gl_test_context.h"
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+constexpr int kW = 64, kH = 48, kMap = 128;
+
+// Writes light.json, shadow.exr, volume.ply, camera.json, camdepth.exr and medium.json into `dir`.
+void write_scene(const std::string& dir, Vec3d eye, Vec3d target) {
+  const std::string light_json = test::spot_json("linear");
+  std::ofstream(dir + "/light.json") << light_json;
+  const Light light = test::light_from_json(light_json);
+  const DepthImage shadow = test::scene_shadow_map(light, kMap, kMap);
+  ASSERT_TRUE(write_depth_image(dir + "/shadow.exr", shadow));
+  Result<Mesh> volume = build_static_volume(light, shadow, {}, "shadow");
+  ASSERT_TRUE(volume);
+  ASSERT_TRUE(write_mesh(dir + "/volume.ply", *volume));
+  std::ostringstream cam;
+  const Vec3d d = target - eye;
+  cam << R"({"position": [)" << eye.x << ", " << eye.y << ", " << eye.z << R"(], "direction": [)"
+      << d.x << ", " << d.y << ", " << d.z << R"(], "up": [0, 1, 0], "fov_y_deg": 50, "aspect": )"
+      << double(kW) / kH << R"(, "near": 0.05, "far": 100, "depth": "linear", "width": )" << kW
+      << R"(, "height": )" << kH << "}";
+  std::ofstream(dir + "/camera.json") << cam.str();
+  Result<Camera> camera = parse_camera(cam.str(), "camera.json");
+  ASSERT_TRUE(camera) << camera.error().message;
+  DepthImage depth;
+  depth.width = kW;
+  depth.height = kH;
+  for (int row = 0; row < kH; ++row)
+    for (int col = 0; col < kW; ++col) {
+      const Ray ray = pixel_ray(*camera, col, row);
+      const double t = test::cast_scene(ray.origin, ray.direction);
+      const double z = std::isfinite(t)
+                           ? -camera->view.view.transform_point(ray.origin + t * ray.direction).z
+                           : 100.0;
+      depth.values.push_back(static_cast<float>(std::min(z, 100.0)));
+    }
+  ASSERT_TRUE(write_depth_image(dir + "/camdepth.exr", depth));
+  std::ofstream(dir + "/medium.json")
+      << R"({"scattering": 0.06, "absorption": 0.02, "intensity": 20, "phase": {"type": "hg", "g": 0.3}})";
+}
+
+std::string common_args(const std::string& dir) {
+  return "--light '" + dir + "/light.json' --camera '" + dir + "/camera.json' --depth '" + dir +
+         "/camdepth.exr' --medium '" + dir + "/medium.json' --quiet";
+}
+
+double number_after(const std::string& text, const std::string& key) {
+  const auto at = text.find(key);
+  if (at == std::string::npos) return NAN;
+  return std::strtod(text.c_str() + at + key.size(), nullptr);
+}
+
+// Keeps the pictures when LIGHTVOL_RENDER_PICTURES names a directory (for the README).
+std::string picture_dir(const test::TempDir& tmp) {
+  const char* keep = std::getenv("LIGHTVOL_RENDER_PICTURES");
+  return keep ? std::string(keep) : tmp.path();
+}
+
+TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
+  REQUIRE_GL_CONTEXT();
+  test::TempDir tmp;
+  const std::string dir = picture_dir(tmp);
+  write_scene(dir, {6, 3, 6}, {0, 1, 0});
+  const std::string args = common_args(dir);
+  test::CommandResult ref = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
+                                               " --method reference --out '" + dir + "/reference.exr'");
+  ASSERT_EQ(ref.exit_code, 0) << ref.err;
+  test::CommandResult vol = test::run_lightvol(
+      "render '" + dir + "/volume.ply' " + args + " --out '" + dir + "/volume.exr' --compare '" +
+      dir + "/reference.exr' --frames 2");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  EXPECT_LT(number_after(vol.out, "relative L2 "), 0.002) << vol.out;
+  EXPECT_GT(number_after(vol.out, "PSNR "), 60) << vol.out;
+  EXPECT_GT(number_after(vol.out, "time per frame: "), 0) << vol.out;
+  Result<Image> exr = read_image(dir + "/volume.exr");
+  ASSERT_TRUE(exr) << exr.error().message;
+  EXPECT_EQ(exr->width, kW);
+  EXPECT_EQ(exr->height, kH);
+  // The raymarcher against the same reference, and the radial blur runs.
+  test::CommandResult march = test::run_lightvol(
+      "render " + args + " --method raymarch --shadow-map '" + dir + "/shadow.exr' --samples 1024 --out '" +
+      dir + "/raymarch.png' --compare '" + dir + "/reference.exr'");
+  ASSERT_EQ(march.exit_code, 0) << march.err;
+  EXPECT_LT(number_after(march.out, "relative L2 "), 0.03) << march.out;
+  test::CommandResult radial = test::run_lightvol(
+      "render " + args + " --method radial --shadow-map '" + dir + "/shadow.exr' --out '" + dir +
+      "/radial.png'");
+  ASSERT_EQ(radial.exit_code, 0) << radial.err;
+  test::CommandResult composite = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
+                                                     " --composite --out '" + dir + "/composite.png'");
+  ASSERT_EQ(composite.exit_code, 0) << composite.err;
+}
+
+TEST(RenderCommand, RejectsBadInputNamingTheFile) {
+  test::TempDir tmp;
+  write_scene(tmp.path(), {6, 3, 6}, {0, 1, 0});
+  const std::string dir = tmp.path();
+  std::ofstream(dir + "/bad_medium.json") << R"({"scattering": 0.1, "sigma": 1})";
+  test::CommandResult r = test::run_lightvol(
+      "render '" + dir + "/volume.ply' --light '" + dir + "/light.json' --camera '" + dir +
+      "/camera.json' --depth '" + dir + "/camdepth.exr' --medium '" + dir +
+      "/bad_medium.json' --out '" + dir + "/x.exr' --method reference");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: " + dir + "/bad_medium.json: key 'sigma': unknown key (known: "
+                   "scattering, absorption, intensity, phase)\n");
+  r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: render: --method volume needs the light volume MESH\n");
+  r = test::run_lightvol("render '" + dir + "/volume.ply' " + common_args(dir) + " --out '" + dir +
+                         "/x.exr' --method reference --compare '" + dir + "/shadow.exr'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: " + dir + "/shadow.exr: image is 128x128, the render is 64x48\n");
+}
+
+}  // namespace
+}  // namespace lightvol
