@@ -14,6 +14,7 @@ void add_build_command(CLI::App& app, Runner* run);
 void add_stats_command(CLI::App& app, Runner* run);
 void add_check_command(CLI::App& app, Runner* run);
 void add_demo_command(CLI::App& app, Runner* run);
+void add_shadowmap_command(CLI::App& app, Runner* run);  // with LIGHTVOL_HAS_SHADOWMAP
 void add_render_command(CLI::App& app, Runner* run);
 
 // Prints "lightvol: <message>" on stderr and returns 2 (bad usage or input).

@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
   add_stats_command(app, &run);
   add_check_command(app, &run);
   add_demo_command(app, &run);
+#ifdef LIGHTVOL_HAS_SHADOWMAP
+  add_shadowmap_command(app, &run);
+#endif
   add_render_command(app, &run);
 
   try {
