@@ -32,9 +32,10 @@ double cast_scene(Vec3d o, Vec3d d, const Box& box) {
   return best;
 }
 
-DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box) {
+DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box, int face) {
   EXPECT_EQ(light.depth, DepthEncoding::linear);
-  const Unprojector un(light, width, height, 0, Space::world);
+  const Unprojector un(light, width, height, face, Space::world);
+  const Mat4d view = light.type == LightType::omni ? omni_face_view(light, face) : light.view;
   DepthImage image;
   image.width = width;
   image.height = height;
@@ -46,7 +47,7 @@ DepthImage scene_shadow_map(const Light& light, int width, int height, const Box
       const Vec3d origin = light.is_perspective() ? light.position : a;
       const double t = cast_scene(origin, dir, box);
       double depth = light.far;
-      if (std::isfinite(t)) depth = -light.view.transform_point(origin + t * dir).z;
+      if (std::isfinite(t)) depth = -view.transform_point(origin + t * dir).z;
       image.values[static_cast<std::size_t>(row) * width + col] =
           static_cast<float>(std::clamp(depth, light.near, light.far));
     }

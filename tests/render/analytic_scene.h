@@ -22,7 +22,9 @@ double cast_scene(Vec3d origin, Vec3d direction, const Box& box = {});
 
 // The light's shadow map of the scene in its "linear" encoding (eye-space −z; far where nothing
 // is hit). The light must use depth "linear".
-DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box = {});
+// Omni lights: face `face` (+X −X +Y −Y +Z −Z), its depth the face eye space's −z.
+DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box = {},
+                            int face = 0);
 
 // True when x is lit: inside the part of the light's frustum spanned by the texel-centre rays of a
 // W×H map, between near and far, and the light reaches it without meeting floor or box.

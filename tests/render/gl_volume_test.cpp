@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/render/reference.h>
+#include <lightvol/depth/cube_faces.h>
+#include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "render/analytic_scene.h"
@@ -80,6 +82,40 @@ TEST(GlVolume, BaselineAtTheClosestPointDoesNotLoseAccuracy) {
     std::printf("  %-30s relative L2 with baseline %.2e, from the eye %.2e\n", c.name,
                 with.relative_l2, without.relative_l2);
     EXPECT_LE(with.relative_l2, 1.5 * without.relative_l2 + 1e-6) << c.name;
+  }
+}
+
+TEST(GlVolume, OmniMatchesTheReferenceInsideAndOutside) {
+  REQUIRE_GL_CONTEXT();
+  const Light light = test::light_from_json(
+      R"({"type": "omni", "position": [0.3, 2.5, 0.2], "near": 0.1, "far": 30, "depth": "linear"})");
+  CubeFaces cube;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    cube.faces[f] = test::scene_shadow_map(light, 48, 48, {}, f);
+    cube.sources[f] = omni_face_name(f);
+  }
+  Result<Mesh> volume = build_omni_volume(light, cube, {});
+  ASSERT_TRUE(volume) << volume.error().message;
+  Medium m;
+  m.scattering = 0.05;
+  m.absorption = 0.02;
+  m.intensity = 10;
+  m.phase = {PhaseType::hg, 0.3, 0};
+  // Lit space around the camera; then the camera in the box's shadow, looking out of it.
+  for (auto [eye, target] : {std::pair<Vec3d, Vec3d>{{5, 3, 5}, {0, 1, 0}},
+                             {{0.3, 0.5, 0.2}, {3, 0.9, 1}}}) {
+    const RenderScene scene = test::make_render_scene(test::make_camera(eye, target, kW, kH), light, m);
+    const Image ref = render_reference(*volume, scene);
+    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+    ASSERT_TRUE(renderer) << renderer.error().message;
+    (*renderer)->set_volume(*volume);
+    const ImageDifference d = compare_images((*renderer)->render(), ref);
+    double total = 0;
+    for (double v : ref.values) total += v;
+    std::printf("  omni eye (%g, %g, %g): relative L2 %.2e  max abs %.2e  mean %.3g\n", eye.x, eye.y,
+                eye.z, d.relative_l2, d.max_abs, total / static_cast<double>(ref.values.size()));
+    EXPECT_GT(total, 0);
+    EXPECT_LT(d.relative_l2, 0.002);
   }
 }
 
