@@ -91,7 +91,7 @@ int run_build(const BuildOptions& o) {
     ao.refinement = o.refine == "laplacian" ? Refinement::laplacian : Refinement::max_error;
     ao.max_error = o.max_error;
     ao.threshold = o.threshold;
-    ao.measure = true;
+    ao.measure = o.json || !o.report_path.empty();  // the reached error is for reports
     progress.begin("building adaptive volume");
     mesh = build_adaptive_volume(*light, *depth, vo, ao, depth_path, &adaptive_report);
   } else {

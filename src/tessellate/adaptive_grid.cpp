@@ -106,11 +106,6 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   return t;
 }
 
-double TexelDepths::error(int col, int row, double d) const {
-  const std::size_t v = index(col, row);
-  if (uniform_) return std::abs(d - depth_[v]) * uniform_scale_;
-  return std::abs(d - depth_[v]) * scale_[v] / std::abs(w0(col, row) + d * w1_);
-}
 
 // ---- triangles over the lattice ----------------------------------------------------------------
 
@@ -285,16 +280,6 @@ double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin,
                      : box_error_rows_t<false>(t, b, y_begin, y_end);
 }
 
-double box_error(const TexelDepths& t, const Quadtree::Box& b) {
-  if (static_cast<std::int64_t>(b.x1 - b.x0) * (b.y1 - b.y0) < (1 << 16))
-    return box_error_rows(t, b, b.y0, b.y1 + 1);
-  return tbb::parallel_reduce(
-      tbb::blocked_range<int>(b.y0, b.y1 + 1, 16), 0.0,
-      [&](const tbb::blocked_range<int>& r, double m) {
-        return std::max(m, box_error_rows(t, b, r.begin(), r.end()));
-      },
-      [](double p, double q) { return std::max(p, q); });
-}
 
 // Edge-split bits of a cell's configuration.
 enum : unsigned { kSplitTop = 1, kSplitRight = 2, kSplitBottom = 4, kSplitLeft = 8 };
@@ -377,11 +362,21 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
 
   // One cell: its own measure (max_error: over both triangles of its unsplit configuration;
   // laplacian, level 1: the edge map over its texels), then the max with its children.
-  const auto compute = [&](int level, int i, int j, bool parallel_rows) {
+  const auto compute = [&](int level, int i, int j) {
     const Quadtree::Box b = q.box(level, i, j);
     float v = 0;
-    if (refinement_ == Refinement::max_error) {
-      v = round_up(parallel_rows ? box_error(texels_, b) : box_error_rows(texels_, b, b.y0, b.y1 + 1));
+    if (refinement_ == Refinement::max_error && level == 1 && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+      // A whole level-1 cell: five texels, each halfway along an edge or the diagonal.
+      const TexelDepths& t = texels_;
+      const int x = b.x0, y = b.y0;
+      const double da = t.window_depth(x, y), db = t.window_depth(x + 2, y),
+                   dc = t.window_depth(x, y + 2), dd = t.window_depth(x + 2, y + 2);
+      const double e = std::max({t.error(x + 1, y, 0.5 * (da + db)), t.error(x, y + 1, 0.5 * (da + dc)),
+                                 t.error(x + 1, y + 1, 0.5 * (db + dc)), t.error(x + 2, y + 1, 0.5 * (db + dd)),
+                                 t.error(x + 1, y + 2, 0.5 * (dc + dd))});
+      v = round_up(e);
+    } else if (refinement_ == Refinement::max_error) {
+      v = round_up(box_error_rows(texels_, b, b.y0, b.y1 + 1));
     } else if (level == 1) {
       for (int y = b.y0; y <= b.y1; ++y)
         for (int x = b.x0; x <= b.x1; ++x) v = std::max(v, edges[static_cast<std::size_t>(y) * w + x]);
@@ -396,9 +391,11 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
     value_[level][static_cast<std::size_t>(j) * q.nx(level) + i] = v;
   };
 
-  // Levels 1..K tile by tile (a level-K cell's texels stay in cache while its whole sub-pyramid
-  // is computed); the levels above K cell by cell, large cells splitting their rows.
-  const int tile = std::min(top_, 7);
+  // Levels 1..K tile by tile: a level-K cell's texels stay in cache while its whole sub-pyramid is
+  // computed. The levels above K in one sweep over the rows: each row adds its texels to the own
+  // measure of its cell at every upper level (partial maxima per chunk of rows, joined by max:
+  // exact and deterministic), so the texels are read once more, not once per level.
+  const int tile = std::min(top_, 6);
   if (tile >= 1) {
     const int ntx = q.nx(tile);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.cells(tile)),
@@ -409,18 +406,51 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
           const int span = 1 << (tile - level);
           const int i1 = std::min((ti + 1) * span, q.nx(level)), j1 = std::min((tj + 1) * span, q.ny(level));
           for (int j = tj * span; j < j1; ++j)
-            for (int i = ti * span; i < i1; ++i) compute(level, i, j, false);
+            for (int i = ti * span; i < i1; ++i) compute(level, i, j);
         }
       }
     });
   }
+  if (top_ > tile && refinement_ == Refinement::max_error) {
+    using Own = std::vector<std::vector<double>>;  // per upper level, per cell
+    Own empty(static_cast<std::size_t>(top_) + 1);
+    for (int level = tile + 1; level <= top_; ++level) empty[level].assign(q.cells(level), 0.0);
+    const Own own = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, h, 16), empty,
+        [&](const tbb::blocked_range<int>& rows, Own acc) {
+          for (int y = rows.begin(); y != rows.end(); ++y)
+            for (int level = tile + 1; level <= top_; ++level) {
+              const int nx = q.nx(level), ny = q.ny(level), j = y >> level;
+              for (int cj : {j - 1, j}) {
+                if (cj < 0 || cj >= ny) continue;
+                if (cj == j - 1 && (y & ((1 << level) - 1)) != 0) continue;  // not its bottom edge
+                for (int i = 0; i < nx; ++i) {
+                  double& m = acc[level][static_cast<std::size_t>(cj) * nx + i];
+                  m = std::max(m, box_error_rows(texels_, q.box(level, i, cj), y, y + 1));
+                }
+              }
+            }
+          return acc;
+        },
+        [](Own a, const Own& b) {
+          for (std::size_t l = 0; l < a.size(); ++l)
+            for (std::size_t c = 0; c < a[l].size(); ++c) a[l][c] = std::max(a[l][c], b[l][c]);
+          return a;
+        });
+    for (int level = tile + 1; level <= top_; ++level)
+      for (std::size_t c = 0; c < own[level].size(); ++c) value_[level][c] = round_up(own[level][c]);
+  }
   for (int level = tile + 1; level <= top_; ++level) {
-    const int nx = q.nx(level);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.cells(level), 1),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t cell = range.begin(); cell != range.end(); ++cell)
-        compute(level, static_cast<int>(cell % nx), static_cast<int>(cell / nx), true);
-    });
+    // Upper levels: the max with the children (own measures are in place).
+    const int nx = q.nx(level), nxb = q.nx(level - 1), nyb = q.ny(level - 1);
+    for (std::size_t cell = 0; cell < q.cells(level); ++cell) {
+      const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
+      float v = value_[level][cell];
+      for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
+        for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
+          v = std::max(v, value_[level - 1][static_cast<std::size_t>(cj) * nxb + ci]);
+      value_[level][cell] = v;
+    }
   }
   seconds_ = seconds_since(start);
 }
@@ -547,11 +577,19 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
         [&](const tbb::blocked_range<std::size_t>& range, bool acc) {
           for (std::size_t k = range.begin(); k != range.end(); ++k) {
             const int level = blocks[k].level;
-            if (level == 0) continue;
+            // Level 1 never fails: every configuration keeps the diagonal, and the texels that are
+            // not vertices (unsplit edge midpoints, the centre on the diagonal) interpolate as in
+            // the unsplit cell.
+            if (level <= 1) continue;
             for_each_leaf(blocks[k], [&](int i, int j) {
               const Quadtree::Box b = q.box(level, i, j);
               const unsigned config = config_of(level, i, j, b);
               if (config == 0) return;
+              // With a uniform error scale, a configuration moves the surface by at most the
+              // deviation of its split midpoints, texels of the cell: its error is at most twice
+              // the cell's own (≤ its pyramid value v). 2v within the bound needs no evaluation.
+              const double v = value_[level][static_cast<std::size_t>(j) * q.nx(level) + i];
+              if (texels_.uniform() && 2 * v * (1 + 1e-9) <= bound) return;
               std::array<Pt, 3> tri[6];
               const int n = cell_triangles(b, 1 << (level - 1), config, tri);
               for (int t = 0; t < n; ++t) {

@@ -17,6 +17,7 @@
 // triangles emitted.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,7 +42,11 @@ class TexelDepths {
   // The texel's window depth, clamped to [0, 1] (its vertex lies on the far plane at 1).
   double window_depth(int col, int row) const { return depth_[index(col, row)]; }
   // World distance between the point of texel (col, row)'s ray at window depth `d` and its own point.
-  double error(int col, int row, double d) const;
+  double error(int col, int row, double d) const {
+    const std::size_t v = index(col, row);
+    if (uniform_) return std::abs(d - depth_[v]) * uniform_scale_;
+    return std::abs(d - depth_[v]) * scale_[v] / std::abs(w0(col, row) + d * w1_);
+  }
 
   // For the row loops of the tessellator: the error is |d − depth|·scale / |w0 + d·w1| with
   // w0 = w0_c + col·w0_dc + row·w0_dr; with `uniform()`, scale = uniform_scale() and the

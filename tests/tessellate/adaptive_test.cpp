@@ -344,6 +344,36 @@ TEST(Adaptive, ForcedBorderTexelsBecomeVertices) {
   EXPECT_EQ(mesh->num_triangles(), adaptive_volume_counts(light.type, g).triangles);
 }
 
+// ---- the fix-up: the bound holds for the configuration emitted, not just the unsplit cell -----
+
+TEST(Adaptive, LeafWhoseSplitConfigurationBreaksTheBoundIsSplit) {
+  // 17×17 at depth 5, E = 1 world unit (directional, linear: world error = depth error). Forcing
+  // the top-border texel 4 splits the level-3 cell [0,8]², so its right neighbour [8,16]×[0,8] (a
+  // leaf: its texels and its children's stay within 0.9) gets its left edge split at (8, 4). That
+  // midpoint stands 0.9 high and texel (10, 3) 0.4 low; the configuration's fan from (8, 4) lifts
+  // (10, 3) by 3/4 · 0.9 and misses it by 1.075: the leaf must split.
+  const Light light = light_from_json(directional_json("linear"));
+  const DepthImage depth = make_depth(17, 17, [](int c, int r) {
+    if (c == 8 && r == 4) return 5.9f;
+    if (c == 10 && r == 3) return 4.6f;
+    return 5.0f;
+  });
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
+  ASSERT_TRUE(t.ok());
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  BorderSplits forced;
+  forced.side[kTop] = {4};
+  const AdaptiveGrid g = pyramid.tessellate(1.0, true, forced);
+  EXPECT_EQ(g.fixup_rounds, 1);
+  EXPECT_LE(pyramid.measure(g), 1.0);
+  Result<Mesh> mesh = assemble_adaptive_volume(light, depth, g, {}, "x");
+  ASSERT_TRUE(mesh.ok());
+  expect_valid(*mesh);
+  const RayErrors r = ray_errors(*mesh, light, depth);
+  EXPECT_EQ(r.missed, 0);
+  EXPECT_LE(r.max_error, 1.0 + 1e-5);
+}
+
 // ---- the Laplacian mode ------------------------------------------------------------------------
 
 TEST(Adaptive, LaplacianModeStaysClosed) {
