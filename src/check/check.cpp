@@ -10,7 +10,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
+#include <tbb/parallel_for.h>
 
 #include <lightvol/check/cgal_checks.h>
 #include <lightvol/core/check.h>
@@ -124,22 +124,35 @@ struct EdgeResults {
   std::vector<std::int64_t> boundary_faces;
 };
 
-// Sorts every edge use and reads closedness, manifoldness and orientation off the groups.
+// Buckets every edge use by its lower vertex (a counting sort, linear), sorts each small bucket,
+// and reads closedness, manifoldness and orientation off the groups of equal edges.
 EdgeResults edge_checks(const Mesh& mesh, int max_offenders) {
-  const std::size_t nt = mesh.num_triangles();
+  const std::size_t nt = mesh.num_triangles(), nv = mesh.num_vertices();
+  const auto use_of = [&](std::size_t t, int k) {
+    const std::uint64_t a = mesh.indices[3 * t + k];
+    const std::uint64_t b = mesh.indices[3 * t + (k + 1) % 3];
+    return EdgeUse{std::min(a, b) << 32 | std::max(a, b),
+                   static_cast<std::uint32_t>(t << 1 | (a > b ? 1 : 0))};
+  };
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k)
+      ++start[std::min(mesh.indices[3 * t + k], mesh.indices[3 * t + (k + 1) % 3]) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
   std::vector<EdgeUse> uses(3 * nt);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14),
+  {
+    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 3; ++k) {
+        const EdgeUse u = use_of(t, k);
+        uses[next[u.edge >> 32]++] = u;
+      }
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 12),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                        for (int k = 0; k < 3; ++k) {
-                          const std::uint64_t a = mesh.indices[3 * t + k];
-                          const std::uint64_t b = mesh.indices[3 * t + (k + 1) % 3];
-                          uses[3 * t + k] = {std::min(a, b) << 32 | std::max(a, b),
-                                             static_cast<std::uint32_t>(t << 1 | (a > b ? 1 : 0))};
-                        }
-                      }
+                      for (std::size_t v = r.begin(); v != r.end(); ++v)
+                        std::sort(uses.begin() + start[v], uses.begin() + start[v + 1]);
                     });
-  tbb::parallel_sort(uses.begin(), uses.end());
 
   EdgeResults out;
   out.closed.name = kCheckClosed;
