@@ -293,6 +293,22 @@ TEST(Adaptive, MirroredLightKeepsOrientation) {
   EXPECT_LE(r.max_error, 0.05 + 2e-5);
 }
 
+TEST(Adaptive, LightSpaceOutputIsTheWorldVolumeMoved) {
+  // Same grid in either frame: same counts, same volume (the view is a rigid motion), closed.
+  const Light light = light_from_json(spot_json("linear"));
+  const DepthImage depth = scene(33, 21, 8.0);
+  AdaptiveOptions o;
+  o.max_error = 0.02;
+  VolumeOptions in_light;
+  in_light.space = Space::light;
+  Result<Mesh> world = build_adaptive_volume(light, depth, {}, o, "w");
+  Result<Mesh> local = build_adaptive_volume(light, depth, in_light, o, "l");
+  ASSERT_TRUE(world.ok() && local.ok());
+  EXPECT_EQ(world->indices, local->indices);
+  expect_valid(*local);
+  EXPECT_NEAR(signed_volume(*local), signed_volume(*world), 1e-4 * signed_volume(*world));
+}
+
 TEST(Adaptive, Deterministic) {
   const Light light = light_from_json(spot_json("linear"));
   const DepthImage depth = scene(200, 150, 8.0);
