@@ -1,0 +1,65 @@
+// `lightvol demo` end to end at a reduced size: every output is written and both volumes are
+// closed, oriented and of the expected size.
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/io/mesh_reader.h>
+#include <lightvol/render/image_io.h>
+
+#include "render/gl_test_context.h"
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+TEST(Demo, RunsOnTheBundledSceneAtSize64) {
+  test::TempDir dir;
+  const test::CommandResult r = test::run_lightvol("demo --out " + dir.path() + " --size 64");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The summary names every step.
+  for (const char* step : {"shadow map 64x64", "static volume", "adaptive volume", "check static",
+                           "check adaptive"})
+    EXPECT_NE(r.out.find(step), std::string::npos) << step << "\n" << r.out;
+  EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
+
+  Result<DepthImage> shadow = read_depth_image(dir.file("shadow_map.exr"));
+  ASSERT_TRUE(shadow) << shadow.error().message;
+  EXPECT_EQ(shadow->width, 64);
+  EXPECT_EQ(shadow->height, 64);
+  int hits = 0;
+  for (const float d : shadow->values) hits += d < 1.0f ? 1 : 0;
+  EXPECT_EQ(hits, 64 * 64);  // the light is enclosed by the scene: every texel sees a surface
+  Result<DepthImage> camera = read_depth_image(dir.file("camera_depth.exr"));
+  ASSERT_TRUE(camera);
+  EXPECT_EQ(camera->width, 60);  // 480 × 64/512
+  EXPECT_EQ(camera->height, 45);
+
+  Result<Mesh> fixed = read_mesh(dir.file("volume_static.ply"));
+  ASSERT_TRUE(fixed) << fixed.error().message;
+  EXPECT_EQ(fixed->num_triangles(), 2u * 64 * 64 - 2);
+  EXPECT_TRUE(test::is_closed_and_oriented(*fixed));
+  Result<Mesh> adaptive = read_mesh(dir.file("volume_adaptive.ply"));
+  ASSERT_TRUE(adaptive) << adaptive.error().message;
+  EXPECT_LT(adaptive->num_triangles(), fixed->num_triangles());
+  EXPECT_TRUE(test::is_closed_and_oriented(*adaptive));
+  EXPECT_GT(signed_volume(*adaptive), 0);
+
+  for (const char* png : {"shadow_map.png", "camera_depth.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir.file(png))) << png;
+  if (!test::gl_test_context()) return;  // without OpenGL the demo skips rendering
+  for (const char* name : {"airlight_static", "airlight_adaptive", "airlight_raymarch"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir.file(std::string(name) + ".png"))) << name;
+    Result<Image> image = read_image(dir.file(std::string(name) + ".exr"));
+    ASSERT_TRUE(image) << name;
+    EXPECT_EQ(image->width, 60);
+    double sum = 0;
+    for (const double v : image->values) sum += v;
+    EXPECT_GT(sum, 0) << name << ": the camera sees the lit shafts";
+  }
+}
+
+}  // namespace
+}  // namespace lightvol
