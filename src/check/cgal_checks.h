@@ -23,14 +23,20 @@ struct CgalChecks {
   std::size_t components = 0;
 };
 
-// Self-intersections (PMP::self_intersections, parallel with TBB, exact predicates), and when
-// `closed` and none were found, PMP::does_bound_a_volume. Stops counting intersecting pairs at
-// 10,000; keeps the first `max_pairs`.
-CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs);
+// Faces whose bounding box is longer than this many times the median face's go through an AABB
+// tree instead of CGAL's box sweep, for which they are quadratic (a spot volume's fan).
+inline constexpr double kLongFaceRatio = 8;
 
-// Self-intersection test alone (PMP::does_self_intersect, parallel): true when two faces
+// Self-intersections (PMP::self_intersections, parallel with TBB, exact predicates; long faces
+// against an AABB tree with the same pair test), and when `closed` and none were found,
+// PMP::does_bound_a_volume. Stops counting intersecting pairs at 10,000; keeps the first
+// `max_pairs`.
+CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
+                       double long_face_ratio = kLongFaceRatio);
+
+// Self-intersection test alone (as in cgal_checks, stopping at the first pair): true when two faces
 // intersect other than along shared edges and vertices, or when `mesh` is not edge-manifold and
 // oriented. For benchmarks.
-bool cgal_does_self_intersect(const Mesh& mesh);
+bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio = kLongFaceRatio);
 
 }  // namespace lightvol::detail

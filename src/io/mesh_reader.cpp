@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
@@ -36,12 +37,18 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
   using Vec3d = OpenMesh::Vec3d;
   using StatusInfo = OpenMesh::Attributes::StatusInfo;
 
-  explicit FlatImporter(Mesh* mesh) : mesh_(mesh) {}
+  // `max_elements` bounds the vertices and faces a file of its size can hold (a truncated file
+  // whose header promises billions must not make the readers allocate them).
+  FlatImporter(Mesh* mesh, std::size_t max_elements) : mesh_(mesh), max_elements_(max_elements) {}
 
   std::string error;           // the first bad face, if any
   std::size_t polygons = 0;    // faces as read, before triangulation
 
   VH add_vertex(const Vec3f& p) override {
+    if (mesh_->num_vertices() >= max_elements_) {
+      if (error.empty()) error = "more vertices than a file of this size can hold (truncated?)";
+      return VH();
+    }
     mesh_->positions.insert(mesh_->positions.end(), {p[0], p[1], p[2]});
     return VH(static_cast<int>(mesh_->num_vertices() - 1));
   }
@@ -57,6 +64,10 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
 
   FH add_face(const VHandles& vs) override {
     const std::size_t face = polygons++;
+    if (face >= max_elements_) {
+      if (error.empty()) error = "more faces than a file of this size can hold (truncated?)";
+      return FH();
+    }
     if (vs.size() < 3) {
       if (error.empty())
         error = "face " + std::to_string(face) + " has " + std::to_string(vs.size()) + " vertices";
@@ -129,7 +140,12 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
 
  private:
   Mesh* mesh_;
+  std::size_t max_elements_;
 };
+
+// Every vertex or face takes at least 4 bytes in any of these formats ("0 0 0\n" is 6): more than
+// this many elements cannot be in a file of `size` bytes.
+std::size_t max_elements(std::uintmax_t size) { return static_cast<std::size_t>(size / 4 + 16); }
 
 // The first `n` bytes of a file (fewer if it is shorter).
 std::string file_head(const std::string& path, std::size_t n) {
@@ -152,14 +168,43 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
     case MeshFormat::ply:
       if (!starts_with(head, "ply\n") && !starts_with(head, "ply\r\n"))
         return Error{path + ": not a PLY file (it does not start with 'ply')"};
-      if (head.find("element vertex") == std::string::npos &&
-          file_head(path, 1 << 16).find("element vertex") == std::string::npos)
-        return Error{path + ": PLY header declares no 'element vertex'"};
+    {
+      const std::string header = file_head(path, 1 << 16);
+      const std::size_t end = header.find("end_header");
+      if (end == std::string::npos) return Error{path + ": PLY header has no 'end_header'"};
+      std::istringstream lines(header.substr(0, end));
+      std::string line;
+      bool has_vertices = false;
+      while (std::getline(lines, line)) {
+        std::istringstream words(line);
+        std::string keyword, element;
+        double count = 0;
+        if (!(words >> keyword >> element) || keyword != "element") continue;
+        if (!(words >> count) || count < 0)
+          return Error{path + ": PLY header: element '" + element + "' has no count"};
+        if (count > static_cast<double>(max_elements(size)))
+          return Error{path + ": PLY header: " + std::to_string(static_cast<long long>(count)) +
+                       " " + element + " elements cannot fit in " + std::to_string(size) +
+                       " bytes (truncated file?)"};
+        has_vertices |= element == "vertex";
+      }
+      if (!has_vertices) return Error{path + ": PLY header declares no 'element vertex'"};
       return {};
+    }
     case MeshFormat::off: {
       const std::size_t at = head.find("OFF");
       if (at == std::string::npos || at > 4)
         return Error{path + ": not an OFF file (no 'OFF' keyword at its start)"};
+      // Text OFF: the counts follow the keyword (after comments); binary OFF is left to OpenMesh.
+      std::istringstream words(head.substr(head.find_first_of(" \t\r\n", at) == std::string::npos
+                                               ? head.size()
+                                               : head.find_first_of(" \t\r\n", at)));
+      double nv = 0, nf = 0;
+      if (head.compare(at, 9, "OFF BINARY") != 0 && (words >> nv >> nf) &&
+          (nv < 0 || nf < 0 || nv + nf > static_cast<double>(max_elements(size))))
+        return Error{path + ": OFF header: " + std::to_string(static_cast<long long>(nv)) +
+                     " vertices and " + std::to_string(static_cast<long long>(nf)) +
+                     " faces cannot fit in " + std::to_string(size) + " bytes (truncated file?)"};
       return {};
     }
     case MeshFormat::stl: {
@@ -190,7 +235,7 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
   omout().disable();
   omerr().disable();
   Mesh mesh;
-  FlatImporter importer(&mesh);
+  FlatImporter importer(&mesh, max_elements(size));
   OpenMesh::IO::Options options;
   bool read = false;
   try {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/check/cgal_checks.h>
 #include <lightvol/check/check.h>
 #include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
@@ -334,6 +335,36 @@ TEST_F(BrokenVolume, LightAwayFromTheApex) {
   const CheckReport inside = check_volume(mesh, &light);
   EXPECT_TRUE(inside.valid()) << inside.first_failure();
   EXPECT_NEAR(inside.light_sum, 4 * std::numbers::pi, 1e-9);
+}
+
+// Long faces (the fan) go through an AABB tree instead of CGAL's box sweep: both routes must find
+// the same intersecting pairs. Ratio 0 sends every face through the tree, a huge ratio none.
+TEST_F(BrokenVolume, LongFacesRouteFindsTheSamePairsAsTheSweep) {
+  const auto pairs = [](const Mesh& m, double ratio) {
+    const detail::CgalChecks c = detail::cgal_checks(m, true, 1000, ratio);
+    EXPECT_TRUE(c.built);
+    return c.first_pairs;
+  };
+  EXPECT_TRUE(pairs(mesh, 0).empty());
+  EXPECT_TRUE(pairs(mesh, 1e30).empty());
+  EXPECT_FALSE(detail::cgal_does_self_intersect(mesh, 0));
+
+  // The apex pushed down through the occluder: fan faces cross grid faces.
+  Mesh apex_down = mesh;
+  const std::size_t apex = apex_down.num_vertices() - 1;
+  apex_down.positions[3 * apex + 1] = 1.0f;  // between the floor (-0.3) and the occluder (2.1)
+  const auto tree_pairs = pairs(apex_down, 0), sweep_pairs = pairs(apex_down, 1e30),
+             mixed_pairs = pairs(apex_down, 4);
+  EXPECT_FALSE(sweep_pairs.empty());
+  EXPECT_EQ(tree_pairs, sweep_pairs);
+  EXPECT_EQ(mixed_pairs, sweep_pairs);
+  EXPECT_TRUE(detail::cgal_does_self_intersect(apex_down, 0));
+
+  // The dragged vertex: short faces only.
+  const auto p5 = mesh.vertex(grid(5, 3)), p6 = mesh.vertex(grid(6, 4));
+  for (int k = 0; k < 3; ++k) mesh.positions[3 * grid(2, 3) + k] = 0.5f * (p5[k] + p6[k]);
+  EXPECT_FALSE(pairs(mesh, 1e30).empty());
+  EXPECT_EQ(pairs(mesh, 0), pairs(mesh, 1e30));
 }
 
 // ---- the command line ------------------------------------------------------------------------

@@ -142,6 +142,12 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
   expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
   expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");
+  expect_error(dir.write("huge.off", "OFF\n2000000000 1 0\n0 0 0\n"), "huge.off");
+  expect_error(dir.write("huge.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\n"
+                                     "property float x\nproperty float y\nproperty float z\n"
+                                     "element face 1\nproperty list uchar int vertex_indices\n"
+                                     "end_header\n0 0 0\n"),
+               "huge.ply");
   expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "face 0 names vertex");
 
   // A binary PLY cut short: the header promises more than the body holds.
