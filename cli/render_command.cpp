@@ -74,6 +74,9 @@ int run_render(const RenderOptions& o) {
   Result<Medium> medium = load_medium(o.medium_path);
   if (!medium) return fail(medium.error().message);
   scene.medium = *medium;
+  if (scene.medium.profile.enabled() && scene.light.type != LightType::spot)
+    return fail(o.medium_path + ": key 'profile': applies to spot lights only, " + o.light_path +
+                " is a " + std::string(to_string(scene.light.type)) + " light");
   progress.begin("reading " + o.depth_path);
   Result<DepthImage> depth = read_depth_image(o.depth_path, {o.channel});
   if (!depth) return fail(depth.error().message);

@@ -40,6 +40,14 @@ double Phase::operator()(double cos_theta) const {
   return inv4pi;
 }
 
+double SpotProfile::operator()(double cos_alpha) const {
+  if (!enabled()) return 1.0;
+  const double lo = std::cos(outer_deg * std::numbers::pi / 180.0);
+  const double hi = std::cos(inner_deg * std::numbers::pi / 180.0);
+  const double x = std::clamp((cos_alpha - lo) / (hi - lo), 0.0, 1.0);
+  return x * x * (3.0 - 2.0 * x);
+}
+
 // ---- JSON ---------------------------------------------------------------------------------------
 
 namespace {
@@ -92,8 +100,10 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
   if (!root) return root.error();
   Medium medium;
   for (const auto& [key, value] : root->items()) {
-    if (key != "scattering" && key != "absorption" && key != "intensity" && key != "phase")
-      return key_error(source, key, "unknown key (known: scattering, absorption, intensity, phase)");
+    if (key != "scattering" && key != "absorption" && key != "intensity" && key != "phase" &&
+        key != "profile")
+      return key_error(source, key,
+                       "unknown key (known: scattering, absorption, intensity, phase, profile)");
   }
   if (!root->contains("scattering")) return key_error(source, "scattering", "missing");
   for (const char* key : {"scattering", "absorption", "intensity"}) {
@@ -141,6 +151,26 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
         return key_error(source, std::string("phase.") + key, "must lie in (-1, 1), got " + fmt(*x));
       (parameter == "g" ? medium.phase.g : medium.phase.k) = *x;
     }
+  }
+  if (root->contains("profile")) {
+    const json& profile = root->at("profile");
+    if (!profile.is_object())
+      return key_error(source, "profile", "expected an object {\"inner_deg\": ..., \"outer_deg\": ...}");
+    for (const auto& [key, value] : profile.items())
+      if (key != "inner_deg" && key != "outer_deg")
+        return key_error(source, "profile." + key, "unknown key (known: inner_deg, outer_deg)");
+    for (const char* key : {"inner_deg", "outer_deg"}) {
+      const std::string name = std::string("profile.") + key;
+      if (!profile.contains(key)) return key_error(source, name, "missing");
+      Result<double> x = number(profile, key, source);
+      if (!x) return key_error(source, name, "expected a finite number");
+      (std::strcmp(key, "inner_deg") == 0 ? medium.profile.inner_deg : medium.profile.outer_deg) = *x;
+    }
+    if (!(medium.profile.inner_deg >= 0 && medium.profile.inner_deg < medium.profile.outer_deg &&
+          medium.profile.outer_deg <= 90))
+      return key_error(source, "profile", "needs 0 <= inner_deg < outer_deg <= 90, got " +
+                                              fmt(medium.profile.inner_deg) + " and " +
+                                              fmt(medium.profile.outer_deg));
   }
   return medium;
 }
@@ -325,7 +355,13 @@ double phase_integral(const Phase& phase, double u, double a, double b) {
 // ---- RayAirlight --------------------------------------------------------------------------------
 
 RayAirlight::RayAirlight(const Light& light, const Medium& medium, const Ray& ray)
-    : directional_(light.type == LightType::directional), medium_(medium) {
+    : directional_(light.type == LightType::directional),
+      medium_(medium),
+      light_position_(light.position),
+      light_direction_(light.direction),
+      origin_(ray.origin),
+      direction_(ray.direction),
+      profiled_(light.type == LightType::spot && medium.profile.enabled()) {
   const double st = medium.extinction();
   if (directional_) {
     const Vec3d f = light.direction;
@@ -359,7 +395,18 @@ double RayAirlight::operator()(double t) const {
     return dir_scale_ * (std::abs(x) < 1e-8 ? t * (1 - 0.5 * x) : -std::expm1(-x) / dir_rate_);
   }
   const double u = medium_.extinction() * h_;
-  return scale_ * phase_integral(medium_.phase, u, xi0_, xi(t));
+  if (!profiled_) return scale_ * phase_integral(medium_.phase, u, xi0_, xi(t));
+  // With a spotlight profile the integrand also depends on where x(ξ) lies:
+  // s(ξ) = s0 + h·tan(2ξ − π/2) = s0 − h / tan 2ξ.
+  const Phase& phase = medium_.phase;
+  const auto f = [&](double x) {
+    const double s = s0_ - h_ / std::tan(2.0 * x);
+    const Vec3d to_x = origin_ + s * direction_ - light_position_;
+    const double len = length(to_x);
+    const double profile = len > 0 ? medium_.profile(dot(to_x, light_direction_) / len) : 1.0;
+    return phase(std::cos(2.0 * x)) * std::exp(-u * std::tan(x)) * profile;
+  };
+  return scale_ * integrate(f, xi0_, xi(t), std::max(phase(1.0), phase(-1.0)));
 }
 
 }  // namespace lightvol

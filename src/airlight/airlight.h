@@ -33,6 +33,19 @@ struct Phase {
   double operator()(double cos_theta) const;
 };
 
+// ---- spotlight profile --------------------------------------------------------------------------
+
+// The soft-edged spotlight of seed 002, beyond the paper: the intensity is scaled by
+// smoothstep(cos outer, cos inner, cos α), α the angle between the light's direction and the
+// direction from the light to the point. Angles from the axis, in degrees; off when outer_deg is 0.
+struct SpotProfile {
+  double inner_deg = 0;
+  double outer_deg = 0;
+
+  bool enabled() const { return outer_deg > 0; }
+  double operator()(double cos_alpha) const;
+};
+
 // ---- medium -------------------------------------------------------------------------------------
 
 struct Medium {
@@ -40,13 +53,15 @@ struct Medium {
   double absorption = 0.0;   // σa, 1/world unit
   double intensity = 1.0;    // I: W/sr for spot and omni lights, W/m² for directional lights
   Phase phase;
+  SpotProfile profile;       // spot lights only
 
   double extinction() const { return scattering + absorption; }  // σt
 };
 
 // Parses {"scattering", "absorption", "intensity", "phase": {"type": "isotropic"|"hg"|"schlick",
-// "g" | "k"}}. All keys optional except "scattering"; defaults as above. Errors name `source` and
-// the key: unknown keys, negative coefficients, |g| or |k| ≥ 1, a parameter of another phase type.
+// "g" | "k"}, "profile": {"inner_deg", "outer_deg"}}. All keys optional except "scattering";
+// defaults as above. Errors name `source` and the key: unknown keys, negative coefficients,
+// |g| or |k| ≥ 1, a parameter of another phase type, not 0 ≤ inner_deg < outer_deg ≤ 90.
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source);
 Result<Medium> load_medium(const std::string& path);
 
@@ -92,7 +107,8 @@ double phase_integral(const Phase& phase, double u, double a, double b);
 class RayAirlight {
  public:
   // `light` gives the type (spot and omni use the point-light formula, directional the closed
-  // form), position and direction. `ray.direction` must be unit.
+  // form), position and direction. `ray.direction` must be unit. A spot light with
+  // medium.profile enabled integrates the profile too (adaptive quadrature); others ignore it.
   RayAirlight(const Light& light, const Medium& medium, const Ray& ray);
 
   // La(0, t) for t ≥ 0 (t = +infinity allowed); 0 for t ≤ 0.
@@ -107,6 +123,8 @@ class RayAirlight {
  private:
   bool directional_;
   Medium medium_;
+  Vec3d light_position_, light_direction_, origin_, direction_;
+  bool profiled_ = false;  // a spot light with a SpotProfile
   // point
   double h_ = 0, s0_ = 0, scale_ = 0, xi0_ = 0;
   // directional

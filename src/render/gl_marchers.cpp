@@ -122,7 +122,7 @@ void main() {
     } else {
       vec3 to_x = x - light_position;
       float dist = length(to_x);
-      radiance = phase(dot(to_x / dist, -dir)) * exp(-sigma_t * dist) / (dist * dist);
+      radiance = phase(dot(to_x / dist, -dir)) * exp(-sigma_t * dist) / (dist * dist) * profile(to_x);
     }
     sum += radiance * exp(-sigma_t * t);
   }

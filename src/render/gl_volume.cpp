@@ -1,6 +1,7 @@
 #include <lightvol/render/gl_volume.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -36,6 +37,21 @@ uniform float phase_param;     // g or k
 
 uniform sampler2D f_table;
 uniform float f_u_max;
+
+uniform int profile_enabled;   // seed 002's soft-edged spot: smoothstep(cos outer, cos inner, cos α)
+uniform float profile_cos_inner;
+uniform float profile_cos_outer;
+
+// The current ray, set by point_setup(), for integrands that depend on the point x(ξ).
+vec3 g_origin;
+vec3 g_dir;
+float g_h;
+float g_s0;
+
+float profile(vec3 to_x) {
+  if (profile_enabled == 0) return 1.0;
+  return smoothstep(profile_cos_outer, profile_cos_inner, dot(normalize(to_x), light_direction));
+}
 
 // The world-space ray of this fragment's pixel centre.
 void pixel_ray(out vec3 origin, out vec3 dir) {
@@ -73,6 +89,10 @@ void point_setup(vec3 origin, vec3 dir, out float h, out float s0) {
   vec3 to_light = light_position - origin;
   s0 = dot(to_light, dir);
   h = max(length(cross(dir, to_light)), 1e-6 * max(1.0, length(to_light)));
+  g_origin = origin;
+  g_dir = dir;
+  g_h = h;
+  g_s0 = s0;
 }
 
 const float GL_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
@@ -80,7 +100,14 @@ const float GL_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664
 const float GL_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
                                0.1012285362903763);
 
-float integrand(float xi, float u) { return phase(cos(2.0 * xi)) * exp(-u * tan(xi)); }
+float integrand(float xi, float u) {
+  float f = phase(cos(2.0 * xi)) * exp(-u * tan(xi));
+  if (profile_enabled == 1) {
+    float s = g_s0 - g_h / tan(2.0 * xi);  // the point x(ξ) on the ray
+    f *= profile(g_origin + s * g_dir - light_position);
+  }
+  return f;
+}
 
 // ∫ from a to b of p(cos 2ξ)·exp(−u tan ξ) dξ, `panels` 8-point Gauss–Legendre panels.
 float quadrature(float a, float b, float u, int panels) {
@@ -114,7 +141,7 @@ float sun_f(float u, float v) {
 }
 
 float angular_integral(float a, float b, float u, int panels) {
-  if (phase_type == 0 && u <= f_u_max) return (sun_f(u, b) - sun_f(u, a)) * (1.0 / (4.0 * PI));
+  if (phase_type == 0 && u <= f_u_max && profile_enabled == 0) return (sun_f(u, b) - sun_f(u, a)) * (1.0 / (4.0 * PI));
   return quadrature(a, b, u, panels);
 }
 )";
@@ -153,6 +180,11 @@ void set_scene_uniforms(const Program& program, const RenderScene& scene) {
   glUniform1f(program.uniform("phase_param"),
               f(m.phase.type == PhaseType::hg ? m.phase.g : m.phase.k));
   glUniform1f(program.uniform("f_u_max"), f(sun_table().u_max));
+  const SpotProfile& profile = scene.medium.profile;
+  const bool use_profile = profile.enabled() && light.type == LightType::spot;
+  glUniform1i(program.uniform("profile_enabled"), use_profile ? 1 : 0);
+  glUniform1f(program.uniform("profile_cos_inner"), f(std::cos(profile.inner_deg * std::numbers::pi / 180)));
+  glUniform1f(program.uniform("profile_cos_outer"), f(std::cos(profile.outer_deg * std::numbers::pi / 180)));
 }
 
 // ---- the F(u, v) table --------------------------------------------------------------------------
@@ -287,7 +319,8 @@ void main() {
   point_setup(origin, dir, h, s0);
   float c = 2.0 * sigma_s * intensity * exp(-sigma_t * s0) / h;
   float base = 0.0;
-  if (baseline == 1 && a.g != 0.0) base = angular_integral(0.5 * atan(h, s0), 0.25 * PI, sigma_t * h, 8);
+  if (baseline == 1 && a.g != 0.0)
+    base = angular_integral(0.5 * atan(h, s0), 0.25 * PI, sigma_t * h, profile_enabled == 1 ? 32 : 8);
   airlight = c * (a.r + a.g * base);
 }
 )";
@@ -369,7 +402,8 @@ Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderS
   }
   s.volume.use();
   glUniform1i(s.volume.uniform("surface"), 0);
-  glUniform1i(s.volume.uniform("panels"), options.panels);
+  // The profile's soft edge is only C1: more panels keep the quadrature at float accuracy.
+  glUniform1i(s.volume.uniform("panels"), scene.medium.profile.enabled() ? std::max(options.panels, 8) : options.panels);
   glUniform1f(s.volume.uniform("facing_sign"), s.facing_sign);
   glUniformMatrix4fv(s.volume.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
   s.resolve.use();

@@ -16,7 +16,9 @@
 //
 // Isotropic media read Sun et al.'s F(u, v) from a 2D float texture (u = σt·h on a square-root axis
 // up to u_max = 32, v on [0, π/2]; bilinear interpolation in the shader with float weights);
-// Henyey–Greenstein and Schlick phases, and u beyond the table, use 8-point Gauss–Legendre panels.
+// Henyey–Greenstein and Schlick phases, u beyond the table, and spot lights with a soft-edged
+// profile (Medium::profile, seed 002) use 8-point Gauss–Legendre panels (8 per fragment with a
+// profile, whose smoothstep edge is only C¹).
 // Fragments beyond the visible surface clamp their t to the camera depth (a texture); depth test
 // and clipping are off (GL_DEPTH_CLAMP) so no fragment of the closed volume is lost.
 #pragma once

@@ -79,6 +79,40 @@ TEST(RayAirlight, PointLightMatchesDirectIntegration) {
   }
 }
 
+TEST(RayAirlight, SpotProfileMatchesDirectIntegration) {
+  const Light light = test::light_from_json(test::spot_json());
+  Medium m;
+  m.scattering = 0.08;
+  m.absorption = 0.03;
+  m.intensity = 30;
+  m.phase = {PhaseType::hg, 0.5, 0};
+  m.profile = {10, 25};
+  for (auto [origin, target] : {std::pair<Vec3d, Vec3d>{{5, 1, 3}, {-3, 1.5, -1}},
+                                {{0.5, 0.5, 0.5}, {2, 1, 3}}}) {
+    Ray ray{origin, normalize(target - origin)};
+    const RayAirlight la(light, m, ray);
+    for (double t : {2.0, 7.5, 20.0}) {
+      const double direct = midpoint(
+          [&](double s) {
+            const Vec3d x = ray.origin + s * ray.direction;
+            const double d = length(x - light.position);
+            const Vec3d l = (1.0 / d) * (x - light.position);
+            return m.scattering * m.intensity * std::exp(-m.extinction() * d) / (d * d) *
+                   m.phase(dot(l, -1.0 * ray.direction)) * m.profile(dot(l, light.direction)) *
+                   std::exp(-m.extinction() * s);
+          },
+          0, t, 400000);
+      EXPECT_NEAR(la(t), direct, 1e-7 * std::abs(direct) + 1e-12) << "t " << t;
+    }
+  }
+  // The profile: 1 inside the inner cone, 0 outside the outer one, smooth between.
+  EXPECT_EQ(m.profile(std::cos(5 * std::numbers::pi / 180)), 1.0);
+  EXPECT_EQ(m.profile(std::cos(30 * std::numbers::pi / 180)), 0.0);
+  const double mid = m.profile(std::cos(17.5 * std::numbers::pi / 180));
+  EXPECT_GT(mid, 0.3);
+  EXPECT_LT(mid, 0.7);
+}
+
 TEST(RayAirlight, DirectionalClosedFormMatchesDirectIntegration) {
   const Light light = test::light_from_json(test::directional_json());
   Medium m;
@@ -115,6 +149,12 @@ TEST(Medium, ParsesAllKeys) {
   EXPECT_EQ(m->phase.type, PhaseType::hg);
   EXPECT_EQ(m->phase.g, 0.3);
   EXPECT_DOUBLE_EQ(m->extinction(), 0.06);
+  EXPECT_FALSE(m->profile.enabled());
+  Result<Medium> p = parse_medium(R"({"scattering": 0.05, "profile": {"inner_deg": 15, "outer_deg": 25}})", "p.json");
+  ASSERT_TRUE(p) << p.error().message;
+  EXPECT_TRUE(p->profile.enabled());
+  EXPECT_EQ(p->profile.inner_deg, 15);
+  EXPECT_EQ(p->profile.outer_deg, 25);
 }
 
 TEST(Medium, RejectsBadInputNamingFileAndKey) {
@@ -126,6 +166,9 @@ TEST(Medium, RejectsBadInputNamingFileAndKey) {
       {R"({"scattering": 0.1, "phase": {"type": "hg", "k": 0.2}})", "m.json: key 'phase.k': does not apply"},
       {R"({"scattering": 0.1, "phase": {"type": "rayleigh"}})", "m.json: key 'phase.type': expected"},
       {R"({"scattering": 0.1, "phase": {"type": "hg", "gg": 0.1}})", "m.json: key 'phase.gg': unknown key"},
+      {R"({"scattering": 0.1, "profile": {"inner_deg": 30, "outer_deg": 20}})", "m.json: key 'profile': needs 0 <= inner_deg < outer_deg <= 90"},
+      {R"({"scattering": 0.1, "profile": {"outer_deg": 20}})", "m.json: key 'profile.inner_deg': missing"},
+      {R"({"scattering": 0.1, "profile": {"inner_deg": 1, "outer_deg": 20, "x": 1}})", "m.json: key 'profile.x': unknown key"},
       {R"([1, 2])", "m.json: expected a JSON object"},
       {R"({"scattering": )", "m.json: not valid JSON"},
   };

@@ -121,7 +121,8 @@ double brute_force_airlight(const RenderScene& scene, int width, int height, int
       const Vec3d to_x = x - scene.light.position;
       const double d = length(to_x);
       const double cos_theta = dot((1.0 / d) * to_x, -1.0 * ray.direction);
-      radiance = m.intensity * std::exp(-st * d) / (d * d) * m.phase(cos_theta);
+      radiance = m.intensity * std::exp(-st * d) / (d * d) * m.phase(cos_theta) *
+                 m.profile(dot(to_x, scene.light.direction) / d);
     } else {
       const double z = dot(x - scene.light.position, scene.light.direction) - scene.light.near;
       radiance = m.intensity * std::exp(-st * z) * m.phase(dot(scene.light.direction, -1.0 * ray.direction));

@@ -24,6 +24,7 @@ struct Case {
   std::string light_json;
   Vec3d eye, target;
   Phase phase;
+  SpotProfile profile = {};
 };
 
 constexpr int kMap = 96, kW = 64, kH = 48;
@@ -38,6 +39,7 @@ ImageDifference volume_vs_reference(const Case& c, const GlVolumeOptions& option
   m.absorption = 0.02;
   m.intensity = 20;
   m.phase = c.phase;
+  m.profile = c.profile;
   const RenderScene scene =
       test::make_render_scene(test::make_camera(c.eye, c.target, kW, kH), light, m);
   const Image ref = render_reference(*volume, scene);
@@ -58,6 +60,8 @@ const Case kCases[] = {
     {"spot outside isotropic", test::spot_json("linear"), {-5, 2, 4}, {0, 0.5, 0}, {PhaseType::isotropic}},
     {"spot inside isotropic", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}},
     {"spot inside schlick", test::spot_json("linear"), {0.8, 2.5, 0.3}, {-1, 0, -1}, {PhaseType::schlick, 0, -0.3}},
+    {"soft spot outside hg", test::spot_json("linear"), {6, 3, 6}, {0, 1, 0}, {PhaseType::hg, 0.4, 0}, {12, 24}},
+    {"soft spot inside isotropic", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}, {5, 28}},
     {"directional outside hg", test::directional_json("linear"), {7, 4, 5}, {0, 0.5, 0}, {PhaseType::hg, 0.2, 0}},
     {"directional inside isotropic", test::directional_json("linear"), {2, 1, 2}, {-1, 0.5, -2}, {PhaseType::isotropic}},
 };

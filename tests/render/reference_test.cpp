@@ -28,6 +28,7 @@ struct Case {
   std::string light_json;
   Vec3d eye, target;
   Phase phase;
+  SpotProfile profile = {};
 };
 
 void expect_reference_matches_brute_force(const Case& c) {
@@ -37,8 +38,10 @@ void expect_reference_matches_brute_force(const Case& c) {
   const DepthImage shadow = test::scene_shadow_map(light, kMap, kMap);
   Result<Mesh> volume = build_static_volume(light, shadow, {}, "shadow");
   ASSERT_TRUE(volume) << volume.error().message;
+  Medium medium = test_medium(c.phase);
+  medium.profile = c.profile;
   const RenderScene scene = test::make_render_scene(test::make_camera(c.eye, c.target, kW, kH),
-                                                    light, test_medium(c.phase));
+                                                    light, medium);
   const Image ref = render_reference(*volume, scene);
   Image brute = ref;
   for (int row = 0; row < kH; ++row)
@@ -60,6 +63,11 @@ TEST(Reference, SpotLightMatchesBruteForceFromOutside) {
 TEST(Reference, SpotLightMatchesBruteForceFromInside) {
   expect_reference_matches_brute_force(
       {"spot inside", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}});
+}
+
+TEST(Reference, SoftEdgedSpotMatchesBruteForce) {
+  expect_reference_matches_brute_force({"spot profile", test::spot_json("linear"), {6, 3, 6},
+                                        {0, 1, 0}, {PhaseType::hg, 0.4, 0}, {12, 24}});
 }
 
 TEST(Reference, DirectionalLightMatchesBruteForce) {
