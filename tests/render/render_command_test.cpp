@@ -121,7 +121,7 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
       "/bad_medium.json' --out '" + dir + "/x.exr' --method reference");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: " + dir + "/bad_medium.json: key 'sigma': unknown key (known: "
-                   "scattering, absorption, intensity, phase)\n");
+                   "scattering, absorption, intensity, phase, profile)\n");
   r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: render: --method volume needs the light volume MESH\n");
