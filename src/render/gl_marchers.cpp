@@ -159,8 +159,14 @@ void main() {
   pixel_ray(origin, dir);
   vec3 to_light = light_position - origin;
   float t_surface = texelFetch(surface, ivec2(gl_FragCoord.xy), 0).r;
-  // Unoccluded where the visible surface lies beyond the light: glow by the phase toward it.
-  result = t_surface > length(to_light) ? sigma_s * intensity * phase(dot(dir, normalize(to_light))) : 0.0;
+  // Unoccluded where the visible surface lies beyond the light. The glow is the unshadowed
+  // in-scattering around the light, ∝ p(θ)·e^(−σt·D)/h (h: distance of the light from the ray).
+  float h, s0;
+  point_setup(origin, dir, h, s0);
+  float dist = length(to_light);
+  float glow = sigma_s * intensity * phase(dot(dir, to_light / dist)) * exp(-sigma_t * dist) /
+               max(h, 0.02 * dist);
+  result = t_surface > dist ? glow : 0.0;
 }
 )";
 

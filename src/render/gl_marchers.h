@@ -9,7 +9,8 @@
 //   per texel quad as the static volume, so the marcher converges to the volume's exact airlight.
 //   Spot and directional lights take one map; omni lights six faces (+X −X +Y −Y +Z −Z).
 // radial — Mitchell 2007 (GPU Gems 3, ch. 13): an occlusion pre-pass from the camera depth (pixels
-//   whose surface lies beyond the light, weighted by the phase function toward the light) blurred
+//   whose surface lies beyond the light, weighted by the unshadowed glow around the light,
+//   σs·I·p(θ)·e^(−σt·D)/max(h, D/50), h the light's distance from the pixel ray) blurred
 //   radially toward the light's screen position with exposure, weight, decay and density.
 //   Approximate by design (it knows nothing of the shadow map); zero when the light is behind the
 //   camera.
