@@ -8,10 +8,13 @@
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
 #include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/omni_adaptive.h>
+#include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "commands.h"
@@ -70,16 +73,23 @@ int run_build(const BuildOptions& o) {
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
   progress.end();
-  if (light->type == LightType::omni) return fail(o.light_path + ": omni lights are not supported yet");
-  if (o.depth_paths.size() != 1)
+  // Omni: six faces (six paths, one {face} path or one W x 6W strip), read as a cube.
+  const bool omni = light->type == LightType::omni;
+  Result<CubeFaces> cube = Error{""};
+  if (omni) {
+    progress.begin("reading omni faces");
+    cube = read_cube_faces(o.depth_paths, {o.channel});
+    if (!cube) return fail(cube.error().message);
+    progress.end(std::to_string(cube->size()) + "x" + std::to_string(cube->size()) + " x 6");
+  } else if (o.depth_paths.size() != 1)
     return fail("a " + std::string(to_string(light->type)) + " light takes one depth image, got " +
                 std::to_string(o.depth_paths.size()));
 
   const std::string& depth_path = o.depth_paths.front();
-  progress.begin("reading " + depth_path);
-  Result<DepthImage> depth = read_depth_image(depth_path, {o.channel});
+  if (!omni) progress.begin("reading " + depth_path);
+  Result<DepthImage> depth = omni ? Result<DepthImage>(DepthImage{}) : read_depth_image(depth_path, {o.channel});
   if (!depth) return fail(depth.error().message);
-  progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
+  if (!omni) progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
 
   VolumeOptions vo;
   vo.space = o.space == "light" ? Space::light : Space::world;
@@ -92,8 +102,12 @@ int run_build(const BuildOptions& o) {
     ao.max_error = o.max_error;
     ao.threshold = o.threshold;
     ao.measure = o.json || !o.report_path.empty();  // the reached error is for reports
-    progress.begin("building adaptive volume");
-    mesh = build_adaptive_volume(*light, *depth, vo, ao, depth_path, &adaptive_report);
+    progress.begin(omni ? "building adaptive omni volume" : "building adaptive volume");
+    mesh = omni ? build_adaptive_omni_volume(*light, *cube, vo, ao, &adaptive_report)
+                : build_adaptive_volume(*light, *depth, vo, ao, depth_path, &adaptive_report);
+  } else if (omni) {
+    progress.begin("building static omni volume");
+    mesh = build_omni_volume(*light, *cube, vo);
   } else {
     progress.begin("building static volume");
     mesh = build_static_volume(*light, *depth, vo, depth_path);
@@ -129,8 +143,8 @@ int run_build(const BuildOptions& o) {
       {"light", {{"path", o.light_path}, {"type", to_string(light->type)}, {"depth", to_string(light->depth)}}},
       {"output", o.out_path},
       {"space", o.space},
-      {"width", depth->width},
-      {"height", depth->height},
+      {"width", omni ? cube->size() : depth->width},
+      {"height", omni ? cube->size() : depth->height},
       {"mode", adaptive ? "adaptive" : "static"},
       {"vertices", mesh->num_vertices()},
       {"triangles", mesh->num_triangles()},

@@ -1,0 +1,200 @@
+#include <lightvol/volume/omni_adaptive.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <iterator>
+#include <limits>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <lightvol/core/check.h>
+#include <lightvol/volume/omni_volume.h>
+
+namespace lightvol {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+GridSide grid_side(FaceBorder border) {
+  switch (border) {
+    case FaceBorder::top: return kTop;
+    case FaceBorder::bottom: return kBottom;
+    case FaceBorder::left: return kLeft;
+    case FaceBorder::right: return kRight;
+  }
+  return kTop;
+}
+
+// Border positions of one side, mapped to the other side's numbering (reversed: W−1−p), ascending.
+std::vector<int> mapped(const std::vector<int>& positions, bool reversed, int width) {
+  std::vector<int> out(positions);
+  if (reversed) {
+    for (int& p : out) p = width - 1 - p;
+    std::reverse(out.begin(), out.end());
+  }
+  return out;
+}
+
+std::vector<int> merged(const std::vector<int>& a, const std::vector<int>& b) {
+  std::vector<int> out;
+  out.reserve(a.size() + b.size());
+  std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(out));
+  return out;
+}
+
+}  // namespace
+
+Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
+                                        const VolumeOptions& volume, const AdaptiveOptions& options,
+                                        AdaptiveReport* report, OmniAdaptiveDetail* detail) {
+  LV_CHECK(light.type == LightType::omni);
+  if (Status s = validate_cube_faces(cube); !s) return s.error();
+  const int w = cube.size();
+  const auto start = std::chrono::steady_clock::now();
+  AdaptiveReport r;
+  OmniAdaptiveDetail d;
+
+  // Per face: window depths and the refinement pyramid.
+  std::vector<RefinementPyramid> pyramids;
+  pyramids.reserve(kOmniFaces);
+  std::vector<Unprojector> faces;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[f], f, cube.sources[f]);
+    if (!texels) return texels.error();
+    pyramids.emplace_back(std::move(*texels), options.refinement);
+    faces.emplace_back(light, w, w, f, volume.space);
+  }
+  r.pyramid_seconds = seconds_since(start);
+
+  // Tessellate; force each border to hold its neighbour's border vertices until they agree.
+  const double bound =
+      options.refinement == Refinement::max_error ? options.max_error : options.threshold;
+  const OmniAdjacency adjacency = omni_adjacency(light);
+  std::array<BorderSplits, kOmniFaces> forced;
+  std::array<AdaptiveGrid, kOmniFaces> grids;
+  std::array<bool, kOmniFaces> dirty;
+  dirty.fill(true);
+  for (;;) {
+    ++d.seam_rounds;
+    LV_CHECK_LE(d.seam_rounds, 4 * w + 4);  // every round adds at least one border vertex
+    for (int f = 0; f < kOmniFaces; ++f) {
+      if (!dirty[f]) continue;
+      grids[f] = pyramids[f].tessellate(bound, faces[f].standard_winding(), forced[f]);
+      dirty[f] = false;
+    }
+    bool changed = false;
+    for (const OmniSeam& seam : adjacency.seams) {
+      const GridSide sa = grid_side(seam.border[0]), sb = grid_side(seam.border[1]);
+      const std::vector<int>& a = grids[seam.face[0]].border[sa];
+      const std::vector<int>& b = grids[seam.face[1]].border[sb];
+      const std::vector<int> both = merged(a, mapped(b, seam.reversed, w));
+      if (both != a) {
+        forced[seam.face[0]].side[sa] = both;
+        dirty[seam.face[0]] = changed = true;
+      }
+      const std::vector<int> both_b = mapped(both, seam.reversed, w);
+      if (both_b != b) {
+        forced[seam.face[1]].side[sb] = both_b;
+        dirty[seam.face[1]] = changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  for (const AdaptiveGrid& g : grids) {
+    r.balance_seconds += g.balance_seconds;
+    r.emit_seconds += g.emit_seconds;
+    r.grid_triangles += g.num_triangles();
+    r.leaves += g.leaves;
+    r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
+  }
+  if (options.measure) {
+    const auto m = std::chrono::steady_clock::now();
+    r.max_error_reached = 0;
+    for (int f = 0; f < kOmniFaces; ++f)
+      r.max_error_reached = std::max(r.max_error_reached, pyramids[f].measure(grids[f]));
+    r.measure_seconds = seconds_since(m);
+  }
+
+  // Assemble: each face's vertices (texel order) on their rays, its triangles, then the seams and
+  // the corners.
+  const auto assemble_start = std::chrono::steady_clock::now();
+  std::array<std::uint32_t, kOmniFaces + 1> base{};
+  for (int f = 0; f < kOmniFaces; ++f) {
+    const std::uint64_t next = std::uint64_t{base[f]} + grids[f].vertices.size();
+    if (next >= std::numeric_limits<std::uint32_t>::max())
+      return Error{cube.sources[0] + ": the volume needs more vertices than 32-bit indices hold"};
+    base[f + 1] = static_cast<std::uint32_t>(next);
+  }
+  std::uint64_t seam_triangles = 0;
+  for (const OmniSeam& seam : adjacency.seams)
+    seam_triangles += 2 * (grids[seam.face[0]].border[grid_side(seam.border[0])].size() - 1);
+  std::uint64_t triangles = r.grid_triangles + seam_triangles + 8;
+
+  Mesh mesh;
+  mesh.positions.resize(3 * std::size_t{base[kOmniFaces]});
+  mesh.indices.reserve(3 * triangles);
+  const std::uint32_t uw = static_cast<std::uint32_t>(w);
+  for (int f = 0; f < kOmniFaces; ++f) {
+    const AdaptiveGrid& grid = grids[f];
+    const DepthImage& depth = cube.faces[f];
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.vertices.size(), 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+        const std::uint32_t id = grid.vertices[v];
+        const int c = static_cast<int>(id % uw), row = static_cast<int>(id / uw);
+        Vec3d p;
+        const bool reached = faces[f].point(c, row, depth.values[id], &p);
+        LV_CHECK(reached);  // a perspective ray reaches every depth
+        float* out = mesh.positions.data() + 3 * (std::size_t{base[f]} + v);
+        out[0] = static_cast<float>(p.x), out[1] = static_cast<float>(p.y), out[2] = static_cast<float>(p.z);
+      }
+    });
+    d.face_triangles[f] = grid.num_triangles();
+    for (const std::uint32_t i : grid.indices) mesh.indices.push_back(base[f] + i);
+  }
+  const auto vertex = [&](int face, int col, int row) {
+    return base[face] + grids[face].vertex_index(col, row);
+  };
+  const auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, bool flip) {
+    mesh.indices.push_back(a);
+    mesh.indices.push_back(flip ? c : b);
+    mesh.indices.push_back(flip ? b : c);
+  };
+  for (const OmniSeam& seam : adjacency.seams) {
+    const std::vector<int>& along = grids[seam.face[0]].border[grid_side(seam.border[0])];
+    LV_CHECK(mapped(along, seam.reversed, w) == grids[seam.face[1]].border[grid_side(seam.border[1])]);
+    const auto at = [&](int side, int position) {
+      int col = 0, row = 0;
+      border_texel(seam.border[side], w, side == 1 && seam.reversed ? w - 1 - position : position,
+                   &col, &row);
+      return vertex(seam.face[side], col, row);
+    };
+    for (std::size_t k = 0; k + 1 < along.size(); ++k) {
+      const std::uint32_t a0 = at(0, along[k]), a1 = at(0, along[k + 1]);
+      const std::uint32_t b0 = at(1, along[k]), b1 = at(1, along[k + 1]);
+      emit(a0, a1, b0, seam.flip);
+      emit(a1, b1, b0, seam.flip);
+    }
+  }
+  for (const OmniCorner& corner : adjacency.corners) {
+    std::uint32_t v[3];
+    for (int k = 0; k < 3; ++k)
+      v[k] = vertex(corner.face[k], corner.last_col[k] ? w - 1 : 0, corner.last_row[k] ? w - 1 : 0);
+    emit(v[0], v[1], v[2], false);
+  }
+  LV_CHECK_EQ(mesh.num_triangles(), triangles);
+  r.assemble_seconds = seconds_since(assemble_start);
+  r.vertices = mesh.num_vertices();
+  r.triangles = mesh.num_triangles();
+  d.seam_triangles = seam_triangles;
+  if (report) *report = r;
+  if (detail) *detail = d;
+  return mesh;
+}
+
+}  // namespace lightvol

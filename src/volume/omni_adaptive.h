@@ -1,0 +1,37 @@
+// The adaptive omni volume (DESIGN §3 "Adaptive", omni): each cube face tessellated adaptively
+// (tessellate/adaptive_grid.h) under one bound, the faces' border vertices made to agree across
+// every cube edge, then joined by seam strips and corner triangles like the static omni volume.
+//
+// Across a cube edge both faces carry exactly the same border vertices (each side is forced to
+// take the other's, repeated until neither changes; the quadtrees' 2:1 balance propagates the
+// forced vertices inward), so each seam is a strip of 2(n − 1) triangles between n facing vertex
+// pairs: no T-junctions whatever the levels on either side, and cells facing each other across an
+// edge have the same size along it. Closed, outward, star-shaped from the light.
+#pragma once
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
+#include <lightvol/depth/cube_faces.h>
+#include <lightvol/light/light.h>
+#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/static_volume.h>
+
+namespace lightvol {
+
+// Seam statistics of an adaptive omni build, beyond AdaptiveReport's totals over the six faces.
+struct OmniAdaptiveDetail {
+  std::uint64_t face_triangles[kOmniFaces] = {};  // each face's grid triangles
+  std::uint64_t seam_triangles = 0;               // the twelve seam strips (corners: 8 more)
+  int seam_rounds = 0;                            // tessellation rounds until the borders agreed
+};
+
+// Builds the adaptive omni volume from six validated equal square faces. `report` (optional)
+// receives the totals (grid_triangles and leaves summed over the faces, the largest
+// max_error_reached when options.measure); `detail` (optional) the per-face and seam counts.
+// Errors name the face's source: unequal faces, an unreachable radial depth.
+Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
+                                        const VolumeOptions& volume, const AdaptiveOptions& options,
+                                        AdaptiveReport* report = nullptr,
+                                        OmniAdaptiveDetail* detail = nullptr);
+
+}  // namespace lightvol

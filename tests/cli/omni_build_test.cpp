@@ -1,0 +1,111 @@
+// lightvol build with an omni light: the three input forms give byte-identical volumes that pass
+// check --light, static and adaptive; a missing face is exit 2 naming the file and the face, with nothing written.
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/depth/cube_faces.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::make_depth;
+using test::run_lightvol;
+using test::TempDir;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string q(const std::string& path) { return "'" + path + "'"; }
+
+// Window depths: a box room around the light with one face partly open (depth 1: nothing hit).
+CubeFaces room(int w) {
+  CubeFaces cube;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    cube.faces[f] = make_depth(w, w, [f, w](int c, int r) {
+      if (f == 5 && c < w / 2 && r < w / 2) return 1.0f;
+      return static_cast<float>(0.90 + 0.01 * f + 0.002 * c + 0.001 * r);
+    });
+  }
+  return cube;
+}
+
+class OmniBuildCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    light_ = dir_.write("omni.json",
+                        R"({"type": "omni", "position": [0, 1, 0], "near": 0.1, "far": 10})");
+    const CubeFaces cube = room(kW);
+    for (int f = 0; f < kOmniFaces; ++f)
+      ASSERT_TRUE(write_depth_image(expand_face_pattern(dir_.file("room_{face}.exr"), f), cube.faces[f]).ok());
+    ASSERT_TRUE(write_depth_image(dir_.file("strip.exr"), stack_cube_faces(cube)).ok());
+  }
+  static constexpr int kW = 12;
+  TempDir dir_;
+  std::string light_;
+};
+
+TEST_F(OmniBuildCli, ThreeInputFormsGiveIdenticalVolumes) {
+  std::string six;
+  for (int f = 0; f < kOmniFaces; ++f)
+    six += q(dir_.file("room_" + std::string(omni_face_tag(f)) + ".exr")) + " ";
+  const std::string common = " --light " + q(light_) + " --quiet --out ";
+  const test::CommandResult a = run_lightvol("build " + q(dir_.file("room_{face}.exr")) + common +
+                                             q(dir_.file("a.ply")) + " --report " + q(dir_.file("a.json")));
+  const test::CommandResult b = run_lightvol("build " + six + common + q(dir_.file("b.ply")));
+  const test::CommandResult c = run_lightvol("build " + q(dir_.file("strip.exr")) + common + q(dir_.file("c.ply")));
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const std::string bytes = slurp(dir_.file("a.ply"));
+  EXPECT_FALSE(bytes.empty());
+  EXPECT_EQ(bytes, slurp(dir_.file("b.ply")));
+  EXPECT_EQ(bytes, slurp(dir_.file("c.ply")));
+  const std::string report = slurp(dir_.file("a.json"));
+  EXPECT_NE(report.find("\"triangles\": " + std::to_string(12 * kW * kW - 4)), std::string::npos) << report;
+  EXPECT_NE(report.find("\"vertices\": " + std::to_string(6 * kW * kW)), std::string::npos) << report;
+
+  const test::CommandResult check = run_lightvol("check " + q(dir_.file("a.ply")) + " --light " + q(light_));
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+}
+
+TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
+  const test::CommandResult r = run_lightvol(
+      "build " + q(dir_.file("strip.exr")) + " --light " + q(light_) + " --quiet --adaptive --max-error 0.05" +
+      " --out " + q(dir_.file("ad.ply")) + " --report " + q(dir_.file("ad.json")));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string report = slurp(dir_.file("ad.json"));
+  EXPECT_NE(report.find("\"mode\": \"adaptive\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"max_error_reached\""), std::string::npos) << report;
+  const test::CommandResult check = run_lightvol("check " + q(dir_.file("ad.ply")) + " --light " + q(light_));
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+}
+
+TEST_F(OmniBuildCli, MissingFaceIsExit2NamingFileAndFace) {
+  std::remove(dir_.file("room_pz.exr").c_str());
+  const test::CommandResult r = run_lightvol("build " + q(dir_.file("room_{face}.exr")) + " --light " +
+                                             q(light_) + " --out " + q(dir_.file("v.ply")));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: " + dir_.file("room_pz.exr") + ": face +Z (pz): no such file\n");
+  std::ifstream written(dir_.file("v.ply"));
+  EXPECT_FALSE(written.good()) << "a failed build wrote its output";
+}
+
+TEST_F(OmniBuildCli, WrongNumberOfFacesIsExit2) {
+  const test::CommandResult r =
+      run_lightvol("build " + q(dir_.file("room_px.exr")) + " " + q(dir_.file("room_nx.exr")) +
+                   " --light " + q(light_) + " --out " + q(dir_.file("v.ply")));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("an omni light takes six depth images"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace lightvol

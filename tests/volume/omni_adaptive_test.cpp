@@ -1,0 +1,154 @@
+// The adaptive omni volume on a room with a pillar and a ball (flat and curved surfaces, depth
+// edges, an open window: every face): closed edge by edge (so no T-junctions at the seams),
+// outward, star-shaped from the light, and within its bound, checked independently by casting
+// every texel's ray against the emitted triangles.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/volume/omni_adaptive.h>
+#include <lightvol/volume/omni_volume.h>
+
+#include "bench/omni_scene.h"
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::has_no_degenerate_triangles;
+using test::is_closed_and_oriented;
+
+constexpr double kPi = 3.14159265358979323846;
+
+Light scene_light() { return test::light_from_json(bench::omni_scene_light_json()); }
+
+Vec3d vertex(const Mesh& mesh, std::uint32_t v) {
+  const auto p = mesh.vertex(v);
+  return {p[0], p[1], p[2]};
+}
+
+double solid_angle(Vec3d a, Vec3d b, Vec3d c) {
+  const double la = length(a), lb = length(b), lc = length(c);
+  return 2 * std::atan2(dot(a, cross(b, c)),
+                        la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la);
+}
+
+::testing::AssertionResult is_star_shaped_from(const Mesh& mesh, Vec3d light) {
+  double total = 0;
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const auto [i, j, k] = mesh.triangle(t);
+    const Vec3d a = vertex(mesh, i) - light, b = vertex(mesh, j) - light, c = vertex(mesh, k) - light;
+    if (!(dot(a, cross(b, c)) > 0))
+      return ::testing::AssertionFailure() << "triangle " << t << " does not face away from the light";
+    total += solid_angle(a, b, c);
+  }
+  if (std::abs(total - 4 * kPi) > 1e-9 * static_cast<double>(mesh.num_triangles()))
+    return ::testing::AssertionFailure() << "solid angles add up to " << total << ", not 4 pi";
+  return ::testing::AssertionSuccess();
+}
+
+// The largest distance, over every texel of every face, between the texel's point and where its
+// ray (from the light) leaves the mesh: brute force over all triangles.
+double largest_texel_error(const Mesh& mesh, const Light& light, const CubeFaces& cube) {
+  const int w = cube.size();
+  double worst = 0;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    const Unprojector u(light, w, w, f, Space::world);
+    for (int r = 0; r < w; ++r)
+      for (int c = 0; c < w; ++c) {
+        Vec3d p;
+        EXPECT_TRUE(u.point(c, r, cube.faces[f].at(c, r), &p));
+        const Vec3d o = light.position, d = normalize(p - o);
+        double hit = -1;
+        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+          const auto [i, j, k] = mesh.triangle(t);
+          const Vec3d a = vertex(mesh, i), e1 = vertex(mesh, j) - a, e2 = vertex(mesh, k) - a;
+          const Vec3d pv = cross(d, e2);
+          const double det = dot(e1, pv);
+          if (det == 0) continue;
+          const Vec3d tv = o - a;
+          const double uu = dot(tv, pv) / det;
+          if (uu < -1e-9 || uu > 1 + 1e-9) continue;
+          const Vec3d qv = cross(tv, e1);
+          const double vv = dot(d, qv) / det;
+          if (vv < -1e-9 || uu + vv > 1 + 1e-9) continue;
+          const double s = dot(e2, qv) / det;
+          if (s > 0) hit = std::max(hit, s);
+        }
+        EXPECT_GT(hit, 0) << "face " << f << " texel " << c << "," << r << ": ray leaves nothing";
+        worst = std::max(worst, std::abs(hit - length(p - o)));
+      }
+  }
+  return worst;
+}
+
+TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
+  const Light light = scene_light();
+  for (int w : {16, 37}) {
+    const CubeFaces cube = bench::omni_scene(w);
+    for (double bound : {0.002, 0.05, 0.5}) {
+      SCOPED_TRACE("W = " + std::to_string(w) + ", max error " + std::to_string(bound));
+      AdaptiveOptions options;
+      options.max_error = bound;
+      options.measure = true;
+      AdaptiveReport report;
+      OmniAdaptiveDetail detail;
+      Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options, &report, &detail);
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      EXPECT_TRUE(is_closed_and_oriented(*mesh));
+      EXPECT_TRUE(has_no_degenerate_triangles(*mesh));
+      EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+      EXPECT_LE(report.max_error_reached, bound);
+      EXPECT_EQ(report.triangles, mesh->num_triangles());
+      EXPECT_EQ(mesh->num_triangles(), report.grid_triangles + detail.seam_triangles + 8);
+      EXPECT_LE(mesh->num_triangles(), 12u * w * w - 4);  // never more than the static volume
+      if (w == 16) {
+        EXPECT_LE(largest_texel_error(*mesh, light, cube), bound * (1 + 1e-4) + 1e-5);
+      }
+    }
+  }
+}
+
+TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
+  const Light light = scene_light();
+  const int w = 64;
+  const CubeFaces cube = bench::omni_scene(w);
+  AdaptiveOptions options;
+  options.max_error = 0.01;
+  Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_TRUE(is_closed_and_oriented(*mesh));
+  // Far fewer triangles than the static 12W² − 4, but more than a bare cube (the pillar, the ball).
+  EXPECT_LT(mesh->num_triangles(), (12u * w * w - 4) / 3);
+  EXPECT_GT(mesh->num_triangles(), 500u);
+}
+
+TEST(OmniAdaptive, LaplacianRefinementAndLightSpaceAreClosedToo) {
+  const Light light = scene_light();
+  const CubeFaces cube = bench::omni_scene(33);
+  AdaptiveOptions options;
+  options.refinement = Refinement::laplacian;
+  options.threshold = 0.001;
+  VolumeOptions volume;
+  volume.space = Space::light;
+  Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, volume, options);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_TRUE(is_closed_and_oriented(*mesh));
+  EXPECT_TRUE(is_star_shaped_from(*mesh, {0, 0, 0}));
+}
+
+TEST(OmniAdaptive, FlipYFacesAreClosedToo) {
+  Light light = scene_light();
+  light.flip_y = true;
+  AdaptiveOptions options;
+  options.max_error = 0.05;
+  Result<Mesh> mesh = build_adaptive_omni_volume(light, bench::omni_scene(20), {}, options);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_TRUE(is_closed_and_oriented(*mesh));
+  EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+}
+
+}  // namespace
+}  // namespace lightvol
