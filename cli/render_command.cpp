@@ -7,6 +7,7 @@
 
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/io/mesh_reader.h>
 #include <lightvol/light/light.h>
@@ -55,7 +56,7 @@ int run_render(const RenderOptions& o) {
   const bool needs_mesh = o.method == "volume" || o.method == "reference";
   if (needs_mesh && o.mesh_path.empty())
     return fail("render: --method " + o.method + " needs the light volume MESH");
-  if (!needs_mesh && o.shadow_maps.empty())
+  if (o.method == "raymarch" && o.shadow_maps.empty())
     return fail("render: --method " + o.method + " needs --shadow-map DEPTH (the light's shadow map(s))");
   if (o.samples < 1) return fail("--samples: must be >= 1, got " + std::to_string(o.samples));
   if (o.interleave < 1) return fail("--interleave: must be >= 1, got " + std::to_string(o.interleave));
@@ -118,17 +119,33 @@ int run_render(const RenderOptions& o) {
         frame_seconds.push_back(s);
       }
     } else {
+      // Omni maps: six files, one path with {face}, or one W x 6W strip (DESIGN §2).
+      std::vector<std::string> paths = o.shadow_maps;
+      if (scene.light.type == LightType::omni && paths.size() == 1 &&
+          paths[0].find("{face}") != std::string::npos) {
+        const std::string pattern = paths[0];
+        paths.clear();
+        for (int f = 0; f < kOmniFaces; ++f) paths.push_back(expand_face_pattern(pattern, f));
+      }
       std::vector<DepthImage> maps;
-      for (const std::string& path : o.shadow_maps) {
+      std::vector<std::string> sources;
+      for (const std::string& path : paths) {
         Result<DepthImage> map = read_depth_image(path, {o.channel});
         if (!map) return fail(map.error().message);
         maps.push_back(std::move(*map));
+        sources.push_back(path);
+      }
+      if (scene.light.type == LightType::omni && maps.size() == 1) {
+        Result<CubeFaces> cube = split_cube_strip(maps[0], paths[0]);
+        if (!cube) return fail(cube.error().message);
+        maps.assign(cube->faces.begin(), cube->faces.end());
+        sources.assign(cube->sources.begin(), cube->sources.end());
       }
       MarchOptions mo;
       mo.samples = o.samples;
       mo.interleave = o.interleave;
       mo.method = o.method == "radial" ? MarchMethod::radial : MarchMethod::raymarch;
-      Result<std::unique_ptr<GlMarcher>> marcher = GlMarcher::create(scene, maps, o.shadow_maps, mo);
+      Result<std::unique_ptr<GlMarcher>> marcher = GlMarcher::create(scene, maps, sources, mo);
       if (!marcher) return fail(marcher.error().message);
       image = (*marcher)->render();
       for (int i = 0; i < o.frames; ++i) {
@@ -187,8 +204,8 @@ void add_render_command(CLI::App& app, Runner* run) {
   CLI::App* cmd = app.add_subcommand(
       "render",
       "The OpenGL checker: render the single-scattering airlight of a light volume (signed\n"
-      "additive blending, --method volume), its CPU reference, or the ray-marching and radial-blur\n"
-      "alternatives from the shadow map(s).");
+      "additive blending, --method volume), its CPU reference, or the ray-marching (from the shadow\n"
+      "map) and radial-blur (from the camera depth) alternatives.");
   cmd->add_option("MESH", o->mesh_path, "Light volume (world space), for volume and reference");
   cmd->add_option("--light", o->light_path, "Light description (JSON)")->required();
   cmd->add_option("--camera", o->camera_path, "Camera: a spot light description plus width, height")
@@ -203,7 +220,8 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option("--method", o->method, "volume | reference | raymarch | radial")
       ->check(CLI::IsMember({"volume", "reference", "raymarch", "radial"}))
       ->capture_default_str();
-  cmd->add_option("--shadow-map", o->shadow_maps, "Shadow map(s) for raymarch and radial");
+  cmd->add_option("--shadow-map", o->shadow_maps,
+                  "raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
       ->capture_default_str();

@@ -102,8 +102,7 @@ TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
   ASSERT_EQ(march.exit_code, 0) << march.err;
   EXPECT_LT(number_after(march.out, "relative L2 "), 0.03) << march.out;
   test::CommandResult radial = test::run_lightvol(
-      "render " + args + " --method radial --shadow-map '" + dir + "/shadow.exr' --out '" + dir +
-      "/radial.png'");
+      "render " + args + " --method radial --out '" + dir + "/radial.png'");
   ASSERT_EQ(radial.exit_code, 0) << radial.err;
   test::CommandResult composite = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
                                                      " --composite --out '" + dir + "/composite.png'");
@@ -125,6 +124,9 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
   r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: render: --method volume needs the light volume MESH\n");
+  r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr' --method raymarch");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: render: --method raymarch needs --shadow-map DEPTH (the light's shadow map(s))\n");
   r = test::run_lightvol("render '" + dir + "/volume.ply' " + common_args(dir) + " --out '" + dir +
                          "/x.exr' --method reference --compare '" + dir + "/shadow.exr'");
   EXPECT_EQ(r.exit_code, 2);
