@@ -19,6 +19,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,8 +54,8 @@ class TexelDepths {
   // denominator is 1 everywhere (orthographic projections).
   bool uniform() const { return uniform_; }
   double uniform_scale() const { return uniform_scale_; }
-  const double* depth_row(int row) const { return depth_.data() + index(0, row); }
-  const double* scale_row(int row) const { return scale_.data() + index(0, row); }
+  const double* depth_row(int row) const { return depth_.get() + index(0, row); }
+  const double* scale_row(int row) const { return scale_.get() + index(0, row); }
   double w0(int col, int row) const { return w0_c_ + col * w0_dc_ + row * w0_dr_; }
   double w0_dc() const { return w0_dc_; }
   double w1() const { return w1_; }
@@ -65,8 +66,9 @@ class TexelDepths {
            static_cast<std::size_t>(col);
   }
   int width_ = 0, height_ = 0;
-  std::vector<double> depth_;  // window depth per texel
-  std::vector<double> scale_;  // per texel, empty when uniform
+  // Per texel, written once in parallel (no serial zero-fill, huge pages where available).
+  std::unique_ptr<double[]> depth_;  // window depth
+  std::unique_ptr<double[]> scale_;  // null when uniform
   bool uniform_ = false;
   double uniform_scale_ = 0;
   double w0_c_ = 1, w0_dc_ = 0, w0_dr_ = 0, w1_ = 0;
