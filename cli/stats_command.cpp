@@ -8,9 +8,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/light/light.h>
 #include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "commands.h"
@@ -58,6 +60,112 @@ Result<std::vector<double>> parse_bounds(const std::string& text) {
   return out;
 }
 
+// Omni lights: the same table over the whole cube, with each bound's triangles per face and in the
+// seams (the twelve strips; the eight corner triangles are in the totals).
+int run_stats_omni(const StatsOptions& o, const Light& light, const std::vector<double>& bounds,
+                   Progress& progress) {
+  progress.begin("reading omni faces");
+  Result<CubeFaces> cube = read_cube_faces(o.depth_paths, {o.channel});
+  if (!cube) return fail(cube.error().message);
+  const int w = cube->size();
+  progress.end(std::to_string(w) + "x" + std::to_string(w) + " x 6");
+  progress.begin("error pyramids");
+  Result<OmniRefinement> refinement = OmniRefinement::create(
+      light, *cube, Refinement::max_error, o.space == "light" ? Space::light : Space::world);
+  if (!refinement) return fail(refinement.error().message);
+  progress.end();
+
+  std::vector<Row> rows;
+  std::vector<OmniAdaptiveDetail> details;
+  for (const double e : bounds) {
+    progress.begin("tessellating at " + std::to_string(e));
+    AdaptiveReport report;
+    OmniAdaptiveDetail detail;
+    const Mesh mesh = refinement->build(e, true, &report, &detail);
+    Row r;
+    r.max_error = e;
+    r.triangles = report.triangles;
+    r.vertices = report.vertices;
+    r.leaves = report.leaves;
+    r.fixup_rounds = report.fixup_rounds;
+    r.reached = report.max_error_reached;
+    r.balance = report.balance_seconds;
+    r.emit = report.emit_seconds;
+    r.measure = report.measure_seconds;
+    rows.push_back(r);
+    details.push_back(detail);
+    progress.end(thousands(r.triangles) + " triangles");
+  }
+  const VolumeCounts st = static_volume_counts(LightType::omni, w, w);
+  const std::uint64_t static_face = 2ull * (w - 1) * (w - 1), static_seams = 24ull * (w - 1);
+
+  if (o.json) {
+    nlohmann::json adaptive = nlohmann::json::array();
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      nlohmann::json faces = nlohmann::json::object();
+      for (int f = 0; f < kOmniFaces; ++f)
+        faces[std::string(omni_face_tag(f))] = details[i].face_triangles[f];
+      adaptive.push_back({{"max_error", r.max_error},
+                          {"triangles", r.triangles},
+                          {"vertices", r.vertices},
+                          {"max_error_reached", r.reached},
+                          {"leaves", r.leaves},
+                          {"ratio_to_static", double(r.triangles) / double(st.triangles)},
+                          {"face_triangles", faces},
+                          {"seam_triangles", details[i].seam_triangles},
+                          {"corner_triangles", 8},
+                          {"seam_rounds", details[i].seam_rounds},
+                          {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
+    }
+    const nlohmann::json report = {
+        {"inputs", o.depth_paths},
+        {"light", {{"path", o.light_path}, {"type", "omni"}, {"depth", to_string(light.depth)}}},
+        {"width", w},
+        {"height", w},
+        {"faces", 6},
+        {"static", {{"triangles", st.triangles}, {"vertices", st.vertices},
+                    {"face_triangles", static_face}, {"seam_triangles", static_seams},
+                    {"corner_triangles", 8}}},
+        {"error_pyramid_seconds", refinement->seconds()},
+        {"adaptive", adaptive}};
+    std::printf("%s\n", report.dump(2).c_str());
+    return 0;
+  }
+  if (o.csv) {
+    std::printf("mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
+    std::printf("static,,%llu,%llu,0", static_cast<unsigned long long>(st.triangles),
+                static_cast<unsigned long long>(st.vertices));
+    for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", static_cast<unsigned long long>(static_face));
+    std::printf(",%llu,8\n", static_cast<unsigned long long>(static_seams));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error, static_cast<unsigned long long>(r.triangles),
+                  static_cast<unsigned long long>(r.vertices), r.reached);
+      for (int f = 0; f < kOmniFaces; ++f)
+        std::printf(",%llu", static_cast<unsigned long long>(details[i].face_triangles[f]));
+      std::printf(",%llu,8\n", static_cast<unsigned long long>(details[i].seam_triangles));
+    }
+    return 0;
+  }
+  std::printf("%s: 6 faces of %dx%d, omni light, %s depth\n", o.depth_paths.front().c_str(), w, w,
+              std::string(to_string(light.depth)).c_str());
+  std::printf("static: %s triangles (%s per face, %s in seams, 8 corners), %s vertices\n",
+              thousands(st.triangles).c_str(), thousands(static_face).c_str(),
+              thousands(static_seams).c_str(), thousands(st.vertices).c_str());
+  std::printf("error pyramids: %.3f s (once for all bounds)\n\n", refinement->seconds());
+  std::printf("%12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s\n", "max error", "triangles", "of static",
+              "reached", "px", "nx", "py", "ny", "pz", "nz", "seams");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    std::printf("%12.6g %12s %8.3f%% %12.6g", r.max_error, thousands(r.triangles).c_str(),
+                100.0 * double(r.triangles) / double(st.triangles), r.reached);
+    for (int f = 0; f < kOmniFaces; ++f) std::printf(" %9s", thousands(details[i].face_triangles[f]).c_str());
+    std::printf(" %9s\n", thousands(details[i].seam_triangles).c_str());
+  }
+  return 0;
+}
+
 int run_stats(const StatsOptions& o) {
   if (o.json && o.csv) return fail("--json and --csv: choose one");
   Result<std::vector<double>> bounds = parse_bounds(o.max_errors);
@@ -68,7 +176,7 @@ int run_stats(const StatsOptions& o) {
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
   progress.end();
-  if (light->type == LightType::omni) return fail(o.light_path + ": omni lights are not supported yet");
+  if (light->type == LightType::omni) return run_stats_omni(o, *light, *bounds, progress);
   if (o.depth_paths.size() != 1)
     return fail("a " + std::string(to_string(light->type)) + " light takes one depth image, got " +
                 std::to_string(o.depth_paths.size()));

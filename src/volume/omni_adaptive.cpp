@@ -49,32 +49,47 @@ std::vector<int> merged(const std::vector<int>& a, const std::vector<int>& b) {
 
 }  // namespace
 
-Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
-                                        const VolumeOptions& volume, const AdaptiveOptions& options,
-                                        AdaptiveReport* report, OmniAdaptiveDetail* detail) {
+Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFaces& cube,
+                                               Refinement refinement, Space space) {
   LV_CHECK(light.type == LightType::omni);
   if (Status s = validate_cube_faces(cube); !s) return s.error();
-  const int w = cube.size();
   const auto start = std::chrono::steady_clock::now();
-  AdaptiveReport r;
-  OmniAdaptiveDetail d;
-
-  // Per face: window depths and the refinement pyramid.
-  std::vector<RefinementPyramid> pyramids;
-  pyramids.reserve(kOmniFaces);
-  std::vector<Unprojector> faces;
+  OmniRefinement out(light, cube);
+  const int w = cube.size();
+  out.pyramids_.reserve(kOmniFaces);
   for (int f = 0; f < kOmniFaces; ++f) {
     Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[f], f, cube.sources[f]);
     if (!texels) return texels.error();
-    pyramids.emplace_back(std::move(*texels), options.refinement);
-    faces.emplace_back(light, w, w, f, volume.space);
+    out.pyramids_.emplace_back(std::move(*texels), refinement);
+    out.faces_.emplace_back(light, w, w, f, space);
   }
-  r.pyramid_seconds = seconds_since(start);
+  out.seconds_ = seconds_since(start);
+  return out;
+}
 
-  // Tessellate; force each border to hold its neighbour's border vertices until they agree.
+Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
+                                        const VolumeOptions& volume, const AdaptiveOptions& options,
+                                        AdaptiveReport* report, OmniAdaptiveDetail* detail) {
+  Result<OmniRefinement> refinement =
+      OmniRefinement::create(light, cube, options.refinement, volume.space);
+  if (!refinement) return refinement.error();
   const double bound =
       options.refinement == Refinement::max_error ? options.max_error : options.threshold;
-  const OmniAdjacency adjacency = omni_adjacency(light);
+  return refinement->build(bound, options.measure, report, detail);
+}
+
+Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
+                           OmniAdaptiveDetail* detail) const {
+  const CubeFaces& cube = *cube_;
+  const std::vector<RefinementPyramid>& pyramids = pyramids_;
+  const std::vector<Unprojector>& faces = faces_;
+  const int w = cube.size();
+  AdaptiveReport r;
+  OmniAdaptiveDetail d;
+  r.pyramid_seconds = seconds_;
+
+  // Tessellate; force each border to hold its neighbour's border vertices until they agree.
+  const OmniAdjacency adjacency = omni_adjacency(light_);
   std::array<BorderSplits, kOmniFaces> forced;
   std::array<AdaptiveGrid, kOmniFaces> grids;
   std::array<bool, kOmniFaces> dirty;
@@ -112,7 +127,7 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
     r.leaves += g.leaves;
     r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
   }
-  if (options.measure) {
+  if (measure) {
     const auto m = std::chrono::steady_clock::now();
     r.max_error_reached = 0;
     for (int f = 0; f < kOmniFaces; ++f)
@@ -126,8 +141,7 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   std::array<std::uint32_t, kOmniFaces + 1> base{};
   for (int f = 0; f < kOmniFaces; ++f) {
     const std::uint64_t next = std::uint64_t{base[f]} + grids[f].vertices.size();
-    if (next >= std::numeric_limits<std::uint32_t>::max())
-      return Error{cube.sources[0] + ": the volume needs more vertices than 32-bit indices hold"};
+    LV_CHECK_LT(next, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});  // 2^32 vertices: > 16 GB of input
     base[f + 1] = static_cast<std::uint32_t>(next);
   }
   std::uint64_t seam_triangles = 0;

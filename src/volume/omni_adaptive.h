@@ -9,6 +9,8 @@
 // edge have the same size along it. Closed, outward, star-shaped from the light.
 #pragma once
 
+#include <vector>
+
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 #include <lightvol/depth/cube_faces.h>
@@ -23,6 +25,29 @@ struct OmniAdaptiveDetail {
   std::uint64_t face_triangles[kOmniFaces] = {};  // each face's grid triangles
   std::uint64_t seam_triangles = 0;               // the twelve seam strips (corners: 8 more)
   int seam_rounds = 0;                            // tessellation rounds until the borders agreed
+};
+
+// The six faces' refinement pyramids, built once and reusable for any number of bounds (what
+// `lightvol stats` tabulates). Errors name the face's source: unequal faces, an unreachable radial
+// depth.
+class OmniRefinement {
+ public:
+  static Result<OmniRefinement> create(const Light& light, const CubeFaces& cube,
+                                       Refinement refinement, Space space);
+  double seconds() const { return seconds_; }  // time to build the six pyramids
+
+  // The adaptive omni volume at `bound` (max_error: world units; laplacian: the threshold T).
+  // `report` and `detail` as for build_adaptive_omni_volume (report's pyramid_seconds: seconds()).
+  Mesh build(double bound, bool measure, AdaptiveReport* report = nullptr,
+             OmniAdaptiveDetail* detail = nullptr) const;
+
+ private:
+  OmniRefinement(const Light& light, const CubeFaces& cube) : light_(light), cube_(&cube) {}
+  Light light_;
+  const CubeFaces* cube_;  // not owned: must outlive this object
+  std::vector<RefinementPyramid> pyramids_;
+  std::vector<Unprojector> faces_;
+  double seconds_ = 0;
 };
 
 // Builds the adaptive omni volume from six validated equal square faces. `report` (optional)

@@ -1,5 +1,5 @@
 // lightvol build with an omni light: the three input forms give byte-identical volumes that pass
-// check --light, static and adaptive; a missing face is exit 2 naming the file and the face, with nothing written.
+// check --light, static and adaptive; stats splits the counts by face and seams; a missing face is exit 2 naming the file and the face, with nothing written.
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -87,6 +87,26 @@ TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
   EXPECT_NE(report.find("\"max_error_reached\""), std::string::npos) << report;
   const test::CommandResult check = run_lightvol("check " + q(dir_.file("ad.ply")) + " --light " + q(light_));
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+}
+
+TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
+  const test::CommandResult r = run_lightvol("stats " + q(dir_.file("room_{face}.exr")) + " --light " +
+                                             q(light_) + " --max-error 0.01,0.1 --csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string header, static_row, fine, coarse;
+  std::getline(lines, header);
+  std::getline(lines, static_row);
+  std::getline(lines, fine);
+  std::getline(lines, coarse);
+  EXPECT_EQ(header, "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners");
+  // Static: 12W² − 4 triangles, 2(W − 1)² per face, 24(W − 1) in the seams, 8 corners.
+  const int w = kW;
+  std::string expected = "static,," + std::to_string(12 * w * w - 4) + "," + std::to_string(6 * w * w) + ",0";
+  for (int f = 0; f < kOmniFaces; ++f) expected += "," + std::to_string(2 * (w - 1) * (w - 1));
+  EXPECT_EQ(static_row, expected + "," + std::to_string(24 * (w - 1)) + ",8");
+  EXPECT_EQ(fine.rfind("adaptive,0.01,", 0), 0u) << fine;
+  EXPECT_EQ(coarse.rfind("adaptive,0.1,", 0), 0u) << coarse;
 }
 
 TEST_F(OmniBuildCli, MissingFaceIsExit2NamingFileAndFace) {
