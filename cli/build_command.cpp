@@ -191,8 +191,12 @@ void add_build_command(CLI::App& app, Runner* run) {
       "build", "Build the closed light volume of a shadow map and write it as a mesh.");
   cmd->footer(
       "Example:\n  lightvol build shadow.exr --light light.json --out volume.ply\n"
+      "  lightvol build 'room_{face}.exr' --light omni.json --out volume.ply\n"
       "The volume has one vertex per texel, at the texel centre's ray and depth, closed to the\n"
-      "light (spot: a fan to its position; directional: walls and a cap on the near plane).\n"
+      "light (spot: a fan to its position; directional: walls and a cap on the near plane; omni:\n"
+      "six faces joined by seams along the cube's edges and a triangle at each corner).\n"
+      "An omni light takes six images (+X -X +Y -Y +Z -Z), one path with {face} (px nx py ny pz nz)\n"
+      "or one W x 6W strip with the faces top to bottom.\n"
       "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file written.");
   cmd->add_option("depth", o->depth_paths, "Depth image(s): EXR, TIFF, PFM, 16-bit PNG, ...")
       ->required();
