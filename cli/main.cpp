@@ -4,6 +4,8 @@
 #include <exception>
 #include <new>
 
+#include <lightvol/core/limits.h>
+
 #include "commands.h"
 
 namespace lightvol::cli {
@@ -26,6 +28,14 @@ int main(int argc, char** argv) {
   app.footer("Run 'lightvol COMMAND --help' for a command's options. Exit codes: 0 success, "
              "1 invalid volume, 2 bad usage or input.");
 
+  // --max-memory belongs to the app; fallthrough lets it follow any command (set before the
+  // commands are added: subcommands inherit it).
+  std::string max_memory;
+  app.add_option("--max-memory", max_memory,
+                 "Memory budget inputs are checked against before they are read, e.g. 8G "
+                 "(default: 75% of physical memory)");
+  app.fallthrough();
+
   Runner run;
   add_build_command(app, &run);
   add_stats_command(app, &run);
@@ -46,6 +56,11 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     return fail(e.what() + std::string(" (see 'lightvol --help')"));
+  }
+  if (!max_memory.empty()) {
+    const lightvol::Result<std::uint64_t> budget = lightvol::parse_memory_size(max_memory);
+    if (!budget) return fail(budget.error().message);
+    lightvol::set_memory_budget(*budget);
   }
   try {
     return run ? run() : 2;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
@@ -61,6 +62,12 @@ int run_shadowmap(const ShadowmapOptions& o) {
   }
   if (has_face && light.type != LightType::omni)
     return fail(o.out_path + ": {face} applies to omni lights only");
+  if (Status m = check_memory(shadow_map_memory_bytes(size.width, size.height, pass_count(light)),
+                              o.light_path.empty() ? o.camera_path : o.light_path,
+                              "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                                  " shadow map");
+      !m)
+    return fail(m.error().message);
 
   Progress progress(o.quiet);
   progress.begin("reading " + o.scene_path);

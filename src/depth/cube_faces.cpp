@@ -110,8 +110,10 @@ Result<CubeFaces> read_cube_faces(const std::vector<std::string>& paths,
   }
 
   CubeFaces cube;
+  DepthReadOptions face_options = options;
+  face_options.images = kOmniFaces;  // the budget counts all six faces from the first header
   for (int f = 0; f < kOmniFaces; ++f) {
-    Result<DepthImage> image = read_depth_image(face_paths[f], options);
+    Result<DepthImage> image = read_depth_image(face_paths[f], face_options);
     if (!image) return Error{with_face(image.error().message, face_paths[f], f)};
     cube.faces[f] = std::move(*image);
     cube.sources[f] = face_paths[f];

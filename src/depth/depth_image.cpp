@@ -4,10 +4,12 @@
 #include <bit>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include <OpenImageIO/imageio.h>
 
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/limits.h>
 
 namespace lightvol {
 namespace {
@@ -49,6 +51,14 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
                "): choose the depth channel with --channel"};
 }
 
+// The first two bytes of a file ("" if it is shorter).
+std::string read_magic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[2] = {};
+  if (!in.read(magic, 2)) return "";
+  return std::string(magic, 2);
+}
+
 }  // namespace
 
 Status validate_depths(const DepthImage& image, const std::string& source) {
@@ -78,9 +88,27 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
                  "; a depth image needs at least 2x2 texels"};
   if (spec.depth > 1) return Error{path + ": is a volume image; a depth image is 2D"};
   const std::int64_t texels = static_cast<std::int64_t>(spec.width) * spec.height;
+  if (Status s = check_memory(depth_build_memory_bytes(spec.width, spec.height, options.images), path,
+                              "a volume from " + std::to_string(spec.width) + "x" +
+                                  std::to_string(spec.height) + " texels" +
+                                  (options.images > 1 ? " x " + std::to_string(options.images) : ""));
+      !s)
+    return s.error();
   if (texels > (std::int64_t{1} << 30))
     return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                  ", more than 2^30 texels; lightvol's 32-bit indices cannot hold its volume"};
+  // PFM is uncompressed: a header that promises more floats than the file holds is truncated (or
+  // forged); refuse it before allocating what it promises.
+  if (const std::string magic = read_magic(path); magic == "Pf" || magic == "PF") {
+    const std::uintmax_t needed = static_cast<std::uintmax_t>(texels) *
+                                  static_cast<std::uintmax_t>(spec.nchannels) * sizeof(float);
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size < needed)
+      return Error{path + ": PFM header says " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " (" + std::to_string(needed) +
+                   " bytes of floats), but the file has " + std::to_string(size) +
+                   " bytes (truncated file?)"};
+  }
   if (spec.deep) return Error{path + ": is a deep image; a depth image has one value per texel"};
 
   const Result<int> channel = choose_channel(spec, options, path);

@@ -25,6 +25,10 @@ struct DepthReadOptions {
   // Channel to read from a multi-channel image ("Z", "R", ...). Empty: the only channel, else a
   // channel named Z, depth or Y, else the only non-alpha channel; anything else is ambiguous.
   std::string channel;
+  // How many images of this size the caller will read and build from (an omni light: 6): the
+  // memory a build would need is checked against memory_budget() (core/limits.h) right after the
+  // header is read, before any pixel is allocated.
+  int images = 1;
 };
 
 // Reads the first subimage of any file OpenImageIO reads with one float or 16-bit channel (EXR,

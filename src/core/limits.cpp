@@ -1,0 +1,115 @@
+#include <lightvol/core/limits.h>
+
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+
+#include <unistd.h>
+
+namespace lightvol {
+namespace {
+std::atomic<std::uint64_t> g_budget{0};  // 0: not set, use the default
+}  // namespace
+
+std::uint64_t physical_memory_bytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page_size = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_size <= 0) return 0;
+  return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size);
+}
+
+std::uint64_t default_memory_budget() {
+  const std::uint64_t physical = physical_memory_bytes();
+  if (physical == 0) return std::uint64_t{16} << 30;
+  return physical / 4 * 3;
+}
+
+std::uint64_t memory_budget() {
+  const std::uint64_t b = g_budget.load(std::memory_order_relaxed);
+  return b != 0 ? b : default_memory_budget();
+}
+
+void set_memory_budget(std::uint64_t bytes) { g_budget.store(bytes, std::memory_order_relaxed); }
+
+Result<std::uint64_t> parse_memory_size(const std::string& text) {
+  const Error bad{"--max-memory: '" + text +
+                  "' is not a memory size (examples: 512M, 8G, 1.5GiB, 2000000000)"};
+  std::size_t i = 0;
+  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) ++i;
+  if (i == 0) return bad;
+  double value = 0;
+  try {
+    std::size_t used = 0;
+    value = std::stod(text.substr(0, i), &used);
+    if (used != i) return bad;
+  } catch (const std::exception&) {
+    return bad;
+  }
+  std::string suffix;
+  for (std::size_t k = i; k < text.size(); ++k)
+    suffix += static_cast<char>(std::toupper(static_cast<unsigned char>(text[k])));
+  double scale = 1;
+  if (!suffix.empty()) {
+    const char unit = suffix[0];
+    const std::string rest = suffix.substr(1);
+    if (rest != "" && rest != "B" && rest != "IB") return bad;
+    switch (unit) {
+      case 'B': if (!rest.empty()) return bad; break;
+      case 'K': scale = 1024.0; break;
+      case 'M': scale = 1024.0 * 1024; break;
+      case 'G': scale = 1024.0 * 1024 * 1024; break;
+      case 'T': scale = 1024.0 * 1024 * 1024 * 1024; break;
+      default: return bad;
+    }
+  }
+  const double bytes = value * scale;
+  if (!std::isfinite(bytes) || bytes < 1 || bytes > 1.8e19) return bad;
+  return static_cast<std::uint64_t>(bytes);
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+  const char* units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  double v = static_cast<double>(bytes);
+  int u = 0;
+  while (v >= 1024 && u < 6) {
+    v /= 1024;
+    ++u;
+  }
+  char buffer[64];
+  if (u == 0) std::snprintf(buffer, sizeof buffer, "%llu bytes", static_cast<unsigned long long>(bytes));
+  else std::snprintf(buffer, sizeof buffer, "%.1f %s", v, units[u]);
+  return buffer;
+}
+
+std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, int images) {
+  if (width <= 0 || height <= 0 || images <= 0) return 0;
+  // Per texel: 4 (depth float) + 12 (vertex) + 2 × 12 (triangles) + 2 × 3 × 8 (edge keys the
+  // checks sort) ≈ 88; rounded up to 96 for the builder's temporaries.
+  constexpr double kBytesPerTexel = 96;
+  const double bytes = static_cast<double>(width) * static_cast<double>(height) *
+                       static_cast<double>(images) * kBytesPerTexel;
+  return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
+}
+
+std::uint64_t shadow_map_memory_bytes(std::int64_t width, std::int64_t height, int faces) {
+  if (width <= 0 || height <= 0 || faces <= 0) return 0;
+  // Per texel and face: 8 (double window depth) + 4 (encoded float) + 4 (GPU readback) + 4
+  // (depth attachment).
+  constexpr double kBytesPerTexel = 20;
+  const double bytes = static_cast<double>(width) * static_cast<double>(height) *
+                       static_cast<double>(faces) * kBytesPerTexel;
+  return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
+}
+
+Status check_memory(std::uint64_t needed, const std::string& source, const std::string& what) {
+  const std::uint64_t budget = memory_budget();
+  if (needed <= budget) return {};
+  // Suggest a round number of GiB above the need.
+  const std::uint64_t gib = (needed >> 30) + 1;
+  return Error{source + ": " + what + " needs about " + format_bytes(needed) +
+               " of memory, more than the budget of " + format_bytes(budget) +
+               "; raise it with --max-memory (e.g. --max-memory " + std::to_string(gib) + "G)"};
+}
+
+}  // namespace lightvol

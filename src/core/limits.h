@@ -1,0 +1,43 @@
+// Resource limits, decided before work starts: a memory budget that inputs are measured against
+// as soon as their headers say how big they are (image dimensions, mesh element counts, shadow-map
+// sizes), so a forged or absurd header is refused with a message instead of an allocation.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+// Physical memory of the machine (sysconf), 0 if unknown.
+std::uint64_t physical_memory_bytes();
+
+// 75% of physical memory (16 GiB if unknown): the budget when nothing else is set.
+std::uint64_t default_memory_budget();
+
+// The process-wide budget every reader checks against (the CLI's --max-memory sets it).
+std::uint64_t memory_budget();
+void set_memory_budget(std::uint64_t bytes);
+
+// "512M", "8G", "1.5GiB", "2000000000": bytes. Suffixes K M G T (powers of 1024, optional "B" or
+// "iB"), case-insensitive. Errors name the text.
+Result<std::uint64_t> parse_memory_size(const std::string& text);
+
+// "1.5 GiB", for messages.
+std::string format_bytes(std::uint64_t bytes);
+
+// Peak memory a build from `images` depth images of W×H texels takes: the floats read, the
+// volume's positions and indices (≈ W·H vertices, 2·W·H triangles each) and the edge arrays the
+// checks sort. An over-estimate by design: a refused input would have come close.
+std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, int images = 1);
+
+// Peak memory of rendering a W×H shadow map `faces` times (double window depths, encoded floats,
+// GPU readback).
+std::uint64_t shadow_map_memory_bytes(std::int64_t width, std::int64_t height, int faces = 1);
+
+// An Error "<source>: <what> needs about X of memory, more than the budget Y; raise it with
+// --max-memory (e.g. --max-memory Z)" when `needed` exceeds memory_budget(), else success.
+Status check_memory(std::uint64_t needed, const std::string& source, const std::string& what);
+
+}  // namespace lightvol

@@ -1,0 +1,26 @@
+// Fuzz target: the depth-image loading path (OpenImageIO + our channel and value checks). The
+// first byte picks the extension the bytes are read as; the rest is the file.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include <lightvol/core/check.h>
+#include <lightvol/depth/depth_image.h>
+
+#include "fuzz_support.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 1) return 0;
+  static const char* const kExtensions[] = {".exr", ".png", ".tif", ".pfm"};
+  const lightvol::fuzz::TempInput file(data + 1, size - 1, kExtensions[data[0] % 4]);
+  const lightvol::Result<lightvol::DepthImage> image = lightvol::read_depth_image(file.path());
+  if (!image) {
+    LV_CHECK(image.error().message.rfind(file.path(), 0) == 0);
+    return 0;
+  }
+  LV_CHECK(image->width >= 2 && image->height >= 2);
+  LV_CHECK_EQ(image->values.size(),
+              static_cast<std::size_t>(image->width) * static_cast<std::size_t>(image->height));
+  for (const float v : image->values) LV_CHECK(std::isfinite(v) && v >= 0);
+  return 0;
+}

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang under ASan + UBSan into BUILD_DIR and runs each for
+# SECONDS on a copy of its seed corpus (tests/fuzz/corpus/NAME). Fails on any crash, leak,
+# sanitizer report, timeout or out-of-memory; the crashing input is left in BUILD_DIR/fuzz-artifacts.
+#   tests/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS=20] [TARGET...]
+set -euo pipefail
+if [ $# -lt 1 ]; then
+  echo "usage: $0 BUILD_DIR [SECONDS] [TARGET...]" >&2
+  exit 2
+fi
+build_dir=$1
+seconds=${2:-20}
+shift $(( $# >= 2 ? 2 : 1 ))
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(light depth_image mesh build)
+cxx=${CXX:-clang++-14}; command -v "$cxx" >/dev/null || cxx=clang++
+
+# Lean: only the library and the fuzz targets (no CLI, no GL, no tests).
+cmake -S "$source_dir" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_COMPILER="$cxx" \
+  -DLIGHTVOL_BUILD_FUZZERS=ON -DLIGHTVOL_SANITIZE=address,undefined -DLIGHTVOL_WERROR=OFF \
+  -DLIGHTVOL_BUILD_CLI=OFF -DLIGHTVOL_WITH_GL=OFF -DLIGHTVOL_BUILD_TESTS=OFF -DLIGHTVOL_BUILD_BENCH=OFF >/dev/null
+ninja -C "$build_dir" -j2 $(printf 'fuzz_%s ' "${targets[@]}")
+
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:allocator_may_return_null=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+artifacts="$build_dir/fuzz-artifacts"
+mkdir -p "$artifacts"
+status=0
+for t in "${targets[@]}"; do
+  work="$build_dir/fuzz-corpus/$t"   # grows while fuzzing; the seeds in the tree stay untouched
+  mkdir -p "$work"
+  echo "== fuzz_$t for ${seconds}s"
+  if ! "$build_dir/tests/fuzz/fuzz_$t" "$work" "$source_dir/tests/fuzz/corpus/$t" \
+      -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+      -artifact_prefix="$artifacts/${t}-" -print_final_stats=1 >"$build_dir/fuzz_$t.log" 2>&1; then
+    echo "fuzz_$t: FAILED, see $build_dir/fuzz_$t.log and $artifacts" >&2
+    tail -n 40 "$build_dir/fuzz_$t.log" >&2
+    status=1
+  else
+    grep -E "^stat::number_of_executed_units|^Done" "$build_dir/fuzz_$t.log" || true
+  fi
+done
+exit $status
