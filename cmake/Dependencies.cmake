@@ -7,6 +7,8 @@ find_dependency(OpenImageIO)
 find_dependency(nlohmann_json)
 find_dependency(TBB)
 find_dependency(Eigen3)
+# lightvol::gl (the OpenGL renderer), when built, needs EGL; the core library does not.
+find_package(OpenGL QUIET COMPONENTS EGL)
 
 # Debian's OpenImageIO package names /usr/include/opencv4 as an include directory, which need not
 # exist; drop it rather than pull in OpenCV.
