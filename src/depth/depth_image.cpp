@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -51,12 +52,59 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
                "): choose the depth channel with --channel"};
 }
 
+// Up to `n` bytes from the stream's position.
+std::string file_prefix(std::ifstream& in, std::size_t n) {
+  std::string bytes(n, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(n));
+  bytes.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return bytes;
+}
+
 // The first two bytes of a file ("" if it is shorter).
 std::string read_magic(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   char magic[2] = {};
   if (!in.read(magic, 2)) return "";
   return std::string(magic, 2);
+}
+
+// OpenEXR allocates each header attribute at the size the file claims (up to 2 GB) before reading
+// it. Walk the header(s) first: every attribute must fit in the file. Only the sizes are checked;
+// OpenEXR judges the rest.
+Status check_exr_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 1 << 20);
+  if (head.size() < 8 || head.compare(0, 4, "\x76\x2f\x31\x01") != 0) return {};  // not EXR
+  std::uintmax_t file_size = 0;
+  std::error_code ec;
+  if (file_size = std::filesystem::file_size(path, ec); ec) return {};
+  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;
+  std::size_t at = 8;
+  auto read_name = [&](std::string* name) {
+    const std::size_t end = head.find('\0', at);
+    if (end == std::string::npos) return false;
+    *name = head.substr(at, end - at);
+    at = end + 1;
+    return true;
+  };
+  for (;;) {  // headers; a single-part file has one
+    std::string name, type;
+    if (!read_name(&name)) return {};  // header longer than the prefix: leave it to OpenEXR
+    if (name.empty()) {
+      if (!multipart) return {};
+      if (at < head.size() && head[at] == '\0') return {};  // empty header: end of the list
+      continue;
+    }
+    if (!read_name(&type) || at + 4 > head.size()) return {};
+    std::int32_t size = 0;
+    std::memcpy(&size, head.data() + at, sizeof size);
+    at += 4;
+    if (size < 0 || static_cast<std::uintmax_t>(size) > file_size - std::min<std::uintmax_t>(at, file_size))
+      return Error{path + ": EXR header: attribute '" + name + "' claims " + std::to_string(size) +
+                   " bytes, but the file has " + std::to_string(file_size) + " (truncated or corrupt)"};
+    at += static_cast<std::size_t>(size);
+    if (at > head.size()) return {};
+  }
 }
 
 }  // namespace
@@ -80,6 +128,7 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
   if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
+  if (Status s = check_exr_header(path); !s) return s.error();
   auto in = OIIO::ImageInput::open(path);
   if (!in) return Error{path + ": cannot read image: " + oiio_message(OIIO::geterror())};
   const OIIO::ImageSpec spec = in->spec();

@@ -236,7 +236,7 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
   json root;
   try {
     root = json::parse(json_text.begin(), json_text.end());
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
     std::string what = e.what();
     const auto colon = what.find("parse error");
     return Error{source + ": not valid JSON: " + (colon == std::string::npos ? what : what.substr(colon))};

@@ -24,6 +24,7 @@ cmake -S "$source_dir" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInf
 ninja -C "$build_dir" -j2 $(printf 'fuzz_%s ' "${targets[@]}")
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:allocator_may_return_null=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$source_dir/tests/fuzz/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 artifacts="$build_dir/fuzz-artifacts"
 mkdir -p "$artifacts"
@@ -33,7 +34,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$work"
   echo "== fuzz_$t for ${seconds}s"
   if ! "$build_dir/tests/fuzz/fuzz_$t" "$work" "$source_dir/tests/fuzz/corpus/$t" \
-      -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+      -max_total_time="$seconds" -timeout=10 -rss_limit_mb=3072 -malloc_limit_mb=1024 -max_len=65536 \
       -artifact_prefix="$artifacts/${t}-" -print_final_stats=1 >"$build_dir/fuzz_$t.log" 2>&1; then
     echo "fuzz_$t: FAILED, see $build_dir/fuzz_$t.log and $artifacts" >&2
     tail -n 40 "$build_dir/fuzz_$t.log" >&2

@@ -96,6 +96,23 @@ TEST(ForgedHeaders, TruncatedPfmWithinBudgetIsRefusedBeforeAllocating) {
   EXPECT_TRUE(contains(image.error().message, "truncated")) << image.error().message;
 }
 
+TEST(ForgedHeaders, ExrAttributeClaimingTwoGigabytes) {
+  // Found by fuzz_depth_image: OpenEXR allocated the 1.9 GB a string attribute claimed.
+  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
+                       "/tests/fuzz/corpus/depth_image/regression_exr_attribute_2gb",
+                   std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  TempDir dir;
+  const std::string path = dir.write("bad.exr", bytes.substr(1));  // byte 0 picks the extension
+  const std::uint64_t before = peak_memory_bytes();
+  const Result<DepthImage> image = read_depth_image(path);
+  ASSERT_FALSE(image.ok());
+  EXPECT_LT(peak_memory_bytes() - before, kSmall);
+  EXPECT_EQ(image.error().message, path + ": EXR header: attribute 'Software' claims 1912602678 "
+                                          "bytes, but the file has 516 (truncated or corrupt)");
+}
+
 TEST(ForgedHeaders, BudgetRefusesAnImageTheMachineCouldHold) {
   TempDir dir;
   const std::string path = dir.write("d.pfm", pfm(256, 256, 256 * 256));
