@@ -170,13 +170,25 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
         return Error{path + ": not a PLY file (it does not start with 'ply')"};
     {
       const std::string header = file_head(path, 1 << 16);
-      const std::size_t end = header.find("end_header");
-      if (end == std::string::npos) return Error{path + ": PLY header has no 'end_header'"};
+      // 'end_header' must be a line of its own: OpenMesh's PLY reader loops forever on a header
+      // it cannot finish (found by fuzz_mesh: "end_header;").
+      std::size_t end = header.find("\nend_header");
+      while (end != std::string::npos && header.compare(end + 11, 1, "\n") != 0 &&
+             header.compare(end + 11, 2, "\r\n") != 0)
+        end = header.find("\nend_header", end + 1);
+      if (end == std::string::npos) return Error{path + ": PLY header has no 'end_header' line"};
       std::istringstream lines(header.substr(0, end));
       std::string line;
       bool has_vertices = false;
-      while (std::getline(lines, line)) {
+      for (int number = 1; std::getline(lines, line); ++number) {
         std::istringstream words(line);
+        std::string first;
+        words >> first;
+        if (first != "ply" && first != "format" && first != "comment" && first != "obj_info" &&
+            first != "element" && first != "property")
+          return Error{path + ": PLY header line " + std::to_string(number) + ": unknown keyword '" +
+                       first + "'"};
+        words.seekg(0);
         std::string keyword, element;
         double count = 0;
         if (!(words >> keyword >> element) || keyword != "element") continue;

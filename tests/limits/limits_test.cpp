@@ -159,6 +159,21 @@ TEST(ForgedHeaders, PlyWithAHugeListCount) {
   EXPECT_EQ(mesh.error().message.rfind(path + ": ", 0), 0u) << mesh.error().message;
 }
 
+TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
+  // Found by fuzz_mesh: OpenMesh's PLY reader looped forever on "end_header;".
+  TempDir dir;
+  const std::string path = dir.write(
+      "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header;\n0\n1\n2\n");
+  const Result<Mesh> mesh = read_mesh(path);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().message, path + ": PLY header has no 'end_header' line");
+  const std::string junk = dir.write(
+      "junk.ply", "ply\nformat ascii 1.0\nelement vertex 3\nbogus line\nend_header\n0\n1\n2\n");
+  const Result<Mesh> bad = read_mesh(junk);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().message, junk + ": PLY header line 4: unknown keyword 'bogus'");
+}
+
 TEST(ForgedHeaders, OffAnnouncingBillionsOfVertices) {
   TempDir dir;
   const std::string path = dir.write("forged.off", "OFF\n3000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
