@@ -188,6 +188,15 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
             first != "element" && first != "property")
           return Error{path + ": PLY header line " + std::to_string(number) + ": unknown keyword '" +
                        first + "'"};
+        if (first == "format") {  // OpenMesh also loops forever on a version it cannot read
+          std::string encoding, version, extra;
+          words >> encoding >> version;
+          if ((encoding != "ascii" && encoding != "binary_little_endian" &&
+               encoding != "binary_big_endian") || version != "1.0" || (words >> extra))
+            return Error{path + ": PLY header line " + std::to_string(number) +
+                         ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0'"};
+        }
+        words.clear();
         words.seekg(0);
         std::string keyword, element;
         double count = 0;
