@@ -107,6 +107,33 @@ Status check_exr_header(const std::string& path) {
   }
 }
 
+// libpng allocates a chunk at the length the file claims (found by fuzz_depth_image: 1.9 GB);
+// every chunk must fit in the file.
+Status check_png_chunks(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 8);
+  if (head != "\x89PNG\r\n\x1a\n") return {};
+  std::uintmax_t file_size = 0;
+  std::error_code ec;
+  if (file_size = std::filesystem::file_size(path, ec); ec) return {};
+  std::uintmax_t at = 8;
+  for (int chunk = 0; at + 8 <= file_size && chunk < 100000; ++chunk) {
+    in.seekg(static_cast<std::streamoff>(at));
+    const std::string header = file_prefix(in, 8);
+    if (header.size() < 8) return {};
+    const auto* b = reinterpret_cast<const unsigned char*>(header.data());
+    const std::uintmax_t length = (std::uintmax_t{b[0]} << 24) | (std::uintmax_t{b[1]} << 16) |
+                                  (std::uintmax_t{b[2]} << 8) | b[3];
+    if (at + 12 + length > file_size)
+      return Error{path + ": PNG chunk '" + header.substr(4, 4) + "' claims " +
+                   std::to_string(length) + " bytes, but the file has " +
+                   std::to_string(file_size) + " (truncated or corrupt)"};
+    if (header.compare(4, 4, "IEND") == 0) return {};
+    at += 12 + length;
+  }
+  return {};
+}
+
 }  // namespace
 
 Status validate_depths(const DepthImage& image, const std::string& source) {
@@ -129,6 +156,7 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
   if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
   if (Status s = check_exr_header(path); !s) return s.error();
+  if (Status s = check_png_chunks(path); !s) return s.error();
   auto in = OIIO::ImageInput::open(path);
   if (!in) return Error{path + ": cannot read image: " + oiio_message(OIIO::geterror())};
   const OIIO::ImageSpec spec = in->spec();
