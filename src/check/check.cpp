@@ -249,13 +249,18 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
   std::sort(verts.begin(), verts.end());
   verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
   const double cell = std::max(total_length / static_cast<double>(edges.boundary.size()), 1e-30);
+  // Grid cell of a point; coordinates far beyond the grid's reach are clamped (a cell index must
+  // fit an int64), and the hash works in unsigned arithmetic, where overflow wraps.
+  const auto axis_cell = [&](double x) {
+    const double c = std::floor(x / cell);
+    return std::isfinite(c) ? static_cast<std::int64_t>(std::clamp(c, -4.0e15, 4.0e15)) : 0;
+  };
   const auto cell_of = [&](Vec3d p) {
-    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x / cell)),
-                                       static_cast<std::int64_t>(std::floor(p.y / cell)),
-                                       static_cast<std::int64_t>(std::floor(p.z / cell))};
+    return std::array<std::int64_t, 3>{axis_cell(p.x), axis_cell(p.y), axis_cell(p.z)};
   };
   const auto key_of = [](std::array<std::int64_t, 3> c) {
-    return static_cast<std::uint64_t>(c[0] * 73856093 ^ c[1] * 19349663 ^ c[2] * 83492791);
+    return static_cast<std::uint64_t>(c[0]) * 73856093u ^ static_cast<std::uint64_t>(c[1]) * 19349663u ^
+           static_cast<std::uint64_t>(c[2]) * 83492791u;
   };
   std::unordered_multimap<std::uint64_t, std::uint32_t> grid;
   grid.reserve(verts.size());
