@@ -384,6 +384,18 @@ Unprojector::Unprojector(const Light& light, int width, int height, int face, Sp
            m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
   }
   standard_winding_ = (facing > 0) == (det3 > 0);
+
+  if (light.type == LightType::directional) {
+    // Every vertex of the volume lies in the box of the corner texels' near and far points.
+    double max_abs = 0;
+    for (const int col : {0, width - 1})
+      for (const int row : {0, height - 1})
+        for (const Vec3d& p : {near_point(col, row), far_point(col, row)})
+          max_abs = std::max({max_abs, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    const double ray_length = length(far_point(0, 0) - near_point(0, 0));
+    LV_CHECK(ray_length > 0);
+    min_t_ = std::min(0.5, std::ldexp(max_abs, -23 + 6) / ray_length);
+  }
 }
 
 Vec3d Unprojector::ndc(int col, int row) const {
@@ -423,7 +435,7 @@ int Unprojector::row_points(int row, const float* depths, float* out) const {
       dz[i] = 2.0 * m(i, 2);  // z_ndc = 2d − 1: the −1 is folded into base
     }
     for (int c = 0; c < width_; ++c) {
-      const double d = std::clamp(static_cast<double>(depths[c]), 0.0, 1.0);
+      const double d = std::clamp(static_cast<double>(depths[c]), min_t_, 1.0);
       const double x = static_cast<double>(c);
       const double inv_w = 1.0 / (base[3] + dx[3] * x + dz[3] * d);
       for (int i = 0; i < 3; ++i)
@@ -447,7 +459,8 @@ int Unprojector::row_points(int row, const float* depths, float* out) const {
 bool Unprojector::point(int col, int row, double depth, Vec3d* out) const {
   if (depth_ == DepthEncoding::window) {
     const Vec3d n = ndc(col, row);
-    const double z = 2.0 * std::clamp(depth, 0.0, 1.0) - 1.0;
+    // Window depth is linear along the ray only for orthographic projections, where min_t_ is set.
+    const double z = 2.0 * std::clamp(depth, min_t_, 1.0) - 1.0;
     *out = clip_to_out_.transform_point({n.x, n.y, z});
     return true;
   }
@@ -465,7 +478,7 @@ bool Unprojector::point(int col, int row, double depth, Vec3d* out) const {
     if (disc < 0) return false;
     t = (-b + std::sqrt(disc)) / (2 * a);
   }
-  t = std::clamp(t, 0.0, 1.0);
+  t = std::clamp(t, min_t_, 1.0);
   *out = to_out_.transform_point(pn + t * dv);
   return true;
 }

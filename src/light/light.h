@@ -65,7 +65,9 @@ class Unprojector {
 
   // The point of texel (col, row) whose stored depth is `depth` (finite and ≥ 0; the caller checks).
   // Depths at or beyond the far plane give the far plane's point, depths before the near plane the
-  // near plane's. Returns false only for a radial depth that a parallel (directional) ray never
+  // near plane's; for a directional light, depths at or before its near plane give the point
+  // min_t() of the way down the ray instead, so that no vertex lies in the cap's plane (see
+  // min_t()). Returns false only for a radial depth that a parallel (directional) ray never
   // reaches: one smaller than the ray's distance from the light position.
   bool point(int col, int row, double depth, Vec3d* out) const;
 
@@ -73,6 +75,13 @@ class Unprojector {
   // the same points as point(), computed faster. Returns the first column point() would refuse,
   // or −1 (that column's triple is then its near-plane point).
   int row_points(int row, const float* depths, float* out) const;
+
+  // The smallest parameter t along a texel's near→far segment that point() returns: 0, except for a
+  // directional light, whose volume is capped on its near plane. There a vertex on the near plane
+  // would make zero-height walls and grid faces lying on the cap, so vertices keep a distance of
+  // 64 float ulps of the largest coordinate the volume can have: well above the rounding the checks
+  // tolerate, far below any depth difference a shadow map resolves.
+  double min_t() const { return min_t_; }
 
   // The texel ray's points on the near and far planes, in the output frame.
   Vec3d near_point(int col, int row) const;
@@ -98,6 +107,7 @@ class Unprojector {
   Mat4d to_out_;          // eye → output frame
   Mat4d clip_to_out_;     // clip → output frame (window depth)
   bool standard_winding_ = true;
+  double min_t_ = 0;
 };
 
 }  // namespace lightvol

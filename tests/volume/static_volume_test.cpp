@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/check/check.h>
+#include <lightvol/tessellate/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/test_support.h"
@@ -59,6 +61,43 @@ TEST(StaticVolume, DirectionalExactCountsClosedOutward) {
     EXPECT_TRUE(test::is_closed_and_oriented(m));
     EXPECT_TRUE(test::has_no_degenerate_triangles(m));
     EXPECT_GT(signed_volume(m), 0);
+  }
+}
+
+TEST(StaticVolume, DirectionalDepthsOnTheNearPlaneStayJustBeyondIt) {
+  // Depth 0 is the near plane (the light at y = 4 looks down −y, near 0): such texels would put
+  // their vertices in the cap's plane (zero-height walls, grid faces on the cap). They are kept
+  // Unprojector::min_t() down their rays, and the static and adaptive volumes pass every check.
+  for (const char* encoding : {"window", "linear"}) {
+    const Light light = test::light_from_json(test::directional_json(encoding));
+    const double far_value = std::string(encoding) == "window" ? 0.5 : 5.0;
+    const Unprojector unproject(light, 7, 5, 0, Space::world);
+    const double min_y = 4 - unproject.min_t() * 10;  // ray length 10
+    EXPECT_GT(unproject.min_t(), 0);
+    EXPECT_LT(unproject.min_t(), 1e-5);
+    // All on the near plane; only the border on it; only interior texels on it.
+    for (int pattern = 0; pattern < 3; ++pattern) {
+      SCOPED_TRACE(std::string(encoding) + " pattern " + std::to_string(pattern));
+      const DepthImage depth = test::make_depth(7, 5, [&](int c, int r) {
+        const bool border = c == 0 || r == 0 || c == 6 || r == 4;
+        const bool on_near = pattern == 0 || (pattern == 1) == border;
+        return on_near ? 0.0f : static_cast<float>(far_value);
+      });
+      const Mesh static_mesh = build(light, depth);
+      AdaptiveOptions ao;
+      ao.max_error = 0.01;
+      const Result<Mesh> adaptive = build_adaptive_volume(light, depth, {}, ao, "depth.exr");
+      ASSERT_TRUE(adaptive.ok());
+      for (const Mesh* m : {&static_mesh, &*adaptive}) {
+        const CheckReport report = check_volume_linear(*m, &light);
+        EXPECT_TRUE(report.valid()) << report.first_failure();
+        // Grid vertices (the first W·H of the static mesh) of near-plane texels sit at min_y.
+        for (std::size_t v = 0; m == &static_mesh && v < 35; ++v)
+          if (depth.values[v] == 0) {
+            EXPECT_NEAR(m->positions[3 * v + 1], min_y, 1e-6);
+          }
+      }
+    }
   }
 }
 

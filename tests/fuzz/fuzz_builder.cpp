@@ -67,14 +67,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // Depths: one byte per texel, cycling through the input; linear depths span [near, far].
   const std::uint8_t* texels = data + 5;
   const std::size_t n_texels = size - 5;
-  // Known builder limitation (reported; inputs in tests/fuzz/regressions/build_directional_*):
-  // depths exactly on a directional light's near plane make a zero-area wall quad (border texel)
-  // or grid faces coplanar with the cap that the light proof sees from the wrong side (interior
-  // texels), and `build` refuses the volume (exit 1, nothing written). Directional depths
-  // therefore stay off the near plane here until the closing handles it.
   auto depth_at = [&](std::size_t i) {
-    double t = n_texels == 0 ? 1.0 : texels[i % n_texels] / 255.0;
-    if (type == 1 && t == 0) t = 1.0 / 255.0;
+    const double t = n_texels == 0 ? 1.0 : texels[i % n_texels] / 255.0;
     return static_cast<float>(linear ? light->near + t * (light->far - light->near) : t);
   };
   VolumeOptions vo;
