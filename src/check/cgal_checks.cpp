@@ -18,6 +18,8 @@
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/Euler_operations.h>
+#include <CGAL/box_intersection_d.h>
 
 namespace lightvol::detail {
 namespace {
@@ -32,7 +34,11 @@ using Tree = CGAL::AABB_tree<TreeTraits>;
 
 constexpr std::size_t kMaxPairs = 10000;
 
-// Faces keep their order, so face i of the Surface_mesh is triangle i of `mesh`.
+// Faces keep their order, so face i of the Surface_mesh is triangle i of `mesh`, which the caller
+// has found edge-manifold and oriented. Euler::add_faces links all faces at once: adding them one
+// by one searches each vertex's ring for a gap, quadratic around a vertex of high degree. It does
+// not link separate fans meeting at a vertex, so each vertex's ring is walked afterwards: it must
+// hold every face at that vertex.
 bool to_surface_mesh(const Mesh& mesh, SurfaceMesh* out, std::string* why_not) {
   const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
   out->reserve(static_cast<SurfaceMesh::size_type>(nv),
@@ -43,14 +49,34 @@ bool to_surface_mesh(const Mesh& mesh, SurfaceMesh* out, std::string* why_not) {
     const auto p = mesh.vertex(v);
     vs[v] = out->add_vertex(Kernel::Point_3(p[0], p[1], p[2]));
   }
+  std::vector<std::uint32_t> degree(nv, 0);
+  std::vector<std::array<SurfaceMesh::Vertex_index, 3>> faces(nt);
   for (std::size_t t = 0; t < nt; ++t) {
     const auto [a, b, c] = mesh.triangle(t);
-    if (out->add_face(vs[a], vs[b], vs[c]) == SurfaceMesh::null_face()) {
-      *why_not = "face " + std::to_string(t) +
-                 " does not fit a manifold surface (a vertex where separate fans meet, or a "
-                 "repeated vertex)";
+    if (a == b || b == c || a == c) {
+      *why_not = "face " + std::to_string(t) + " repeats a vertex";
       return false;
     }
+    faces[t] = {vs[a], vs[b], vs[c]};
+    ++degree[a], ++degree[b], ++degree[c];
+  }
+  CGAL::Euler::add_faces(faces, *out);
+  faces = {};
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (degree[v] == 0) continue;
+    std::uint32_t ring = 0;
+    for (const FaceIndex f : CGAL::faces_around_target(out->halfedge(vs[v]), *out))
+      ring += f != SurfaceMesh::null_face();
+    if (ring == degree[v]) continue;
+    for (std::size_t t = 0; t < nt; ++t) {
+      const auto [a, b, c] = mesh.triangle(t);
+      if (a == v || b == v || c == v) {
+        *why_not = "face " + std::to_string(t) + " is at vertex " + std::to_string(v) +
+                   ", where separate fans of faces meet (not a manifold surface)";
+        break;
+      }
+    }
+    return false;
   }
   return true;
 }
@@ -146,30 +172,177 @@ class DisjointFaceLister {
   std::array<std::array<double, 3>, 3> tri_;
 };
 
-// Pairs of faces that intersect other than along a shared edge or vertex (CGAL's definition).
+// ---- Hubs: vertices shared by many faces ---------------------------------------------------------
 //
-// CGAL's sweep over face bounding boxes tests every pair of overlapping boxes. A spot volume's fan
-// triangles reach from the apex to the border of the grid: their boxes overlap a large part of
-// the grid, and the sweep turns quadratic (10^9 pairs at 1024²). So faces whose box is longer
-// than `long_face_ratio` times the median are swept among themselves, and tested against the
-// short ones through an AABB tree of those, whose traversal prunes with the triangle itself; each
-// candidate then goes through the same pair test CGAL's sweep uses.
-std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMesh& sm,
-                                                                double long_face_ratio,
-                                                                std::size_t limit) {
-  const std::size_t nf = sm.number_of_faces();
-  std::vector<double> extent(nf);
-  for (FaceIndex f : sm.faces()) {
+// Every face around a vertex h contains h, so their boxes all overlap there and any box sweep tests
+// all deg(h)² pairs: a spot volume's apex (4W faces), a directional cap's centre, or a hostile mesh
+// whose faces all share one vertex. Faces around such a hub are tested through their directions
+// from h instead. Seen from h, the face (h, a, b) is the great-circle arc from a's direction to
+// b's; every point of the face other than h lies along a direction of that arc. So
+//  - two faces around h meet somewhere other than h only if their arcs meet;
+//  - a face g away from h meets (h, a, b) only if the cone of directions from h to g meets the arc,
+//    or if g contains h itself.
+// Boxes around arcs and cones on the unit sphere are small where the faces' boxes are huge, and
+// every candidate they give goes through CGAL's exact pair test.
+
+using SphereBox = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
+
+struct Dir {
+  double x, y, z;
+};
+
+Dir direction(const Kernel::Point_3& from, const Kernel::Point_3& to) {
+  const double dx = to.x() - from.x(), dy = to.y() - from.y(), dz = to.z() - from.z();
+  const double n = std::sqrt(dx * dx + dy * dy + dz * dz);
+  return n > 0 ? Dir{dx / n, dy / n, dz / n} : Dir{0, 0, 0};
+}
+
+// Grows `lo`/`hi` to hold a conservative box of the minor great-circle arc from u to w (unit
+// vectors): the arc lies in the triangle of u, w and the point where the tangents at u and w meet,
+// (u + w) / (1 + u·w). Arcs close to a half circle (or a zero direction) get the whole sphere.
+void add_arc(const Dir& u, const Dir& w, double lo[3], double hi[3]) {
+  const double uw = u.x * w.x + u.y * w.y + u.z * w.z;
+  const bool zero = (u.x == 0 && u.y == 0 && u.z == 0) || (w.x == 0 && w.y == 0 && w.z == 0);
+  if (zero || 1 + uw < 1e-3) {
+    for (int k = 0; k < 3; ++k) lo[k] = -1.5, hi[k] = 1.5;
+    return;
+  }
+  const double s = 1 / (1 + uw);
+  const double pts[3][3] = {{u.x, u.y, u.z}, {w.x, w.y, w.z}, {(u.x + w.x) * s, (u.y + w.y) * s, (u.z + w.z) * s}};
+  for (const auto& p : pts)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+}
+
+SphereBox make_sphere_box(double lo[3], double hi[3], std::uint32_t info) {
+  constexpr double kSlack = 1e-7;  // the rounding of the directions, many times over
+  for (int k = 0; k < 3; ++k) lo[k] -= kSlack, hi[k] += kSlack;
+  return SphereBox(lo, hi, info);
+}
+
+double det3(const Dir& a, const Dir& b, const Dir& c) {
+  return a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) + a.z * (b.x * c.y - b.y * c.x);
+}
+
+// The box of the cone of directions from h to triangle (u1, u2, u3) (their directions): its three
+// edge arcs, plus each axis point ±e_k the cone contains (where a coordinate peaks inside).
+SphereBox cone_box(const Dir u[3], std::uint32_t info) {
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  for (int i = 0; i < 3; ++i) add_arc(u[i], u[(i + 1) % 3], lo, hi);
+  const double d = det3(u[0], u[1], u[2]);
+  for (int k = 0; k < 3; ++k)
+    for (const double sign : {-1.0, 1.0}) {
+      Dir e{0, 0, 0};
+      (k == 0 ? e.x : k == 1 ? e.y : e.z) = sign;
+      // e = a·u1 + b·u2 + c·u3 with a, b, c ≥ 0: by Cramer, the three triple products with e
+      // share the sign of det(u1, u2, u3). The tolerance covers their rounding, so a point on the
+      // cone's boundary counts as inside.
+      const double a = det3(e, u[1], u[2]), b = det3(u[0], e, u[2]), c = det3(u[0], u[1], e);
+      constexpr double tol = 1e-12;
+      const bool inside = (a >= -tol && b >= -tol && c >= -tol && d >= -tol) ||
+                          (a <= tol && b <= tol && c <= tol && d <= tol);
+      if (inside) lo[k] = std::min(lo[k], sign), hi[k] = std::max(hi[k], sign);
+    }
+  return make_sphere_box(lo, hi, info);
+}
+
+// Hubs: vertices around which the faces are too many for pairwise boxes: degree ≥ min_degree and
+// degree² ≥ faces. A hub pass costs about one pass over the faces, and there are at most 3·√faces
+// hubs, so the whole stays below quadratic.
+std::vector<SurfaceMesh::Vertex_index> find_hubs(const SurfaceMesh& sm, std::size_t min_degree) {
+  const double nf = static_cast<double>(sm.number_of_faces());
+  std::vector<SurfaceMesh::Vertex_index> hubs;
+  for (const auto v : sm.vertices()) {
+    const std::size_t degree = sm.degree(v);
+    const double d = static_cast<double>(degree);
+    if (degree >= min_degree && d * d >= nf) hubs.push_back(v);
+  }
+  return hubs;
+}
+
+// Candidate pairs for the faces around hub h: arcs against arcs, and arcs against the cones of the
+// faces away from h (processed in chunks to bound the memory of the boxes).
+void hub_candidates(const SurfaceMesh& sm, SurfaceMesh::Vertex_index h,
+                    std::vector<std::pair<FaceIndex, FaceIndex>>* candidates) {
+  const Kernel::Point_3& ph = sm.point(h);
+  std::vector<SphereBox> arcs;
+  std::vector<char> around(sm.number_of_faces(), 0);
+  CGAL::Bbox_3 reach;  // the box of the faces around h
+  for (const FaceIndex f : CGAL::faces_around_target(sm.halfedge(h), sm)) {
+    if (f == SurfaceMesh::null_face()) continue;
+    around[f.idx()] = 1;
+    reach += PMP::face_bbox(f, sm);
+    Dir d[2];
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      if (v != h && k < 2) d[k++] = direction(ph, sm.point(v));
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    add_arc(d[0], d[1], lo, hi);
+    arcs.push_back(make_sphere_box(lo, hi, static_cast<std::uint32_t>(f.idx())));
+  }
+  const auto add = [candidates](const SphereBox& a, const SphereBox& b) {
+    candidates->emplace_back(FaceIndex(a.info()), FaceIndex(b.info()));
+  };
+  CGAL::box_self_intersection_d(arcs.begin(), arcs.end(), add);
+
+  const Kernel::Point_3 hub_point = ph;
+  std::vector<SphereBox> cones;
+  constexpr std::size_t kChunk = 1 << 20;
+  const auto flush = [&] {
+    if (cones.empty()) return;
+    CGAL::box_intersection_d(arcs.begin(), arcs.end(), cones.begin(), cones.end(), add);
+    cones.clear();
+  };
+  for (const FaceIndex g : sm.faces()) {
+    if (around[g.idx()] || !CGAL::do_overlap(PMP::face_bbox(g, sm), reach)) continue;
+    const auto hg = sm.halfedge(g);
+    const Kernel::Point_3 &a = sm.point(sm.source(hg)), &b = sm.point(sm.target(hg)),
+                          &c = sm.point(sm.target(sm.next(hg)));
+    if (CGAL::do_intersect(Kernel::Triangle_3(a, b, c), hub_point)) {
+      // g passes through h: it meets every face around h there.
+      for (const SphereBox& arc : arcs) candidates->emplace_back(FaceIndex(arc.info()), g);
+      continue;
+    }
+    const Dir u[3] = {direction(ph, a), direction(ph, b), direction(ph, c)};
+    cones.push_back(cone_box(u, static_cast<std::uint32_t>(g.idx())));
+    if (cones.size() == kChunk) flush();
+  }
+  flush();
+}
+
+bool faces_intersect(const SurfaceMesh& sm, FaceIndex f, FaceIndex g) {
+  const Kernel kernel;
+  return PMP::internal::do_faces_intersect<Kernel>(
+      sm.halfedge(f), sm.halfedge(g), sm, sm.points(), kernel.construct_segment_3_object(),
+      kernel.construct_triangle_3_object(), kernel.do_intersect_3_object());
+}
+
+// Pairs among `faces` (none of them around a hub) that intersect other than along a shared edge or
+// vertex (CGAL's definition).
+//
+// CGAL's sweep over face bounding boxes tests every pair of overlapping boxes. Long faces (a
+// directional volume's walls, or slivers in a hostile mesh) have boxes that overlap a large part
+// of the mesh, and the sweep turns quadratic. So faces whose box is longer than `long_face_ratio`
+// times the median are swept among themselves, and tested against the short ones through an AABB
+// tree of those, whose traversal prunes with the triangle itself; each candidate then goes through
+// the same pair test CGAL's sweep uses.
+std::vector<std::pair<FaceIndex, FaceIndex>> sweep_pairs(const SurfaceMesh& sm,
+                                                         const std::vector<FaceIndex>& faces,
+                                                         double long_face_ratio, std::size_t limit) {
+  const std::size_t nf = faces.size();
+  std::vector<double> extent(sm.number_of_faces(), 0.0);
+  std::vector<double> sorted;
+  sorted.reserve(nf);
+  for (FaceIndex f : faces) {
     const CGAL::Bbox_3 box = PMP::face_bbox(f, sm);
     extent[f.idx()] = std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(),
                                 box.zmax() - box.zmin()});
+    sorted.push_back(extent[f.idx()]);
   }
-  std::vector<double> sorted = extent;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(nf / 2), sorted.end());
   const double threshold = long_face_ratio * (nf ? sorted[nf / 2] : 0.0);
   std::vector<FaceIndex> short_faces, long_faces;
-  std::vector<char> is_long(nf, 0);
-  for (FaceIndex f : sm.faces()) {
+  std::vector<char> is_long(sm.number_of_faces(), 0);
+  for (FaceIndex f : faces) {
     if (extent[f.idx()] > threshold) {
       long_faces.push_back(f);
       is_long[f.idx()] = 1;
@@ -178,8 +351,7 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
     }
   }
 
-  // Short against short, and long against long (a fan's boxes all overlap at the apex, but there
-  // are only as many as border edges): CGAL's sweep.
+  // Short against short, and long against long: CGAL's sweep.
   std::vector<std::pair<FaceIndex, FaceIndex>> pairs;
   PMP::self_intersections<CGAL::Parallel_if_available_tag>(
       short_faces, sm, std::back_inserter(pairs), CGAL::parameters::maximum_number(limit));
@@ -189,9 +361,10 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
   if (short_faces.empty() || pairs.size() >= limit) return pairs;
 
   // Long against short: each long face through an AABB tree of the short ones.
+  std::vector<char> in_subset(sm.number_of_faces(), 0);
+  for (FaceIndex f : faces) in_subset[f.idx()] = 1;
   Tree tree(short_faces.begin(), short_faces.end(), sm);
   tree.build();
-  const Kernel kernel;
   std::mutex found_mutex;
   tbb::parallel_for(std::size_t{0}, long_faces.size(), [&](std::size_t i) {
     const FaceIndex f = long_faces[i];
@@ -204,14 +377,12 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
     // Faces sharing a vertex with f: CGAL's pair test (opposite edges against the triangles).
     for (const auto v : CGAL::vertices_around_face(h, sm))
       for (const FaceIndex g : CGAL::faces_around_target(sm.halfedge(v), sm))
-        if (g != SurfaceMesh::null_face() && !is_long[g.idx()]) hits.push_back(g);
+        if (g != SurfaceMesh::null_face() && !is_long[g.idx()] && in_subset[g.idx()])
+          hits.push_back(g);
     std::sort(hits.begin(), hits.end());
     hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
     for (const FaceIndex g : hits) {
-      if (!PMP::internal::do_faces_intersect<Kernel>(
-              h, sm.halfedge(g), sm, sm.points(), kernel.construct_segment_3_object(),
-              kernel.construct_triangle_3_object(), kernel.do_intersect_3_object()))
-        continue;
+      if (!faces_intersect(sm, f, g)) continue;
       const std::lock_guard<std::mutex> lock(found_mutex);
       if (pairs.size() < limit) pairs.emplace_back(std::min(f, g), std::max(f, g));
     }
@@ -219,19 +390,56 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
   return pairs;
 }
 
+// Pairs of faces that intersect other than along a shared edge or vertex: the faces around hubs
+// through their directions from the hub, the others through the box sweep.
+std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMesh& sm,
+                                                                double long_face_ratio,
+                                                                std::size_t min_hub_degree,
+                                                                std::size_t limit) {
+  const std::vector<SurfaceMesh::Vertex_index> hubs = find_hubs(sm, min_hub_degree);
+  std::vector<char> hubbed(sm.number_of_faces(), 0);
+  for (const auto h : hubs)
+    for (const FaceIndex f : CGAL::faces_around_target(sm.halfedge(h), sm))
+      if (f != SurfaceMesh::null_face()) hubbed[f.idx()] = 1;
+  std::vector<FaceIndex> rest;
+  for (const FaceIndex f : sm.faces())
+    if (!hubbed[f.idx()]) rest.push_back(f);
+  std::vector<std::pair<FaceIndex, FaceIndex>> pairs = sweep_pairs(sm, rest, long_face_ratio, limit);
+
+  std::vector<std::pair<FaceIndex, FaceIndex>> candidates;
+  for (const auto h : hubs) {
+    if (pairs.size() >= limit) break;
+    candidates.clear();
+    hub_candidates(sm, h, &candidates);
+    for (auto& [f, g] : candidates)
+      if (g < f) std::swap(f, g);
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::mutex found_mutex;
+    tbb::parallel_for(std::size_t{0}, candidates.size(), [&](std::size_t i) {
+      const auto [f, g] = candidates[i];
+      if (f == g || !faces_intersect(sm, f, g)) return;
+      const std::lock_guard<std::mutex> lock(found_mutex);
+      if (pairs.size() < limit) pairs.emplace_back(f, g);
+    });
+  }
+  return pairs;
+}
+
 }  // namespace
 
 CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
-                       double long_face_ratio) {
+                       double long_face_ratio, std::size_t min_hub_degree) {
   CgalChecks out;
   SurfaceMesh sm;
   if (!to_surface_mesh(mesh, &sm, &out.why_not)) return out;
   out.built = true;
 
-  std::vector<std::pair<FaceIndex, FaceIndex>> pairs = intersecting_pairs(sm, long_face_ratio, kMaxPairs);
+  std::vector<std::pair<FaceIndex, FaceIndex>> pairs = intersecting_pairs(sm, long_face_ratio, min_hub_degree, kMaxPairs);
   for (auto& [f, g] : pairs)
     if (g < f) std::swap(f, g);
   std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());  // found from two hubs
   out.intersecting_pairs = pairs.size();
   out.pairs_truncated = pairs.size() >= kMaxPairs;
   for (std::size_t i = 0; i < pairs.size() && i < max_pairs; ++i)
@@ -247,11 +455,11 @@ CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
   return out;
 }
 
-bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio) {
+bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio, std::size_t min_hub_degree) {
   SurfaceMesh sm;
   std::string why_not;
   if (!to_surface_mesh(mesh, &sm, &why_not)) return true;
-  return !intersecting_pairs(sm, long_face_ratio, 1).empty();
+  return !intersecting_pairs(sm, long_face_ratio, min_hub_degree, 1).empty();
 }
 
 }  // namespace lightvol::detail

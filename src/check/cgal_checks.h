@@ -27,16 +27,23 @@ struct CgalChecks {
 // tree instead of CGAL's box sweep, for which they are quadratic (a spot volume's fan).
 inline constexpr double kLongFaceRatio = 8;
 
+// Vertices with at least this many faces, and at least √(faces) of them, are hubs: the faces around
+// them are tested through their directions from the hub, not through boxes that all contain it
+// (a spot volume's apex, a directional cap's centre, a hostile mesh whose faces share one vertex).
+inline constexpr std::size_t kMinHubDegree = 33;
+
 // Self-intersections (PMP::self_intersections, parallel with TBB, exact predicates; long faces
-// against an AABB tree with the same pair test), and when `closed` and none were found,
-// PMP::does_bound_a_volume. Stops counting intersecting pairs at 10,000; keeps the first
-// `max_pairs`.
+// against an AABB tree and faces around hubs by direction, with the same pair test), and when
+// `closed` and none were found, PMP::does_bound_a_volume. Stops counting intersecting pairs at
+// 10,000; keeps the first `max_pairs`.
 CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
-                       double long_face_ratio = kLongFaceRatio);
+                       double long_face_ratio = kLongFaceRatio,
+                       std::size_t min_hub_degree = kMinHubDegree);
 
 // Self-intersection test alone (as in cgal_checks, stopping at the first pair): true when two faces
 // intersect other than along shared edges and vertices, or when `mesh` is not edge-manifold and
 // oriented. For benchmarks.
-bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio = kLongFaceRatio);
+bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio = kLongFaceRatio,
+                              std::size_t min_hub_degree = kMinHubDegree);
 
 }  // namespace lightvol::detail

@@ -367,6 +367,85 @@ TEST_F(BrokenVolume, LongFacesRouteFindsTheSamePairsAsTheSweep) {
   EXPECT_EQ(pairs(mesh, 0), pairs(mesh, 1e30));
 }
 
+// ---- faces around hubs -------------------------------------------------------------------------
+
+// All pairs both ways: faces around hubs by direction (default), and no hubs (every pair of boxes).
+void expect_same_pairs_both_routes(const Mesh& m, bool expect_pairs) {
+  const detail::CgalChecks hubs = detail::cgal_checks(m, true, 100000);
+  const detail::CgalChecks boxes =
+      detail::cgal_checks(m, true, 100000, detail::kLongFaceRatio, std::size_t(-1));
+  ASSERT_TRUE(hubs.built && boxes.built);
+  EXPECT_EQ(hubs.first_pairs.empty(), !expect_pairs);
+  EXPECT_EQ(hubs.first_pairs, boxes.first_pairs);
+  EXPECT_EQ(hubs.intersecting_pairs, boxes.intersecting_pairs);
+}
+
+// A closed double cone: `n` rim vertices on the unit circle at z = 1, apexes at z = 0 and z = 2.
+// Every face shares an apex with half of the others.
+Mesh bicone(int n) {
+  Mesh m;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * std::numbers::pi * i / n;
+    add_vertex(m, {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 1});
+  }
+  const std::uint32_t low = add_vertex(m, {0, 0, 0}), high = add_vertex(m, {0, 0, 2});
+  for (int i = 0; i < n; ++i) {
+    const auto a = static_cast<std::uint32_t>(i), b = static_cast<std::uint32_t>((i + 1) % n);
+    m.indices.insert(m.indices.end(), {low, b, a, high, a, b});
+  }
+  return m;
+}
+
+TEST(CgalHubs, SpotApexRouteFindsTheSamePairsAsTheBoxes) {
+  // A 40×40 map: the apex has 156 faces, a hub.
+  const DepthImage depth = test::make_depth(40, 40, [](int c, int r) {
+    return (c >= 10 && c < 20 && r >= 12 && r < 30) ? 0.95f : 0.98f;
+  });
+  Mesh mesh = *build_static_volume(spot_light(), depth, {}, "test.exr");
+  expect_same_pairs_both_routes(mesh, false);
+  // The apex pushed down through the occluder: fan faces cross grid faces.
+  mesh.positions[3 * (mesh.num_vertices() - 1) + 1] = 1.0f;
+  expect_same_pairs_both_routes(mesh, true);
+}
+
+TEST(CgalHubs, CrossingFacesAroundOneVertexAreFound) {
+  // Rim vertex 0 pulled across the axis and out the other side: its faces cross the faces there
+  // around both apexes.
+  Mesh folded = bicone(200);
+  folded.positions[0] = -1.5f;
+  expect_same_pairs_both_routes(folded, true);
+  // Rim vertex 0 pushed down onto the plane z = 0.5 but still outside: sound.
+  Mesh dented = bicone(200);
+  dented.positions[2] = 0.5f;
+  expect_same_pairs_both_routes(dented, false);
+}
+
+TEST(CgalHubs, FaceThroughTheHubIsFound) {
+  // A tetrahedron whose bottom face (z = 2) contains the upper apex in its interior.
+  Mesh m = bicone(100);
+  const std::uint32_t a = add_vertex(m, {-1, -1, 2}), b = add_vertex(m, {1, -1, 2}),
+                      c = add_vertex(m, {0, 1, 2}), d = add_vertex(m, {0, 0, 3});
+  m.indices.insert(m.indices.end(), {a, c, b, a, b, d, b, c, d, c, a, d});
+  expect_same_pairs_both_routes(m, true);
+}
+
+TEST(CgalHubs, AllFacesSharingOneVertexStayFast) {
+  // 200,000 faces around one vertex (an open fan, a cone without its base): every box contains
+  // the apex, so a box sweep would test 2·10^10 pairs. By direction, their arcs hardly overlap.
+  Mesh fan = bicone(200000);
+  fan.positions.resize(3 * 200001);  // drop the upper apex
+  for (std::size_t t = 0; t < fan.num_triangles(); t += 2)
+    for (int k = 0; k < 3; ++k) fan.indices[3 * (t / 2) + k] = fan.indices[3 * t + k];
+  fan.indices.resize(3 * 200000);
+  const CheckReport report = check_volume(fan, nullptr);
+  EXPECT_EQ(status_of(report, kCheckClosed), CheckStatus::failed);  // the rim is a boundary
+  EXPECT_EQ(status_of(report, kCheckSelfIntersections), CheckStatus::passed);
+
+  // Two such hubs facing each other (40,000 faces): sound, and closed.
+  const CheckReport both = check_volume(bicone(20000), nullptr);
+  EXPECT_TRUE(both.valid()) << both.first_failure();
+}
+
 // ---- the command line ------------------------------------------------------------------------
 
 TEST(CheckCommand, ExitCodesAndReports) {
