@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <string_view>
 #include <sstream>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
@@ -14,6 +16,7 @@
 #include <OpenMesh/Core/System/omstream.hh>
 #include <draco/compression/decode.h>
 #include <draco/io/gltf_decoder.h>
+#include <nlohmann/json.hpp>
 
 #include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
@@ -269,6 +272,138 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
   return mesh;
 }
 
+// Draco's glTF decoder trusts the file: an index past the end of an attribute made it copy out of
+// bounds (found by fuzz_mesh). So a GLB is checked first: the container's chunks fit the file,
+// and every primitive's accessors lie inside their buffer views, inside the BIN chunk, with
+// every index below the count of each attribute. Draco-compressed primitives
+// (KHR_draco_mesh_compression) are left to Draco's own decoder. Returns the first problem.
+Status validate_glb(const std::string& bytes, const std::string& path) {
+  const auto u32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  const auto fail = [&](const std::string& what) { return Error{path + ": glTF binary: " + what}; };
+  if (bytes.size() < 20) return fail("shorter than its header");
+  if (u32(4) != 2) return fail("version " + std::to_string(u32(4)) + ", not 2");
+  if (u32(8) > bytes.size()) return fail("header claims " + std::to_string(u32(8)) + " bytes, the file has " + std::to_string(bytes.size()));
+  const std::size_t json_length = u32(12);
+  if (u32(16) != 0x4E4F534Au || json_length > bytes.size() - 20) return fail("the first chunk is not a whole JSON chunk");
+  std::string_view bin;
+  const std::size_t bin_at = 20 + ((json_length + 3) & ~std::size_t{3});
+  if (bin_at + 8 <= bytes.size() && u32(bin_at + 4) == 0x004E4942u) {
+    const std::size_t bin_length = u32(bin_at);
+    if (bin_length > bytes.size() - bin_at - 8) return fail("the BIN chunk runs past the end of the file");
+    bin = std::string_view(bytes).substr(bin_at + 8, bin_length);
+  }
+  const nlohmann::json doc = nlohmann::json::parse(bytes.begin() + 20, bytes.begin() + 20 + static_cast<std::ptrdiff_t>(json_length), nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return fail("the JSON chunk is not a JSON object");
+
+  // Checked lookups: a missing or mistyped member reads as `fallback`.
+  const auto member = [](const nlohmann::json& j, const char* key) -> const nlohmann::json* {
+    if (!j.is_object()) return nullptr;
+    const auto it = j.find(key);
+    return it == j.end() ? nullptr : &*it;
+  };
+  const auto integer = [&](const nlohmann::json& j, const char* key, std::int64_t fallback) {
+    const nlohmann::json* m = member(j, key);
+    return m && m->is_number_integer() ? m->get<std::int64_t>() : fallback;
+  };
+  const auto element = [&](const char* array, std::int64_t index) -> const nlohmann::json* {
+    const nlohmann::json* a = member(doc, array);
+    if (!a || !a->is_array() || index < 0 || index >= static_cast<std::int64_t>(a->size())) return nullptr;
+    return &(*a)[static_cast<std::size_t>(index)];
+  };
+  static const std::map<std::string, int> kComponents = {{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4}, {"MAT2", 4}, {"MAT3", 9}, {"MAT4", 16}};
+  const auto component_size = [](std::int64_t type) -> int {
+    switch (type) {
+      case 5120: case 5121: return 1;
+      case 5122: case 5123: return 2;
+      case 5125: case 5126: return 4;
+      default: return 0;
+    }
+  };
+  // The bytes of accessor `index` as (data, stride, element size, count), or an error.
+  struct View {
+    const char* data = nullptr;
+    std::size_t stride = 0, element = 0, count = 0;
+    std::int64_t component_type = 0;
+  };
+  const auto accessor_view = [&](std::int64_t index, View* view) -> Status {
+    const std::string name = "accessor " + std::to_string(index);
+    const nlohmann::json* accessor = element("accessors", index);
+    if (!accessor) return fail(name + " does not exist");
+    if (member(*accessor, "sparse")) return fail(name + " is sparse (not supported)");
+    const nlohmann::json* type = member(*accessor, "type");
+    const auto components = type && type->is_string() ? kComponents.find(type->get<std::string>()) : kComponents.end();
+    view->component_type = integer(*accessor, "componentType", 0);
+    const int size = component_size(view->component_type);
+    if (components == kComponents.end() || size == 0) return fail(name + " has an unknown type");
+    const std::int64_t count = integer(*accessor, "count", -1);
+    if (count < 1) return fail(name + " has no valid count");
+    const nlohmann::json* buffer_view = element("bufferViews", integer(*accessor, "bufferView", -1));
+    if (!buffer_view) return fail(name + " has no buffer view");
+    if (integer(*buffer_view, "buffer", -1) != 0) return fail(name + " is not in the GLB's BIN chunk");
+    const std::int64_t view_offset = integer(*buffer_view, "byteOffset", 0), view_length = integer(*buffer_view, "byteLength", -1);
+    if (view_offset < 0 || view_length < 0 || view_offset > static_cast<std::int64_t>(bin.size()) ||
+        view_length > static_cast<std::int64_t>(bin.size()) - view_offset)
+      return fail(name + ": its buffer view lies outside the BIN chunk");
+    const std::int64_t element_size = components->second * size;
+    const std::int64_t stride = integer(*buffer_view, "byteStride", element_size);
+    const std::int64_t offset = integer(*accessor, "byteOffset", 0);
+    if (stride < element_size || stride > 252 || offset < 0 || count > view_length ||
+        offset + (count - 1) * stride + element_size > view_length)
+      return fail(name + " runs past the end of its buffer view");
+    view->data = bin.data() + view_offset + offset;
+    view->stride = static_cast<std::size_t>(stride);
+    view->element = static_cast<std::size_t>(element_size);
+    view->count = static_cast<std::size_t>(count);
+    return {};
+  };
+
+  const nlohmann::json* meshes = member(doc, "meshes");
+  if (!meshes || !meshes->is_array()) return {};
+  for (std::size_t m = 0; m < meshes->size(); ++m) {
+    const nlohmann::json* primitives = member((*meshes)[m], "primitives");
+    if (!primitives || !primitives->is_array()) continue;
+    for (std::size_t p = 0; p < primitives->size(); ++p) {
+      const nlohmann::json& primitive = (*primitives)[p];
+      const std::string where = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
+      const nlohmann::json* extensions = member(primitive, "extensions");
+      if (extensions && member(*extensions, "KHR_draco_mesh_compression")) continue;
+      const nlohmann::json* attributes = member(primitive, "attributes");
+      if (!attributes || !attributes->is_object()) return fail(where + " has no attributes");
+      std::size_t min_count = std::numeric_limits<std::size_t>::max();
+      for (const auto& [name, index] : attributes->items()) {
+        View view;
+        if (!index.is_number_integer()) return fail(where + ": attribute " + name + " is not an accessor index");
+        if (Status s = accessor_view(index.get<std::int64_t>(), &view); !s) return s;
+        min_count = std::min(min_count, view.count);
+      }
+      if (const nlohmann::json* indices = member(primitive, "indices")) {
+        View view;
+        if (!indices->is_number_integer()) return fail(where + ": indices is not an accessor index");
+        if (Status s = accessor_view(indices->get<std::int64_t>(), &view); !s) return s;
+        const int size = component_size(view.component_type);
+        if (view.element != static_cast<std::size_t>(size) || view.component_type == 5120 ||
+            view.component_type == 5122 || view.component_type == 5126)
+          return fail(where + ": indices are not unsigned integer scalars");
+        for (std::size_t i = 0; i < view.count; ++i) {
+          const char* at = view.data + i * view.stride;
+          std::uint32_t value = 0;
+          if (size == 1) value = static_cast<std::uint8_t>(*at);
+          if (size == 2) { std::uint16_t v16; std::memcpy(&v16, at, 2); value = v16; }
+          if (size == 4) std::memcpy(&value, at, 4);
+          if (value >= min_count)
+            return fail(where + ": index " + std::to_string(i) + " is " + std::to_string(value) +
+                        ", but its attributes have " + std::to_string(min_count) + " elements");
+        }
+      }
+    }
+  }
+  return {};
+}
+
 Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -285,6 +420,7 @@ Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
   } else {
     if (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0)
       return Error{path + ": not a GLB file (no 'glTF' magic)"};
+    if (Status s = validate_glb(bytes, path); !s) return s.error();
     draco::GltfDecoder decoder;
     auto result = decoder.DecodeFromBuffer(&buffer);
     if (!result.ok())

@@ -2,6 +2,7 @@
 // positions; polygons are fan-triangulated; junk, empty, truncated and missing files are Errors
 // naming the file.
 #include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
@@ -139,6 +140,17 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("junk.obj", std::string("v 1 2 3\n\0\0\0", 11)), "not an OBJ file");
   expect_error(dir.write("junk.drc", "DRACO but not really"), "not a Draco mesh");
   expect_error(dir.write("junk.glb", "glTF but truncated"), "glTF");
+  {
+    // Found by fuzz_mesh: Draco's glTF decoder copied attribute values past their end for an
+    // index beyond the attribute's count.
+    std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
+                         "/tests/fuzz/corpus/mesh/regression_glb_index_past_attribute",
+                     std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 1u);
+    expect_error(dir.write("index.glb", bytes.substr(1)),
+                 "mesh 0 primitive 0: index 60 is 46, but its attributes have 17 elements");
+  }
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
   expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
   expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");
