@@ -1,17 +1,16 @@
 #include <lightvol/airlight/airlight.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/json_keys.h>
 
 namespace lightvol {
 
@@ -60,149 +59,103 @@ std::string fmt(double x) {
   return out.str();
 }
 
-Result<std::string> read_text(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot open " + what + ": " + std::strerror(errno)};
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error{path + ": cannot read " + what};
-  return text.str();
-}
-
-Result<json> parse_object(std::string_view text, const std::string& source, const char* what) {
-  json root;
-  try {
-    root = json::parse(text.begin(), text.end());
-  } catch (const json::parse_error& e) {
-    std::string message = e.what();
-    const auto at = message.find("parse error");
-    return Error{source + ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
-  }
-  if (!root.is_object()) return Error{source + ": expected a JSON object describing " + what};
-  return root;
-}
-
-Error key_error(const std::string& source, const std::string& key, const std::string& why) {
-  return {source + ": key '" + key + "': " + why};
-}
-
-Result<double> number(const json& obj, const std::string& key, const std::string& source) {
-  const json& v = obj.at(key);
-  if (!v.is_number() || !std::isfinite(v.get<double>()))
-    return key_error(source, key, "expected a finite number, got " + v.dump());
-  return v.get<double>();
-}
-
 }  // namespace
 
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source) {
-  Result<json> root = parse_object(json_text, source, "a medium");
+  Result<json> root = parse_json_object(json_text, source, "a medium");
   if (!root) return root.error();
+  const KeyReader keys(*root, source);
+  if (Status s = keys.only({"scattering", "absorption", "intensity", "phase", "profile"}); !s)
+    return s.error();
   Medium medium;
-  for (const auto& [key, value] : root->items()) {
-    if (key != "scattering" && key != "absorption" && key != "intensity" && key != "phase" &&
-        key != "profile")
-      return key_error(source, key,
-                       "unknown key (known: scattering, absorption, intensity, phase, profile)");
-  }
-  if (!root->contains("scattering")) return key_error(source, "scattering", "missing");
-  for (const char* key : {"scattering", "absorption", "intensity"}) {
-    if (!root->contains(key)) continue;
-    Result<double> x = number(*root, key, source);
+  if (!keys.has("scattering")) return keys.error("scattering", "missing");
+  for (auto [key, field] : {std::pair{"scattering", &medium.scattering},
+                            std::pair{"absorption", &medium.absorption},
+                            std::pair{"intensity", &medium.intensity}}) {
+    if (!keys.has(key)) continue;
+    Result<double> x = keys.number(key);
     if (!x) return x.error();
-    if (*x < 0) return key_error(source, key, "must be >= 0, got " + fmt(*x));
-    if (std::strcmp(key, "scattering") == 0) medium.scattering = *x;
-    if (std::strcmp(key, "absorption") == 0) medium.absorption = *x;
-    if (std::strcmp(key, "intensity") == 0) medium.intensity = *x;
+    if (*x < 0) return keys.error(key, "must be >= 0, got " + fmt(*x));
+    *field = *x;
   }
-  if (root->contains("phase")) {
-    const json& phase = root->at("phase");
-    if (!phase.is_object())
-      return key_error(source, "phase", "expected an object {\"type\": ..., \"g\" or \"k\": ...}");
-    for (const auto& [key, value] : phase.items()) {
-      if (key != "type" && key != "g" && key != "k")
-        return key_error(source, "phase." + key, "unknown key (known: type, g, k)");
-    }
-    if (!phase.contains("type")) return key_error(source, "phase.type", "missing");
-    if (!phase.at("type").is_string())
-      return key_error(source, "phase.type", "expected a string, got " + phase.at("type").dump());
-    const std::string type = phase.at("type").get<std::string>();
+  if (keys.has("phase")) {
+    Result<KeyReader> phase = keys.object("phase");
+    if (!phase) return phase.error();
+    if (Status s = phase->only({"type", "g", "k"}); !s) return s.error();
+    Result<std::string> type = phase->string("type");
+    if (!type) return type.error();
     std::string parameter;
-    if (type == "isotropic") {
+    if (*type == "isotropic") {
       medium.phase.type = PhaseType::isotropic;
-    } else if (type == "hg") {
+    } else if (*type == "hg") {
       medium.phase.type = PhaseType::hg;
       parameter = "g";
-    } else if (type == "schlick") {
+    } else if (*type == "schlick") {
       medium.phase.type = PhaseType::schlick;
       parameter = "k";
     } else {
-      return key_error(source, "phase.type",
-                       "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + type + "\"");
+      return phase->error("type", "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + *type + "\"");
     }
     for (const char* key : {"g", "k"}) {
-      if (!phase.contains(key)) continue;
+      if (!phase->has(key)) continue;
       if (parameter != key)
-        return key_error(source, std::string("phase.") + key,
-                         "does not apply to a phase of type \"" + type + "\"");
-      Result<double> x = number(phase, key, source);
-      if (!x) return key_error(source, std::string("phase.") + key, "expected a finite number");
-      if (!(std::abs(*x) < 1))
-        return key_error(source, std::string("phase.") + key, "must lie in (-1, 1), got " + fmt(*x));
+        return phase->error(key, "does not apply to a phase of type \"" + *type + "\"");
+      Result<double> x = phase->number(key);
+      if (!x) return x.error();
+      if (!(std::abs(*x) < 1)) return phase->error(key, "must lie in (-1, 1), got " + fmt(*x));
       (parameter == "g" ? medium.phase.g : medium.phase.k) = *x;
     }
   }
-  if (root->contains("profile")) {
-    const json& profile = root->at("profile");
-    if (!profile.is_object())
-      return key_error(source, "profile", "expected an object {\"inner_deg\": ..., \"outer_deg\": ...}");
-    for (const auto& [key, value] : profile.items())
-      if (key != "inner_deg" && key != "outer_deg")
-        return key_error(source, "profile." + key, "unknown key (known: inner_deg, outer_deg)");
-    for (const char* key : {"inner_deg", "outer_deg"}) {
-      const std::string name = std::string("profile.") + key;
-      if (!profile.contains(key)) return key_error(source, name, "missing");
-      Result<double> x = number(profile, key, source);
-      if (!x) return key_error(source, name, "expected a finite number");
-      (std::strcmp(key, "inner_deg") == 0 ? medium.profile.inner_deg : medium.profile.outer_deg) = *x;
+  if (keys.has("profile")) {
+    Result<KeyReader> profile = keys.object("profile");
+    if (!profile) return profile.error();
+    if (Status s = profile->only({"inner_deg", "outer_deg"}); !s) return s.error();
+    for (auto [key, field] : {std::pair{"inner_deg", &medium.profile.inner_deg},
+                              std::pair{"outer_deg", &medium.profile.outer_deg}}) {
+      Result<double> x = profile->number(key);
+      if (!x) return x.error();
+      *field = *x;
     }
     if (!(medium.profile.inner_deg >= 0 && medium.profile.inner_deg < medium.profile.outer_deg &&
           medium.profile.outer_deg <= 90))
-      return key_error(source, "profile", "needs 0 <= inner_deg < outer_deg <= 90, got " +
-                                              fmt(medium.profile.inner_deg) + " and " +
-                                              fmt(medium.profile.outer_deg));
+      return keys.error("profile", "needs 0 <= inner_deg < outer_deg <= 90, got " +
+                                       fmt(medium.profile.inner_deg) + " and " +
+                                       fmt(medium.profile.outer_deg));
   }
   return medium;
 }
 
 Result<Medium> load_medium(const std::string& path) {
-  Result<std::string> text = read_text(path, "medium description");
+  Result<std::string> text = read_text_file(path, "medium description");
   if (!text) return text.error();
   return parse_medium(*text, path);
 }
 
 Result<Camera> parse_camera(std::string_view json_text, const std::string& source) {
-  Result<json> root = parse_object(json_text, source, "a camera");
+  Result<json> root = parse_json_object(json_text, source, "a camera");
   if (!root) return root.error();
+  const KeyReader keys(*root, source);
   Camera camera;
-  for (const char* key : {"width", "height"}) {
-    if (!root->contains(key)) return key_error(source, key, "missing");
+  for (auto [key, field] : {std::pair{"width", &camera.width}, std::pair{"height", &camera.height}}) {
+    if (!keys.has(key)) return keys.error(key, "missing");
     const json& v = root->at(key);
     if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 16384)
-      return key_error(source, key, "expected an integer in [1, 16384], got " + v.dump());
-    (std::strcmp(key, "width") == 0 ? camera.width : camera.height) = v.get<int>();
-    root->erase(key);
+      return keys.error(key, "expected an integer in [1, 16384], got " + v.dump());
+    *field = v.get<int>();
   }
-  if (!root->contains("type")) (*root)["type"] = "spot";
-  if (root->at("type") == "omni") return key_error(source, "type", "a camera cannot be an omni light");
-  Result<Light> view = parse_light(root->dump(), source);
-  if (!view) return view.error();
-  camera.view = *view;
+  json view = *root;  // the rest is a light description
+  view.erase("width");
+  view.erase("height");
+  if (!view.contains("type")) view["type"] = "spot";
+  if (view.at("type") == "omni") return keys.error("type", "a camera cannot be an omni light");
+  Result<Light> light = parse_light(view.dump(), source);
+  if (!light) return light.error();
+  camera.view = *light;
   return camera;
 }
 
 Result<Camera> load_camera(const std::string& path) {
-  Result<std::string> text = read_text(path, "camera description");
+  Result<std::string> text = read_text_file(path, "camera description");
   if (!text) return text.error();
   return parse_camera(*text, path);
 }

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/json_keys.h>
 
 namespace lightvol {
 
@@ -39,93 +39,6 @@ std::string fmt(double x) {
   out << x;
   return out.str();
 }
-
-// Reads typed keys out of one JSON object and words every problem as "<source>: key '<k>': ...".
-class KeyReader {
- public:
-  KeyReader(const json& object, const std::string& source) : obj_(object), source_(source) {}
-
-  Error error(const std::string& key, const std::string& why) const {
-    return {source_ + ": key '" + key + "': " + why};
-  }
-  bool has(const std::string& key) const { return obj_.contains(key); }
-
-  Result<double> number(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    if (!v.is_number()) return error(key, "expected a number, got " + describe(v));
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) return error(key, "expected a finite number");
-    return x;
-  }
-
-  Result<Vec3d> vec3(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), is_finite_number))
-      return error(key, "expected an array of 3 finite numbers, got " + describe(v));
-    return Vec3d{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
-  }
-
-  Result<std::array<double, 4>> array4(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    if (!v.is_array() || v.size() != 4 || !std::all_of(v.begin(), v.end(), is_finite_number))
-      return error(key, "expected an array of 4 finite numbers, got " + describe(v));
-    return std::array<double, 4>{v[0].get<double>(), v[1].get<double>(), v[2].get<double>(),
-                                 v[3].get<double>()};
-  }
-
-  // A 4×4 matrix, row-major: 16 numbers, or 4 rows of 4.
-  Result<Mat4d> matrix(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    std::vector<double> flat;
-    if (v.is_array() && v.size() == 16 && std::all_of(v.begin(), v.end(), is_finite_number)) {
-      for (const json& x : v) flat.push_back(x.get<double>());
-    } else if (v.is_array() && v.size() == 4) {
-      for (const json& row : v) {
-        if (!row.is_array() || row.size() != 4 ||
-            !std::all_of(row.begin(), row.end(), is_finite_number))
-          break;
-        for (const json& x : row) flat.push_back(x.get<double>());
-      }
-    }
-    if (flat.size() != 16)
-      return error(key, "expected a row-major 4x4 matrix: 16 finite numbers or 4 rows of 4");
-    Mat4d m;
-    std::copy(flat.begin(), flat.end(), m.m.begin());
-    return m;
-  }
-
-  Result<std::string> string(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    if (!v.is_string()) return error(key, "expected a string, got " + describe(v));
-    return v.get<std::string>();
-  }
-
-  Result<bool> boolean(const std::string& key) const {
-    if (!has(key)) return missing(key);
-    const json& v = obj_.at(key);
-    if (!v.is_boolean()) return error(key, "expected true or false, got " + describe(v));
-    return v.get<bool>();
-  }
-
- private:
-  static bool is_finite_number(const json& x) {
-    return x.is_number() && std::isfinite(x.get<double>());
-  }
-  static std::string describe(const json& v) {
-    std::string s = v.dump();
-    if (s.size() > 40) s = s.substr(0, 37) + "...";
-    return std::string(v.type_name()) + " " + s;
-  }
-  Error missing(const std::string& key) const { return error(key, "missing"); }
-
-  const json& obj_;
-  const std::string& source_;
-};
 
 #define LV_TRY_ASSIGN(var, expr)            \
   auto var##_result = (expr);               \
@@ -233,15 +146,9 @@ Status parse_matrices(const KeyReader& keys, Light* light) {
 }  // namespace
 
 Result<Light> parse_light(std::string_view json_text, const std::string& source) {
-  json root;
-  try {
-    root = json::parse(json_text.begin(), json_text.end());
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
-    std::string what = e.what();
-    const auto colon = what.find("parse error");
-    return Error{source + ": not valid JSON: " + (colon == std::string::npos ? what : what.substr(colon))};
-  }
-  if (!root.is_object()) return Error{source + ": expected a JSON object describing a light"};
+  Result<json> parsed = parse_json_object(json_text, source, "a light");
+  if (!parsed) return parsed.error();
+  const json& root = *parsed;
   const KeyReader keys(root, source);
 
   for (const auto& [key, value] : root.items()) {
@@ -327,12 +234,9 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
 }
 
 Result<Light> load_light(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot open light description: " + std::strerror(errno)};
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error{path + ": cannot read light description"};
-  return parse_light(text.str(), path);
+  Result<std::string> text = read_text_file(path, "light description");
+  if (!text) return text.error();
+  return parse_light(*text, path);
 }
 
 std::string_view omni_face_tag(int face) {

@@ -171,6 +171,8 @@ TEST(Medium, RejectsBadInputNamingFileAndKey) {
       {R"({"scattering": 0.1, "profile": {"inner_deg": 1, "outer_deg": 20, "x": 1}})", "m.json: key 'profile.x': unknown key"},
       {R"([1, 2])", "m.json: expected a JSON object"},
       {R"({"scattering": )", "m.json: not valid JSON"},
+      {R"({"scattering": 1e99999})", "m.json: not valid JSON"},  // beyond double: out_of_range
+      {R"({"scattering": 0.1, "phase": [1]})", "m.json: key 'phase': expected an object"},
   };
   for (auto [text, expected] : cases) {
     Result<Medium> m = parse_medium(text, "m.json");
@@ -207,6 +209,7 @@ TEST(Camera, RejectsBadInputNamingFileAndKey) {
       {"{" + base + R"(, "width": 0, "height": 64})", "cam.json: key 'width': expected an integer"},
       {"{" + base + R"(, "width": 2.5, "height": 64})", "cam.json: key 'width': expected an integer"},
       {"{" + base + R"(, "width": 8, "height": 8, "fov": 3})", "cam.json: key 'fov': unknown key"},
+      {"{" + base + R"(, "width": 8, "height": 8, "near": 1e99999})", "cam.json: not valid JSON"},
       {R"({"type": "omni", "position": [0, 0, 0], "near": 1, "far": 2, "width": 8, "height": 8})",
        "cam.json: key 'type': a camera cannot be an omni light"},
   };

@@ -1,0 +1,130 @@
+#include <lightvol/core/json_keys.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+namespace lightvol {
+namespace {
+
+using nlohmann::json;
+
+bool is_finite_number(const json& x) { return x.is_number() && std::isfinite(x.get<double>()); }
+
+std::string describe(const json& v) {
+  std::string s = v.dump();
+  if (s.size() > 40) s = s.substr(0, 37) + "...";
+  return std::string(v.type_name()) + " " + s;
+}
+
+}  // namespace
+
+Result<std::string> read_text_file(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open " + what + ": " + std::strerror(errno)};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{path + ": cannot read " + what};
+  return text.str();
+}
+
+Result<json> parse_json_object(std::string_view text, const std::string& source, const char* what) {
+  json root;
+  try {
+    root = json::parse(text.begin(), text.end());
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
+    const std::string message = e.what();
+    const auto at = message.find("parse error");
+    return Error{source + ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
+  }
+  if (!root.is_object()) return Error{source + ": expected a JSON object describing " + what};
+  return root;
+}
+
+Error KeyReader::error(const std::string& key, const std::string& why) const {
+  return {source_ + ": key '" + prefix_ + key + "': " + why};
+}
+
+Status KeyReader::only(std::initializer_list<std::string_view> known) const {
+  for (const auto& [key, value] : obj_.items()) {
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    std::string list;
+    for (const std::string_view k : known) list += (list.empty() ? "" : ", ") + std::string(k);
+    return error(key, "unknown key (known: " + list + ")");
+  }
+  return {};
+}
+
+Result<double> KeyReader::number(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_number()) return error(key, "expected a number, got " + describe(v));
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) return error(key, "expected a finite number");
+  return x;
+}
+
+Result<Vec3d> KeyReader::vec3(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), is_finite_number))
+    return error(key, "expected an array of 3 finite numbers, got " + describe(v));
+  return Vec3d{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+}
+
+Result<std::array<double, 4>> KeyReader::array4(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_array() || v.size() != 4 || !std::all_of(v.begin(), v.end(), is_finite_number))
+    return error(key, "expected an array of 4 finite numbers, got " + describe(v));
+  return std::array<double, 4>{v[0].get<double>(), v[1].get<double>(), v[2].get<double>(),
+                               v[3].get<double>()};
+}
+
+Result<Mat4d> KeyReader::matrix(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  std::vector<double> flat;
+  if (v.is_array() && v.size() == 16 && std::all_of(v.begin(), v.end(), is_finite_number)) {
+    for (const json& x : v) flat.push_back(x.get<double>());
+  } else if (v.is_array() && v.size() == 4) {
+    for (const json& row : v) {
+      if (!row.is_array() || row.size() != 4 ||
+          !std::all_of(row.begin(), row.end(), is_finite_number))
+        break;
+      for (const json& x : row) flat.push_back(x.get<double>());
+    }
+  }
+  if (flat.size() != 16)
+    return error(key, "expected a row-major 4x4 matrix: 16 finite numbers or 4 rows of 4");
+  Mat4d m;
+  std::copy(flat.begin(), flat.end(), m.m.begin());
+  return m;
+}
+
+Result<std::string> KeyReader::string(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_string()) return error(key, "expected a string, got " + describe(v));
+  return v.get<std::string>();
+}
+
+Result<bool> KeyReader::boolean(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_boolean()) return error(key, "expected true or false, got " + describe(v));
+  return v.get<bool>();
+}
+
+Result<KeyReader> KeyReader::object(const std::string& key) const {
+  if (!has(key)) return missing(key);
+  const json& v = obj_.at(key);
+  if (!v.is_object()) return error(key, "expected an object, got " + describe(v));
+  return KeyReader(v, source_, prefix_ + key + ".");
+}
+
+}  // namespace lightvol

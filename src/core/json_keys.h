@@ -1,0 +1,56 @@
+// Reading the small JSON descriptions (light, medium, camera): parsing with every failure as a
+// message, and typed keys whose problems are worded "<source>: key '<k>': ...". Internal to the
+// library (it exposes nlohmann::json, which the installed headers do not need).
+#pragma once
+
+#include <array>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include <lightvol/core/math.h>
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+// The whole text of a description file; `what` names it in errors ("light description").
+Result<std::string> read_text_file(const std::string& path, const char* what);
+
+// `text` as a JSON object. Malformed JSON, numbers beyond double's range (1e99999) and anything
+// but an object are errors naming `source`; `what` says what the object describes ("a light").
+Result<nlohmann::json> parse_json_object(std::string_view text, const std::string& source,
+                                         const char* what);
+
+// Typed keys of one JSON object. `prefix` names a nested object in messages ("phase." gives
+// "key 'phase.g'").
+class KeyReader {
+ public:
+  KeyReader(const nlohmann::json& object, const std::string& source, std::string prefix = "")
+      : obj_(object), source_(source), prefix_(std::move(prefix)) {}
+
+  Error error(const std::string& key, const std::string& why) const;
+  bool has(const std::string& key) const { return obj_.contains(key); }
+
+  // The first key not in `known`, as "unknown key (known: a, b, c)".
+  Status only(std::initializer_list<std::string_view> known) const;
+
+  Result<double> number(const std::string& key) const;  // finite
+  Result<Vec3d> vec3(const std::string& key) const;     // 3 finite numbers
+  Result<std::array<double, 4>> array4(const std::string& key) const;
+  Result<Mat4d> matrix(const std::string& key) const;  // row-major: 16 numbers or 4 rows of 4
+  Result<std::string> string(const std::string& key) const;
+  Result<bool> boolean(const std::string& key) const;
+  // A nested object, read with the prefix "<key>.".
+  Result<KeyReader> object(const std::string& key) const;
+
+ private:
+  Error missing(const std::string& key) const { return error(key, "missing"); }
+
+  const nlohmann::json& obj_;
+  const std::string& source_;
+  std::string prefix_;
+};
+
+}  // namespace lightvol
