@@ -53,12 +53,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string fmt(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
-
 }  // namespace
 
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source) {
@@ -75,7 +69,7 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
     if (!keys.has(key)) continue;
     Result<double> x = keys.number(key);
     if (!x) return x.error();
-    if (*x < 0) return keys.error(key, "must be >= 0, got " + fmt(*x));
+    if (*x < 0) return keys.error(key, "must be >= 0, got " + format_number(*x));
     *field = *x;
   }
   if (keys.has("phase")) {
@@ -102,7 +96,7 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
         return phase->error(key, "does not apply to a phase of type \"" + *type + "\"");
       Result<double> x = phase->number(key);
       if (!x) return x.error();
-      if (!(std::abs(*x) < 1)) return phase->error(key, "must lie in (-1, 1), got " + fmt(*x));
+      if (!(std::abs(*x) < 1)) return phase->error(key, "must lie in (-1, 1), got " + format_number(*x));
       (parameter == "g" ? medium.phase.g : medium.phase.k) = *x;
     }
   }
@@ -119,8 +113,8 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
     if (!(medium.profile.inner_deg >= 0 && medium.profile.inner_deg < medium.profile.outer_deg &&
           medium.profile.outer_deg <= 90))
       return keys.error("profile", "needs 0 <= inner_deg < outer_deg <= 90, got " +
-                                       fmt(medium.profile.inner_deg) + " and " +
-                                       fmt(medium.profile.outer_deg));
+                                       format_number(medium.profile.inner_deg) + " and " +
+                                       format_number(medium.profile.outer_deg));
   }
   return medium;
 }
@@ -196,7 +190,7 @@ Result<std::vector<double>> surface_distances(const Camera& camera, const std::v
       const double d = depth[i];
       if (!std::isfinite(d) || d < 0)
         return Error{source + ": pixel (" + std::to_string(col) + ", " + std::to_string(row) +
-                     "): depth " + fmt(d) + " is not a finite non-negative number"};
+                     "): depth " + format_number(d) + " is not a finite non-negative number"};
       const Ray ray = pixel_ray(camera, col, row);
       const bool far = (v.depth == DepthEncoding::window && d >= 1.0) ||
                        (v.depth == DepthEncoding::linear && d >= v.far);

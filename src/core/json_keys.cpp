@@ -23,6 +23,12 @@ std::string describe(const json& v) {
 
 }  // namespace
 
+std::string format_number(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
 Result<std::string> read_text_file(const std::string& path, const char* what) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{path + ": cannot open " + what + ": " + std::strerror(errno)};

@@ -15,6 +15,9 @@
 
 namespace lightvol {
 
+// `x` as a message shows it (stream formatting: 0.1, 1e+30).
+std::string format_number(double x);
+
 // The whole text of a description file; `what` names it in errors ("light description").
 Result<std::string> read_text_file(const std::string& path, const char* what);
 

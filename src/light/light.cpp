@@ -34,12 +34,6 @@ namespace {
 
 using nlohmann::json;
 
-std::string fmt(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
-
 #define LV_TRY_ASSIGN(var, expr)            \
   auto var##_result = (expr);               \
   if (!var##_result) return var##_result.error(); \
@@ -76,10 +70,10 @@ Status parse_near_far(const KeyReader& keys, bool perspective, Light* light) {
   LV_TRY_ASSIGN(near, keys.number("near"));
   LV_TRY_ASSIGN(far, keys.number("far"));
   if (perspective && near <= 0)
-    return keys.error("near", "must be > 0 for a perspective light, got " + fmt(near));
-  if (!perspective && near < 0) return keys.error("near", "must be >= 0, got " + fmt(near));
+    return keys.error("near", "must be > 0 for a perspective light, got " + format_number(near));
+  if (!perspective && near < 0) return keys.error("near", "must be >= 0, got " + format_number(near));
   if (near >= far)
-    return keys.error("far", "must be greater than near (" + fmt(near) + "), got " + fmt(far));
+    return keys.error("far", "must be greater than near (" + format_number(near) + "), got " + format_number(far));
   light->near = near;
   light->far = far;
   return {};
@@ -123,7 +117,7 @@ Status parse_matrices(const KeyReader& keys, Light* light) {
     far = p(2, 3) / (p(2, 2) + 1);
     if (!(near > 0) || !(far > near) || !std::isfinite(far))
       return keys.error("projection", "its near and far planes must satisfy 0 < near < far, got " +
-                                          fmt(near) + " and " + fmt(far));
+                                          format_number(near) + " and " + format_number(far));
   } else {
     if (p(3, 0) != 0 || p(3, 1) != 0 || p(3, 2) != 0 || p(3, 3) != 1)
       return keys.error("projection",
@@ -132,7 +126,7 @@ Status parse_matrices(const KeyReader& keys, Light* light) {
     far = (p(2, 3) - 1) / p(2, 2);
     if (!(near >= 0) || !(far > near))
       return keys.error("projection", "its near and far planes must satisfy 0 <= near < far, got " +
-                                          fmt(near) + " and " + fmt(far));
+                                          format_number(near) + " and " + format_number(far));
   }
   light->view = view;
   light->projection = projection;
@@ -197,11 +191,11 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
       if (Status s = parse_near_far(keys, true, &light); !s) return s.error();
       LV_TRY_ASSIGN(fov, keys.number("fov_y_deg"));
       if (!(fov > 0 && fov < 180))
-        return keys.error("fov_y_deg", "must lie in (0, 180) degrees, got " + fmt(fov));
+        return keys.error("fov_y_deg", "must lie in (0, 180) degrees, got " + format_number(fov));
       double aspect = 1.0;
       if (keys.has("aspect")) {
         LV_TRY_ASSIGN(a, keys.number("aspect"));
-        if (!(a > 0)) return keys.error("aspect", "must be > 0, got " + fmt(a));
+        if (!(a > 0)) return keys.error("aspect", "must be > 0, got " + format_number(a));
         aspect = a;
       }
       light.projection = perspective(fov, aspect, light.near, light.far);
@@ -213,8 +207,8 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
       LV_TRY_ASSIGN(o, keys.array4("ortho"));
       if (!(o[0] < o[1]) || !(o[2] < o[3]))
         return keys.error("ortho", "extents [left, right, bottom, top] must have left < right and "
-                                   "bottom < top, got [" + fmt(o[0]) + ", " + fmt(o[1]) + ", " +
-                                   fmt(o[2]) + ", " + fmt(o[3]) + "]");
+                                   "bottom < top, got [" + format_number(o[0]) + ", " + format_number(o[1]) + ", " +
+                                   format_number(o[2]) + ", " + format_number(o[3]) + "]");
       light.projection = orthographic(o[0], o[1], o[2], o[3], light.near, light.far);
       break;
     }
