@@ -195,20 +195,29 @@ TEST(ForgedHeaders, PlyAnnouncingTwoToThe31FacesIn1KB) {
 
 TEST(ForgedHeaders, PlyWithAHugeListCount) {
   TempDir dir;
-  // One face whose list claims 255 indices (uchar count), in a file holding three.
-  std::string ply =
-      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
-      "property float y\nproperty float z\nelement face 1\n"
-      "property list uchar int vertex_indices\nend_header\n";
-  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
-  ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
-  ply.push_back(static_cast<char>(255));
-  const std::int32_t idx[3] = {0, 1, 2};
-  ply.append(reinterpret_cast<const char*>(idx), sizeof idx);
-  const std::string path = dir.write("list.ply", ply);
-  const Result<Mesh> mesh = read_mesh(path);
-  ASSERT_FALSE(mesh.ok());
-  EXPECT_EQ(mesh.error().message.rfind(path + ": ", 0), 0u) << mesh.error().message;
+  // One face whose list claims 255 indices (uchar count) or 2^31 − 1 (uint count), in a file
+  // holding three: refused, without allocating what the count claims.
+  for (const bool wide : {false, true}) {
+    std::string ply =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 1\n"
+        "property list " + std::string(wide ? "uint" : "uchar") + " int vertex_indices\nend_header\n";
+    const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+    if (wide) {
+      const std::uint32_t count = 0x7fffffff;
+      ply.append(reinterpret_cast<const char*>(&count), sizeof count);
+    } else {
+      ply.push_back(static_cast<char>(255));
+    }
+    const std::int32_t idx[3] = {0, 1, 2};
+    ply.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    const std::string path = dir.write(wide ? "wide.ply" : "list.ply", ply);
+    Result<Mesh> mesh = Mesh{};
+    EXPECT_LT(largest_allocation([&] { mesh = read_mesh(path); }), kSmall);
+    ASSERT_FALSE(mesh.ok());
+    EXPECT_EQ(mesh.error().message.rfind(path + ": ", 0), 0u) << mesh.error().message;
+  }
 }
 
 TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
