@@ -3,7 +3,8 @@
 // their light: a failure is a builder bug, not bad input.
 //
 // Layout: byte 0 light type and depth encoding, 1 width, 2 height, 3 adaptive max error, 4 flags
-// (flip_y, light space), then one byte per texel (depth = byte / 255, in the encoding's range).
+// (flip_y, light space) and the light's variation (field of view or extent, near and far range,
+// direction), then one byte per texel (depth = byte / 255, in the encoding's range).
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -41,26 +42,42 @@ void require_sound(const Result<Mesh>& mesh, const Light& light, Space space, co
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 5) return 0;
   const int type = data[0] % 3;
-  const bool linear = (data[0] / 3) % 2 == 1;
+  // Depth encoding: window, linear, or (spot, omni) radial.
+  const int encoding_choice = (data[0] / 3) % 3;
+  const bool linear = encoding_choice != 0;
+  const bool radial = encoding_choice == 2 && type != 1;
   const int width = 2 + data[1] % 15;
   const int height = type == 2 ? width : 2 + data[2] % 15;
   const double max_error = 1.0 / static_cast<double>(1 + data[3] % 100);
   const bool flip_y = (data[4] & 1) != 0;
   const Space space = (data[4] & 2) != 0 ? Space::light : Space::world;
-  const std::string encoding = linear ? "linear" : "window";
+  // Bits 2-7 of byte 4 vary the light: 0 is the plain light of the seeds.
+  const int shape = (data[4] >> 2) & 3, range = (data[4] >> 4) & 3, tilt = (data[4] >> 6) & 3;
+  static constexpr double kFov[4] = {60, 10, 120, 170};
+  static constexpr double kOrthoScale[4] = {1, 0.01, 100, 1};
+  static constexpr double kNear[4] = {0.1, 1e-3, 1, 0.1}, kFar[4] = {30, 1e3, 1.5, 30};
+  static constexpr double kDirNear[4] = {0, 0, 2, 0}, kDirFar[4] = {10, 1e3, 2.5, 10};
+  static constexpr const char* kDirection[4] = {"[0, -1, 0]", "[0.3, -1, 0.2]", "[1, 0, 0]", "[0, -1, 0]"};
+  static constexpr const char* kUp[4] = {"[0, 0, -1]", "[0, 0, -1]", "[0, 1, 0]", "[0, 0, -1]"};
+  const auto num = [](double x) { return std::to_string(x); };
+  const std::string encoding = radial ? "radial" : linear ? "linear" : "window";
   const std::string flip = flip_y ? ", \"flip_y\": true" : "";
+  const std::string frame = std::string(R"("direction": )") + kDirection[tilt] + R"(, "up": )" + kUp[tilt];
   std::string json;
   if (type == 0)
-    json = R"({"type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
-           R"( "fov_y_deg": 60, "aspect": )" + std::to_string(static_cast<double>(width) / height) +
-           R"(, "near": 0.1, "far": 30, "depth": ")" + encoding + "\"" + flip + "}";
+    json = R"({"type": "spot", "position": [0, 4, 0], )" + frame + R"(, "fov_y_deg": )" +
+           num(kFov[shape]) + R"(, "aspect": )" + num(static_cast<double>(width) / height) +
+           R"(, "near": )" + num(kNear[range]) + R"(, "far": )" + num(kFar[range]) +
+           R"(, "depth": ")" + encoding + "\"" + flip + "}";
   else if (type == 1)
-    json = R"({"type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0],)"
-           R"( "up": [0, 0, -1], "ortho": [-5, 5, -4, 4], "near": 0, "far": 10, "depth": ")" +
+    json = R"({"type": "directional", "position": [0, 4, 0], )" + frame + R"(, "ortho": [)" +
+           num(-5 * kOrthoScale[shape]) + ", " + num(5 * kOrthoScale[shape]) + ", " +
+           num(-4 * kOrthoScale[shape]) + ", " + num(4 * kOrthoScale[shape]) + R"(], "near": )" +
+           num(kDirNear[range]) + R"(, "far": )" + num(kDirFar[range]) + R"(, "depth": ")" +
            encoding + "\"" + flip + "}";
   else
-    json = R"({"type": "omni", "position": [0, 1, 0], "near": 0.1, "far": 10, "depth": ")" +
-           encoding + "\"" + flip + "}";
+    json = R"({"type": "omni", "position": [0, 1, 0], "near": )" + num(kNear[range]) +
+           R"(, "far": )" + num(kFar[range]) + R"(, "depth": ")" + encoding + "\"" + flip + "}";
   const Result<Light> light = parse_light(json, "fuzz light");
   LV_CHECK(light.ok());
 
