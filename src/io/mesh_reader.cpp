@@ -8,6 +8,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <string_view>
 #include <sstream>
 
@@ -198,6 +199,21 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
                encoding != "binary_big_endian") || version != "1.0" || (words >> extra))
             return Error{path + ": PLY header line " + std::to_string(number) +
                          ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0'"};
+        }
+        if (first == "property") {  // and on a property type it does not know
+          static const std::set<std::string> kTypes = {
+              "char", "uchar", "short", "ushort", "int", "uint", "float", "double",
+              "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"};
+          std::string type, count_type, item_type, name, extra;
+          words >> type;
+          const bool ok = type == "list"
+                              ? (words >> count_type >> item_type >> name) && !(words >> extra) &&
+                                    kTypes.count(count_type) && kTypes.count(item_type)
+                              : (words >> name) && !(words >> extra) && kTypes.count(type);
+          if (!ok)
+            return Error{path + ": PLY header line " + std::to_string(number) +
+                         ": expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with "
+                         "TYPE one of char, uchar, short, ushort, int, uint, float, double"};
         }
         words.clear();
         words.seekg(0);

@@ -233,6 +233,17 @@ TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
   const Result<Mesh> bad = read_mesh(junk);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().message, junk + ": PLY header line 4: unknown keyword 'bogus'");
+  // Found by fuzz_mesh: OpenMesh's PLY reader also looped forever on an unknown property type.
+  for (const char* property : {"property \xff\xff y", "property float", "property list uchar y",
+                               "property list uchar bogus vertex_indices"}) {
+    const std::string typed = dir.write(
+        "typed.ply", std::string("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n") +
+                         property + "\nend_header\n0 0\n1 1\n2 2\n");
+    const Result<Mesh> r = read_mesh(typed);
+    ASSERT_FALSE(r.ok()) << property;
+    EXPECT_EQ(r.error().message.rfind(typed + ": PLY header line 5: expected 'property TYPE NAME'", 0), 0u)
+        << r.error().message;
+  }
 }
 
 TEST(ForgedHeaders, OffAnnouncingBillionsOfVertices) {
