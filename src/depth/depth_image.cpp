@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -86,10 +87,10 @@ std::string read_magic(const std::string& path) {
   return std::string(magic, 2);
 }
 
-// OpenEXR's C++ reader allocated each header attribute at the size the file claims (up to 2 GB)
-// before reading it; its core (used below) checks too, but with a dozen lines of errors. Walk the
-// header(s) first so the common forgery gets one clear line: every attribute must fit in the file.
-// Only the sizes are checked; OpenEXR judges the rest.
+// OpenEXR's readers allocate header attributes at the size the file claims (up to 2 GB), and lose
+// their place on malformed headers, reading text as sizes. Walk the header(s) as the format
+// defines them first: names within their length limit and unique per header, every attribute
+// inside the file. Only the structure is checked; OpenEXR judges the rest.
 Status check_exr_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   const std::string head = file_prefix(in, 1 << 20);
@@ -98,6 +99,8 @@ Status check_exr_header(const std::string& path) {
   std::error_code ec;
   if (file_size = std::filesystem::file_size(path, ec); ec) return {};
   const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;
+  const std::size_t max_name = (static_cast<unsigned char>(head[5]) & 0x04) != 0 ? 255 : 31;
+  const std::string where = path + ": EXR header: ";
   std::size_t at = 8;
   auto read_name = [&](std::string* name) {
     const std::size_t end = head.find('\0', at);
@@ -106,20 +109,31 @@ Status check_exr_header(const std::string& path) {
     at = end + 1;
     return true;
   };
+  std::set<std::string> names;  // of the current header
   for (;;) {  // headers; a single-part file has one
     std::string name, type;
     if (!read_name(&name)) return {};  // header longer than the prefix: leave it to OpenEXR
     if (name.empty()) {
       if (!multipart) return {};
       if (at < head.size() && head[at] == '\0') return {};  // empty header: end of the list
+      names.clear();
       continue;
     }
+    // OpenEXR's readers lose their place on these and then read text as sizes (fuzz findings:
+    // 1.7 GB requested by a 515-byte file with a repeated attribute).
+    if (name.size() > max_name)
+      return Error{where + "attribute name '" + name.substr(0, 40) + "' is longer than " +
+                   std::to_string(max_name) + " characters (corrupt)"};
+    if (!names.insert(name).second)
+      return Error{where + "attribute '" + name + "' appears twice (corrupt)"};
     if (!read_name(&type) || at + 4 > head.size()) return {};
+    if (type.empty() || type.size() > max_name)
+      return Error{where + "attribute '" + name + "' has no valid type name (corrupt)"};
     std::int32_t size = 0;
     std::memcpy(&size, head.data() + at, sizeof size);
     at += 4;
     if (size < 0 || static_cast<std::uintmax_t>(size) > file_size - std::min<std::uintmax_t>(at, file_size))
-      return Error{path + ": EXR header: attribute '" + name + "' claims " + std::to_string(size) +
+      return Error{where + "attribute '" + name + "' claims " + std::to_string(size) +
                    " bytes, but the file has " + std::to_string(file_size) + " (truncated or corrupt)"};
     at += static_cast<std::size_t>(size);
     if (at > head.size()) return {};
@@ -176,10 +190,10 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
   if (Status s = check_exr_header(path); !s) return s.error();
   if (Status s = check_png_chunks(path); !s) return s.error();
-  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library: the C++ header reader
-  // allocates unknown attributes at whatever size the file claims, after reading known ones
-  // (channel lists) past their stated size, so no pre-check of ours can bound it (fuzz finding
-  // depth_image_exr_opaque_attribute: 1.7 GB from a 515-byte file). The core checks every size.
+  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader
+  // allocates unknown attributes at whatever size the file claims and reads known ones (channel
+  // lists) past their stated size. The core checks most sizes; check_exr_header refuses what
+  // made either of them lose its place in fuzzing.
   static const bool exr_core = OIIO::attribute("openexr:core", 1);
   (void)exr_core;
   auto in = OIIO::ImageInput::open(path);
