@@ -446,6 +446,25 @@ TEST(CgalHubs, AllFacesSharingOneVertexStayFast) {
   EXPECT_TRUE(both.valid()) << both.first_failure();
 }
 
+TEST(CgalHubs, TwoShellsSharingOneVertexAreNotASurfaceMesh) {
+  // Two tetrahedra touching at vertex 0: closed, edge-manifold and oriented, but vertex 0 joins
+  // two separate fans, which CGAL's Surface_mesh cannot hold. The CGAL checks say so, naming it.
+  Mesh m;
+  for (const std::array<float, 3> p : {std::array<float, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
+                                       {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}})
+    add_vertex(m, p);
+  m.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,   // x, y, z ≥ 0
+               0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};  // x, y, z ≤ 0
+  const CheckReport r = check_volume(m, nullptr);
+  EXPECT_EQ(status_of(r, kCheckClosed), CheckStatus::passed);
+  EXPECT_EQ(status_of(r, kCheckOriented), CheckStatus::passed);
+  const CheckResult* si = r.find(kCheckSelfIntersections);
+  ASSERT_NE(si, nullptr);
+  EXPECT_EQ(si->status, CheckStatus::skipped);
+  EXPECT_NE(si->detail.find("at vertex 0, where separate fans of faces meet"), std::string::npos)
+      << si->detail;
+}
+
 // ---- the command line ------------------------------------------------------------------------
 
 TEST(CheckCommand, ExitCodesAndReports) {
