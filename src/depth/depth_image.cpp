@@ -188,6 +188,8 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
   if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
+  if (!std::filesystem::is_regular_file(path, ec))
+    return Error{path + ": is not a regular file (a device or a pipe); images are read from files"};
   if (Status s = check_exr_header(path); !s) return s.error();
   if (Status s = check_png_chunks(path); !s) return s.error();
   // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader

@@ -1,7 +1,9 @@
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <lightvol/core/atomic_file.h>
 
@@ -64,6 +66,17 @@ TEST(AtomicFile, MissingDirectoryIsNamed) {
   const Status s = write_bytes_atomically(dir.file("nope/out.ply"), "x");
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.error().message.find("does not exist"), std::string::npos) << s.error().message;
+}
+
+TEST(AtomicFile, DeviceOrPipeTargetIsRefusedAndKept) {
+  // Renaming over a FIFO (or /dev/stdout) would replace it with a plain file.
+  test::TempDir dir;
+  const std::string fifo = dir.file("pipe.ply");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Status s = write_bytes_atomically(fifo, "x");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("is not a regular file"), std::string::npos) << s.error().message;
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo));
 }
 
 }  // namespace

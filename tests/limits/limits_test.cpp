@@ -342,6 +342,11 @@ TEST(Cli, ForgedInputsExitTwoWithOneLineAndNoOutput) {
        dir.file("forged.ply")},
       {"build " + dir.file("d.pfm") + " --light " + light + " --out " + out + " --max-memory lots",
        "--max-memory"},
+      // Endless devices as inputs: refused, not read forever.
+      {"build /dev/zero --light " + light + " --out " + out, "/dev/zero: is not a regular file"},
+      {"build " + dir.file("d.pfm") + " --light /dev/zero --out " + out,
+       "/dev/zero: is larger than 64 MiB"},
+      {"build " + dir.file("d.pfm") + " --light " + dir.path() + " --out " + out, "is a directory"},
 #ifdef LIGHTVOL_TEST_SHADOWMAP
       // The size is checked against the budget before the scene is read.
       {"shadowmap " + dir.file("no_scene.ply") + " --light " + light + " --size 4096 --out " +
