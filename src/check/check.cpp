@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
@@ -360,9 +361,15 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   // faces around it are exactly degenerate and the cone is measured from the same point.
   const Vec3d light_pos = light.position;
   std::vector<std::uint32_t> at_light;
+  // "At the light" means within the rounding of coordinates there (a few float ulps of the light's
+  // own position), not of the largest coordinate: a spot volume's near plane can lie 10^-6 of the
+  // far distance from its apex.
+  const double light_ulp =
+      std::ldexp(std::max({std::abs(light_pos.x), std::abs(light_pos.y), std::abs(light_pos.z),
+                           static_cast<double>(std::numeric_limits<float>::min())}), -23);
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
     const Vec3d d = position(mesh, static_cast<std::uint32_t>(v)) - light_pos;
-    if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= 4 * eps_pos)
+    if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= 4 * light_ulp)
       at_light.push_back(static_cast<std::uint32_t>(v));
   }
   if (at_light.size() > 1) {
@@ -479,8 +486,10 @@ CheckResult nesting_check_directional(const Mesh& mesh, const Light& light, doub
     const auto [ia, ib, ic] = mesh.triangle(t);
     const Vec3d a = position(mesh, ia), b = position(mesh, ib), c = position(mesh, ic);
     *area = 0.5 * dot(cross(b - a, c - a), f);
-    const double tol = ulp_tol * (length(b - a) + length(c - b) + length(a - c)) *
-                       std::max({length(b - a), length(c - b), length(a - c)});
+    // Moving a vertex by δ changes the projected area by at most δ/2 times the opposite edge as
+    // projected along f: walls parallel to f, however tall, stay within rounding of zero.
+    const auto across = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
+    const double tol = ulp_tol * (across(b - a) + across(c - b) + across(a - c));
     const bool source = on_near_plane(ia) && on_near_plane(ib) && on_near_plane(ic);
     if (*area > tol) return source ? -1 : 1;
     if (*area < -tol) return source ? 2 : -1;

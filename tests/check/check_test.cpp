@@ -111,6 +111,37 @@ TEST(CheckVolume, SoundDirectionalVolumePassesBothWays) {
   EXPECT_EQ(status_of(bad, kCheckNesting), CheckStatus::failed);
 }
 
+TEST(CheckVolume, DirectionalProofToleranceScalesWithTheVolume) {
+  // A tilted light with a 0.1-wide window over 10 units of depth (walls 1e4 times taller than
+  // wide), and the same at 100 times the size: the rounding tolerance of a projected area grows
+  // with the face's edges, not with their square, so both are proved and a dragged vertex is
+  // caught in both.
+  for (const double scale : {0.01, 1.0}) {
+    SCOPED_TRACE(scale);
+    const std::string json = R"({"type": "directional", "position": [0, 4, 0],)"
+                             R"( "direction": [0.3, -1, 0.2], "up": [0, 0, -1], "ortho": [)" +
+                             std::to_string(-5 * scale) + ", " + std::to_string(5 * scale) + ", " +
+                             std::to_string(-4 * scale) + ", " + std::to_string(4 * scale) +
+                             R"(], "near": 0, "far": )" + std::to_string(1000 * scale) +
+                             R"(, "depth": "linear"})";
+    const Light light = test::light_from_json(json);
+    // The border on the near plane: walls as tall as the near-plane offset (1e-4 at scale 0.01).
+    const DepthImage depth = test::make_depth(14, 14, [&](int c, int r) {
+      const bool border = c == 0 || r == 0 || c == 13 || r == 13;
+      return static_cast<float>((border ? 0.0 : (c + r) % 3 == 0 ? 0.9 : 0.01) * 1000 * scale);
+    });
+    Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
+    ASSERT_TRUE(mesh.ok());
+    const CheckReport sound = check_volume_linear(*mesh, &light);
+    EXPECT_TRUE(sound.valid()) << sound.first_failure();
+    // Texel (6, 6) dragged across its right neighbours, between (9, 6) and (10, 7).
+    const auto p9 = mesh->vertex(6 * 14 + 9), p10 = mesh->vertex(7 * 14 + 10);
+    for (int k = 0; k < 3; ++k) mesh->positions[3 * (6 * 14 + 6) + k] = 0.5f * (p9[k] + p10[k]);
+    const CheckReport dragged = check_volume_linear(*mesh, &light);
+    EXPECT_EQ(status_of(dragged, kCheckNesting), CheckStatus::failed);
+  }
+}
+
 TEST(CheckVolume, LinearChecksSkipCgal) {
   const Mesh mesh = sound_spot_volume();
   const Light light = spot_light();
