@@ -227,6 +227,29 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
                    " bytes of floats), but the file has " + std::to_string(size) +
                    " bytes (truncated file?)"};
   }
+  // EXR stores an offset table of 8 bytes per chunk (scanline blocks or tiles) and each chunk
+  // starts with at least 8 bytes: a file smaller than that for its size is truncated or forged.
+  // Refuse it before OpenEXR walks (and allocates for) every missing chunk (fuzz finding).
+  if (std::string(in->format_name()) == "openexr") {
+    const std::string compression = spec.get_string_attribute("compression", "none");
+    std::int64_t lines = 1;  // scanlines per chunk, by compression
+    if (compression == "zip" || compression == "pxr24") lines = 16;
+    if (compression == "piz" || compression == "b44" || compression == "b44a" ||
+        compression == "dwaa")
+      lines = 32;
+    if (compression == "dwab") lines = 256;
+    const std::int64_t chunks =
+        spec.tile_width > 0 && spec.tile_height > 0
+            ? ((spec.width + spec.tile_width - 1) / spec.tile_width) *
+                  std::int64_t{(spec.height + spec.tile_height - 1) / spec.tile_height}
+            : (spec.height + lines - 1) / lines;
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && static_cast<std::uintmax_t>(chunks) * 16 > size)
+      return Error{path + ": EXR of " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " has " + std::to_string(chunks) +
+                   " chunks, needing at least " + std::to_string(chunks * 16) +
+                   " bytes, but the file has " + std::to_string(size) + " (truncated file?)"};
+  }
   if (spec.deep) return Error{path + ": is a deep image; a depth image has one value per texel"};
 
   const Result<int> channel = choose_channel(spec, options, path);

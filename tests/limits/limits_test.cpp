@@ -165,6 +165,24 @@ TEST(ForgedHeaders, ExrWithARepeatedAttribute) {
   }
 }
 
+TEST(ForgedHeaders, ExrWithFarFewerBytesThanChunks) {
+  // Found by fuzz_depth_image: a 440-byte EXR whose header says 4x6907652 made OpenEXR walk (and
+  // allocate for) 431,729 missing chunks. The chunk offset table alone would need 8 bytes each.
+  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
+                       "/tests/fuzz/corpus/depth_image/regression_exr_missing_chunks",
+                   std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  TempDir dir;
+  const std::string path = dir.write("cut.exr", bytes.substr(1));
+  Result<DepthImage> image = DepthImage{};
+  EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
+  ASSERT_FALSE(image.ok());
+  EXPECT_EQ(image.error().message,
+            path + ": EXR of 4x6907652 has 431729 chunks, needing at least 6907664 bytes, but the "
+                   "file has 440 (truncated file?)");
+}
+
 TEST(ForgedHeaders, BudgetRefusesAnImageTheMachineCouldHold) {
   TempDir dir;
   const std::string path = dir.write("d.pfm", pfm(256, 256, 256 * 256));
