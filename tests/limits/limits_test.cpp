@@ -273,6 +273,20 @@ TEST(ForgedHeaders, OffAnnouncingBillionsOfVertices) {
       << mesh.error().message;
 }
 
+TEST(ForgedHeaders, OffFaceClaimingHalfABillionVertices) {
+  // Found by fuzz_mesh: OpenMesh's OFF reader pushed every vertex a face's count claimed, 12 GB
+  // for this 40-byte file. lightvol reads OFF itself and bounds each count by its line.
+  TempDir dir;
+  const std::string path =
+      dir.write("face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n500000000 0 1 2\n");
+  Result<Mesh> mesh = Mesh{};
+  EXPECT_LT(largest_allocation([&] { mesh = read_mesh(path); }), kSmall);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().message,
+            path + ": OFF line 6: expected a face: a vertex count of at least 3, then that many "
+                   "vertices");
+}
+
 TEST(ForgedHeaders, JsonNested100000Deep) {
   for (const auto& [open, close] : {std::pair<std::string, std::string>{"[", "]"},
                                     std::pair<std::string, std::string>{"{\"a\":", "}"}}) {
