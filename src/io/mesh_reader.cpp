@@ -452,6 +452,116 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
     return {};
   };
 
+  // Every reference between objects must name an existing one (Draco follows them unchecked: a
+  // node naming mesh 5 of 1 crashed it), and the nodes must form trees (its traversal recurses).
+  const auto array_size = [&](const char* array) -> std::int64_t {
+    const nlohmann::json* a = member(doc, array);
+    return a && a->is_array() ? static_cast<std::int64_t>(a->size()) : 0;
+  };
+  const auto reference = [&](const nlohmann::json& object, const char* key, const char* array,
+                             const std::string& where) -> Status {
+    const nlohmann::json* m = member(object, key);
+    if (!m) return {};
+    if (!m->is_number_integer() || m->get<std::int64_t>() < 0 ||
+        m->get<std::int64_t>() >= array_size(array))
+      return fail(where + ": '" + key + "' names no element of '" + array + "'");
+    return {};
+  };
+  const auto each = [&](const char* array, const auto& visit) -> Status {
+    const nlohmann::json* a = member(doc, array);
+    if (!a) return {};
+    if (!a->is_array()) return fail("'" + std::string(array) + "' is not an array");
+    for (std::size_t i = 0; i < a->size(); ++i)
+      if (Status s = visit((*a)[i], static_cast<std::int64_t>(i), std::string(array) + " " + std::to_string(i)); !s)
+        return s;
+    return {};
+  };
+  const auto references = [&](const nlohmann::json& object, const char* key, const char* array,
+                              const std::string& where) -> Status {
+    const nlohmann::json* list = member(object, key);
+    if (!list) return {};
+    if (!list->is_array()) return fail(where + ": '" + key + "' is not an array");
+    for (const nlohmann::json& item : *list)
+      if (!item.is_number_integer() || item.get<std::int64_t>() < 0 ||
+          item.get<std::int64_t>() >= array_size(array))
+        return fail(where + ": '" + key + "' names no element of '" + array + "'");
+    return {};
+  };
+  if (Status s = reference(doc, "scene", "scenes", "the document"); !s) return s;
+  if (Status s = each("scenes", [&](const nlohmann::json& o, std::int64_t, const std::string& w) { return references(o, "nodes", "nodes", w); }); !s) return s;
+  std::vector<std::int64_t> parent(static_cast<std::size_t>(array_size("nodes")), -1);
+  if (Status s = each("nodes", [&](const nlohmann::json& o, std::int64_t self, const std::string& w) -> Status {
+        for (const char* key : {"mesh", "skin", "camera"}) {
+          const char* array = std::strcmp(key, "mesh") == 0 ? "meshes" : std::strcmp(key, "skin") == 0 ? "skins" : "cameras";
+          if (Status r = reference(o, key, array, w); !r) return r;
+        }
+        if (Status r = references(o, "children", "nodes", w); !r) return r;
+        if (const nlohmann::json* children = member(o, "children")) {
+          for (const nlohmann::json& c : *children) {
+            std::int64_t& p = parent[static_cast<std::size_t>(c.get<std::int64_t>())];
+            if (p != -1 || c.get<std::int64_t>() == self) return fail(w + ": the nodes do not form trees");
+            p = self;
+          }
+        }
+        return {};
+      }); !s) return s;
+  for (std::size_t n = 0; n < parent.size(); ++n) {  // no cycles: every chain of parents ends
+    std::int64_t at = static_cast<std::int64_t>(n);
+    for (std::size_t steps = 0; at != -1; ++steps, at = parent[static_cast<std::size_t>(at)])
+      if (steps > parent.size()) return fail("node " + std::to_string(n) + " is its own ancestor");
+  }
+  if (Status s = each("meshes", [&](const nlohmann::json& mesh, std::int64_t, const std::string& w) -> Status {
+        const nlohmann::json* primitives = member(mesh, "primitives");
+        if (!primitives || !primitives->is_array()) return fail(w + " has no primitives");
+        for (const nlohmann::json& primitive : *primitives) {
+          if (Status r = reference(primitive, "material", "materials", w); !r) return r;
+          if (member(primitive, "targets")) return fail(w + ": morph targets are not supported");
+        }
+        return {};
+      }); !s) return s;
+  if (Status s = each("materials", [&](const nlohmann::json& material, std::int64_t, const std::string& w) -> Status {
+        const nlohmann::json* pbr = member(material, "pbrMetallicRoughness");
+        for (const auto& [holder, key] : {std::pair{pbr, "baseColorTexture"}, std::pair{pbr, "metallicRoughnessTexture"},
+                                          std::pair{&material, "normalTexture"}, std::pair{&material, "occlusionTexture"},
+                                          std::pair{&material, "emissiveTexture"}}) {
+          const nlohmann::json* texture = holder ? member(*holder, key) : nullptr;
+          if (texture)
+            if (Status r = reference(*texture, "index", "textures", w + " " + key); !r) return r;
+        }
+        return {};
+      }); !s) return s;
+  if (Status s = each("textures", [&](const nlohmann::json& o, std::int64_t, const std::string& w) -> Status {
+        if (Status r = reference(o, "source", "images", w); !r) return r;
+        return reference(o, "sampler", "samplers", w);
+      }); !s) return s;
+  if (Status s = each("images", [&](const nlohmann::json& o, std::int64_t, const std::string& w) { return reference(o, "bufferView", "bufferViews", w); }); !s) return s;
+  if (Status s = each("skins", [&](const nlohmann::json& o, std::int64_t, const std::string& w) -> Status {
+        if (Status r = references(o, "joints", "nodes", w); !r) return r;
+        if (Status r = reference(o, "skeleton", "nodes", w); !r) return r;
+        return reference(o, "inverseBindMatrices", "accessors", w);
+      }); !s) return s;
+  if (member(doc, "animations")) return fail("animations are not supported");
+  if (array_size("bufferViews") > 0) {
+    const nlohmann::json* buffers = member(doc, "buffers");
+    if (!buffers || !buffers->is_array() || buffers->size() != 1)
+      return fail("expected exactly one buffer, the BIN chunk");
+    if (integer((*buffers)[0], "byteLength", -1) < 0 ||
+        integer((*buffers)[0], "byteLength", -1) > static_cast<std::int64_t>(bin.size()))
+      return fail("buffer 0 is longer than the BIN chunk");
+  }
+  if (Status s = each("bufferViews", [&](const nlohmann::json& view, std::int64_t, const std::string& w) -> Status {
+        const std::int64_t offset = integer(view, "byteOffset", 0), length = integer(view, "byteLength", -1);
+        if (integer(view, "buffer", -1) != 0 || offset < 0 || length < 0 ||
+            offset > static_cast<std::int64_t>(bin.size()) || length > static_cast<std::int64_t>(bin.size()) - offset)
+          return fail(w + " lies outside the BIN chunk");
+        return {};
+      }); !s) return s;
+  if (Status s = each("accessors", [&](const nlohmann::json& accessor, std::int64_t index, const std::string&) -> Status {
+        if (!member(accessor, "bufferView")) return {};  // Draco-compressed data, or unused
+        View view;
+        return accessor_view(index, &view);
+      }); !s) return s;
+
   const nlohmann::json* meshes = member(doc, "meshes");
   if (!meshes || !meshes->is_array()) return {};
   for (std::size_t m = 0; m < meshes->size(); ++m) {
