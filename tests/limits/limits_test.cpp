@@ -165,6 +165,23 @@ TEST(ForgedHeaders, ExrWithARepeatedAttribute) {
   }
 }
 
+TEST(ForgedHeaders, ExrChannelListRunningPastItsSize) {
+  // Found by fuzz_depth_image: OpenEXR's core read a channel list past its stated 19 bytes, then
+  // text as a 1.9 GB attribute size. Attribute values are checked against their types first.
+  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
+                       "/tests/fuzz/corpus/depth_image/regression_exr_channel_list_overrun",
+                   std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  TempDir dir;
+  const std::string path = dir.write("chlist.exr", bytes.substr(1));
+  Result<DepthImage> image = DepthImage{};
+  EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
+  ASSERT_FALSE(image.ok());
+  EXPECT_EQ(image.error().message, path + ": EXR header: attribute 'channels' (chlist): the channel "
+                                          "list has no end (corrupt)");
+}
+
 TEST(ForgedHeaders, ExrWithFarFewerBytesThanChunks) {
   // Found by fuzz_depth_image: a 440-byte EXR whose header says 4x6907652 made OpenEXR walk (and
   // allocate for) 431,729 missing chunks. The chunk offset table alone would need 8 bytes each.
