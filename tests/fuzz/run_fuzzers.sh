@@ -3,6 +3,8 @@
 # SECONDS on a copy of its seed corpus (tests/fuzz/corpus/NAME). Fails on any crash, leak,
 # sanitizer report, timeout or out-of-memory; the crashing input is left in BUILD_DIR/fuzz-artifacts.
 #   tests/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS=20] [TARGET...]
+# With RUNS=N (and optionally SEED, default 1) each target stops after N inputs from a fixed seed,
+# SECONDS still capping it: the same inputs on every machine, as CI wants.
 set -euo pipefail
 if [ $# -lt 1 ]; then
   echo "usage: $0 BUILD_DIR [SECONDS] [TARGET...]" >&2
@@ -33,7 +35,9 @@ for t in "${targets[@]}"; do
   work="$build_dir/fuzz-corpus/$t"   # grows while fuzzing; the seeds in the tree stay untouched
   mkdir -p "$work"
   echo "== fuzz_$t for ${seconds}s"
-  if ! "$build_dir/tests/fuzz/fuzz_$t" "$work" "$source_dir/tests/fuzz/corpus/$t" \
+  repeat=()
+  [ -z "${RUNS:-}" ] || repeat=(-runs="$RUNS" -seed="${SEED:-1}")
+  if ! "$build_dir/tests/fuzz/fuzz_$t" "$work" "$source_dir/tests/fuzz/corpus/$t" "${repeat[@]}" \
       -max_total_time="$seconds" -timeout=10 -rss_limit_mb=3072 -malloc_limit_mb=1024 -max_len=65536 \
       -artifact_prefix="$artifacts/${t}-" -print_final_stats=1 >"$build_dir/fuzz_$t.log" 2>&1; then
     echo "fuzz_$t: FAILED, see $build_dir/fuzz_$t.log and $artifacts" >&2
