@@ -140,27 +140,14 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("junk.obj", std::string("v 1 2 3\n\0\0\0", 11)), "not an OBJ file");
   expect_error(dir.write("junk.drc", "DRACO but not really"), "not a Draco mesh");
   expect_error(dir.write("junk.glb", "glTF but truncated"), "glTF");
-  {
-    // Found by fuzz_mesh: Draco's glTF decoder copied attribute values past their end for an
-    // index beyond the attribute's count.
-    std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
-                         "/tests/fuzz/corpus/mesh/regression_glb_index_past_attribute",
-                     std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    ASSERT_GT(bytes.size(), 1u);
-    expect_error(dir.write("index.glb", bytes.substr(1)),
-                 "mesh 0 primitive 0: index 60 is 46, but its attributes have 17 elements");
-  }
-  {
-    // Found by fuzz_mesh: a scene naming node 5 of 1 (and a node naming mesh 5) crashed Draco.
-    std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
-                         "/tests/fuzz/corpus/mesh/regression_glb_node_names_no_mesh",
-                     std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    ASSERT_GT(bytes.size(), 1u);
-    expect_error(dir.write("node.glb", bytes.substr(1)),
-                 "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
-  }
+  // Found by fuzz_mesh: Draco's glTF decoder copied attribute values past their end for an index
+  // beyond the attribute's count, and crashed on a scene naming node 5 of 1.
+  expect_error(dir.write("index.glb",
+                         test::fuzz_regression_file("mesh", "regression_glb_index_past_attribute")),
+               "mesh 0 primitive 0: index 60 is 46, but its attributes have 17 elements");
+  expect_error(dir.write("node.glb",
+                         test::fuzz_regression_file("mesh", "regression_glb_node_names_no_mesh")),
+               "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
   expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
   expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");

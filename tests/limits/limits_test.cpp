@@ -131,13 +131,8 @@ TEST(ForgedHeaders, TruncatedPfmWithinBudgetIsRefusedBeforeAllocating) {
 
 TEST(ForgedHeaders, ExrAttributeClaimingTwoGigabytes) {
   // Found by fuzz_depth_image: OpenEXR allocated the 1.9 GB a string attribute claimed.
-  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
-                       "/tests/fuzz/corpus/depth_image/regression_exr_attribute_2gb",
-                   std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ASSERT_GT(bytes.size(), 1u);
   TempDir dir;
-  const std::string path = dir.write("bad.exr", bytes.substr(1));  // byte 0 picks the extension
+  const std::string path = dir.write("bad.exr", test::fuzz_regression_file("depth_image", "regression_exr_attribute_2gb"));
   const std::uint64_t before = peak_memory_bytes();
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
@@ -152,12 +147,8 @@ TEST(ForgedHeaders, ExrWithARepeatedAttribute) {
   // (after reading a channel list past its stated size) and its C core (resuming inside the
   // repeated value) both read text as an attribute size and reserved 1.7 GB. Refused first.
   for (const char* name : {"regression_exr_opaque_attribute", "regression_exr_repeated_attribute"}) {
-    std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) + "/tests/fuzz/corpus/depth_image/" + name,
-                     std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    ASSERT_GT(bytes.size(), 1u);
     TempDir dir;
-    const std::string path = dir.write("bad.exr", bytes.substr(1));  // byte 0 picks the extension
+    const std::string path = dir.write("bad.exr", test::fuzz_regression_file("depth_image", name));
     Result<DepthImage> image = DepthImage{};
     EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
     ASSERT_FALSE(image.ok());
@@ -168,13 +159,8 @@ TEST(ForgedHeaders, ExrWithARepeatedAttribute) {
 TEST(ForgedHeaders, ExrChannelListRunningPastItsSize) {
   // Found by fuzz_depth_image: OpenEXR's core read a channel list past its stated 19 bytes, then
   // text as a 1.9 GB attribute size. Attribute values are checked against their types first.
-  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
-                       "/tests/fuzz/corpus/depth_image/regression_exr_channel_list_overrun",
-                   std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ASSERT_GT(bytes.size(), 1u);
   TempDir dir;
-  const std::string path = dir.write("chlist.exr", bytes.substr(1));
+  const std::string path = dir.write("chlist.exr", test::fuzz_regression_file("depth_image", "regression_exr_channel_list_overrun"));
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());
@@ -185,13 +171,8 @@ TEST(ForgedHeaders, ExrChannelListRunningPastItsSize) {
 TEST(ForgedHeaders, ExrWithFarFewerBytesThanChunks) {
   // Found by fuzz_depth_image: a 440-byte EXR whose header says 4x6907652 made OpenEXR walk (and
   // allocate for) 431,729 missing chunks. The chunk offset table alone would need 8 bytes each.
-  std::ifstream in(std::string(LIGHTVOL_SOURCE_DIR) +
-                       "/tests/fuzz/corpus/depth_image/regression_exr_missing_chunks",
-                   std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ASSERT_GT(bytes.size(), 1u);
   TempDir dir;
-  const std::string path = dir.write("cut.exr", bytes.substr(1));
+  const std::string path = dir.write("cut.exr", test::fuzz_regression_file("depth_image", "regression_exr_missing_chunks"));
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -130,6 +131,14 @@ CommandResult run_lightvol(const std::string& args) {
   r.err = se.str();
   return r;
 #endif
+}
+
+std::string fuzz_regression_file(const std::string& target, const std::string& name) {
+  const std::string path = std::string(LIGHTVOL_SOURCE_DIR) + "/tests/fuzz/corpus/" + target + "/" + name;
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_GT(bytes.size(), 1u) << path;
+  return bytes.empty() ? bytes : bytes.substr(1);
 }
 
 }  // namespace lightvol::test

@@ -56,4 +56,8 @@ struct CommandResult {
 };
 CommandResult run_lightvol(const std::string& args);
 
+// The file a fuzz target read from regression input tests/fuzz/corpus/TARGET/NAME: the input
+// without its first byte, which the depth_image and mesh targets spend on choosing the extension.
+std::string fuzz_regression_file(const std::string& target, const std::string& name);
+
 }  // namespace lightvol::test
