@@ -173,6 +173,24 @@ bool starts_with(const std::string& s, const char* prefix) {
   return s.rfind(prefix, 0) == 0;
 }
 
+// An OBJ face vertex: v, v/t, v//n or v/t/n, each an integer (negative counts from the end).
+bool is_obj_face_vertex(const std::string& token) {
+  std::size_t field = 0, at = 0;
+  for (; field < 3; ++field) {
+    const std::size_t start = at;
+    if (at < token.size() && token[at] == '-') ++at;
+    const std::size_t digits = at;
+    while (at < token.size() && token[at] >= '0' && token[at] <= '9') ++at;
+    const bool number = at > digits;
+    if (!number && (field == 0 || at != start)) return false;  // v required; "-" alone is not
+    if (field != 1 && !number && field != 0) return false;     // n, when present, is required
+    if (at == token.size()) return true;
+    if (token[at] != '/') return false;
+    ++at;
+  }
+  return false;
+}
+
 // Cheap sanity checks before handing a file to OpenMesh, whose readers trust their input: the
 // magic words of PLY and OFF, STL's size arithmetic, and text for OBJ.
 Status check_header(const std::string& path, MeshFormat format, std::uintmax_t size) {
@@ -259,10 +277,25 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
       return Error{path + ": not an STL file (binary size does not match its triangle count, and "
                           "it does not start with 'solid')"};
     }
-    case MeshFormat::obj:
+    case MeshFormat::obj: {
       if (head.find('\0') != std::string::npos)
         return Error{path + ": not an OBJ file (binary data in a text format)"};
+      // Every face vertex must be v, v/t, v//n or v/t/n with integer indices: OpenMesh's reader
+      // asserts (aborting the process) on one like "/1" (fuzz finding).
+      std::ifstream in(path, std::ios::binary);
+      std::string line;
+      for (std::size_t number = 1; std::getline(in, line); ++number) {
+        if (line.size() < 2 || line[0] != 'f' || (line[1] != ' ' && line[1] != '\t')) continue;
+        std::istringstream words(line.substr(2));
+        for (std::string vertex; words >> vertex;) {
+          if (vertex[0] == '#') break;
+          if (!is_obj_face_vertex(vertex))
+            return Error{path + ": OBJ line " + std::to_string(number) + ": face vertex '" +
+                         vertex.substr(0, 40) + "' is not v, v/t, v//n or v/t/n"};
+        }
+      }
       return {};
+    }
     default: return {};
   }
 }

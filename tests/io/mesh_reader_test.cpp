@@ -148,6 +148,9 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("node.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_node_names_no_mesh")),
                "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
+  // Found by fuzz_mesh: OpenMesh's OBJ reader aborts (an assertion) on a face vertex "/1".
+  expect_error(dir.write("slash.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf /1 2 3\n"),
+               "OBJ line 4: face vertex '/1' is not v, v/t, v//n or v/t/n");
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
   expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
   expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");
