@@ -236,6 +236,22 @@ TEST(ForgedHeaders, PlyWithAHugeListCount) {
   }
 }
 
+TEST(ForgedHeaders, AsciiPlyListLongerThanItsLine) {
+  // Found by fuzz_mesh: OpenMesh fills in every vertex an ASCII list count promises (2 GB for
+  // this one). Each element is a line, so the count is bounded by what is left of it.
+  TempDir dir;
+  const std::string path = dir.write(
+      "count.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n300000000 0 1 2\n");
+  Result<Mesh> mesh = Mesh{};
+  EXPECT_LT(largest_allocation([&] { mesh = read_mesh(path); }), kSmall);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().message,
+            path + ": PLY body line 4: a list of 300000000 items on a line of 4 values");
+}
+
 TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
   // Found by fuzz_mesh: OpenMesh's PLY reader looped forever on "end_header;".
   TempDir dir;
