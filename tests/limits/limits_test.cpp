@@ -181,6 +181,20 @@ TEST(ForgedHeaders, ExrWithFarFewerBytesThanChunks) {
                    "file has 440 (truncated file?)");
 }
 
+TEST(ForgedHeaders, ImageLargerThanAnyCompressionOfItsFile) {
+  // Found by CI's fixed-seed fuzz run: 445 bytes of EXR claiming 6894084x17 made OpenImageIO
+  // allocate 7 GB. No format decodes more than about 1,100 bytes per stored byte.
+  TempDir dir;
+  const std::string path = dir.write(
+      "big.exr", test::fuzz_regression_file("depth_image", "regression_image_beyond_compression"));
+  Result<DepthImage> image = DepthImage{};
+  EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
+  ASSERT_FALSE(image.ok());
+  EXPECT_EQ(image.error().message,
+            path + ": is 6894084x17 with 1 channels, 468797712 bytes, in a file of 445: more than "
+                   "any compression holds (truncated or forged)");
+}
+
 TEST(ForgedHeaders, BudgetRefusesAnImageTheMachineCouldHold) {
   TempDir dir;
   const std::string path = dir.write("d.pfm", pfm(256, 256, 256 * 256));
