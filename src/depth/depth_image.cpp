@@ -276,16 +276,19 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   if (texels > (std::int64_t{1} << 30))
     return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                  ", more than 2^30 texels; lightvol's 32-bit indices cannot hold its volume"};
+  // The header against the file it came with: PFM exactly, EXR by its chunk table, every format
+  // by the most any compression packs into a byte.
+  const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
+  const bool sized = !ec;
   // PFM is uncompressed: a header that promises more floats than the file holds is truncated (or
   // forged); refuse it before allocating what it promises.
   if (const std::string magic = read_magic(path); magic == "Pf" || magic == "PF") {
     const std::uintmax_t needed = static_cast<std::uintmax_t>(texels) *
                                   static_cast<std::uintmax_t>(spec.nchannels) * sizeof(float);
-    const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec && size < needed)
+    if (sized && file_size < needed)
       return Error{path + ": PFM header says " + std::to_string(spec.width) + "x" +
                    std::to_string(spec.height) + " (" + std::to_string(needed) +
-                   " bytes of floats), but the file has " + std::to_string(size) +
+                   " bytes of floats), but the file has " + std::to_string(file_size) +
                    " bytes (truncated file?)"};
   }
   // EXR stores an offset table of 8 bytes per chunk (scanline blocks or tiles) and each chunk
@@ -304,12 +307,11 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
             ? ((spec.width + spec.tile_width - 1) / spec.tile_width) *
                   std::int64_t{(spec.height + spec.tile_height - 1) / spec.tile_height}
             : (spec.height + lines - 1) / lines;
-    const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec && static_cast<std::uintmax_t>(chunks) * 16 > size)
+    if (sized && static_cast<std::uintmax_t>(chunks) * 16 > file_size)
       return Error{path + ": EXR of " + std::to_string(spec.width) + "x" +
                    std::to_string(spec.height) + " has " + std::to_string(chunks) +
                    " chunks, needing at least " + std::to_string(chunks * 16) +
-                   " bytes, but the file has " + std::to_string(size) + " (truncated file?)"};
+                   " bytes, but the file has " + std::to_string(file_size) + " (truncated file?)"};
   }
   // No image format packs more than about 1,100 decoded bytes into a compressed byte (deflate,
   // LZW, PIZ and DWA on constant data, measured); a header promising much more than that from a
@@ -318,12 +320,11 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   {
     constexpr std::uintmax_t kMaxRatio = 4096;
     const std::uintmax_t decoded = static_cast<std::uintmax_t>(spec.image_bytes(true));
-    const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec && decoded / kMaxRatio > size)
+    if (sized && decoded / kMaxRatio > file_size)
       return Error{path + ": is " + std::to_string(spec.width) + "x" +
                    std::to_string(spec.height) + " with " + std::to_string(spec.nchannels) +
                    " channels, " + std::to_string(decoded) + " bytes, in a file of " +
-                   std::to_string(size) + ": more than any compression holds (truncated or forged)"};
+                   std::to_string(file_size) + ": more than any compression holds (truncated or forged)"};
   }
   if (spec.deep) return Error{path + ": is a deep image; a depth image has one value per texel"};
 
