@@ -8,7 +8,6 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <set>
 #include <string_view>
 #include <sstream>
 
@@ -22,6 +21,7 @@
 #include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/ply_reader.h>
 
 namespace lightvol {
 namespace {
@@ -77,7 +77,7 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
         error = "face " + std::to_string(face) + " has " + std::to_string(vs.size()) + " vertices";
       return FH();
     }
-    // A face's vertex list takes bytes in the file too (fuzz finding: an ASCII PLY count of
+    // A face's vertex list takes bytes in the file too (fuzz finding, when OpenMesh read PLY: a count of
     // 32,749,287 in a 1 KB file, which OpenMesh filled in and we would have fanned out).
     if (vs.size() > max_elements_) {
       if (error.empty())
@@ -159,15 +159,6 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
 // this many elements cannot be in a file of `size` bytes.
 std::size_t max_elements(std::uintmax_t size) { return static_cast<std::size_t>(size / 4 + 16); }
 
-// An element count from a header, for a message: whole numbers as such, huge ones (beyond any
-// integer type) in scientific notation.
-std::string count_text(double count) {
-  if (count < 1e18) return std::to_string(static_cast<long long>(count));
-  std::ostringstream out;
-  out << count;
-  return out.str();
-}
-
 // The first `n` bytes of a file (fewer if it is shorter).
 std::string file_head(const std::string& path, std::size_t n) {
   std::ifstream in(path, std::ios::binary);
@@ -175,10 +166,6 @@ std::string file_head(const std::string& path, std::size_t n) {
   in.read(head.data(), static_cast<std::streamsize>(n));
   head.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
   return head;
-}
-
-bool starts_with(const std::string& s, const char* prefix) {
-  return s.rfind(prefix, 0) == 0;
 }
 
 // An OBJ face vertex: v, v/t, v//n or v/t/n, each an integer (negative counts from the end).
@@ -199,114 +186,11 @@ bool is_obj_face_vertex(const std::string& token) {
   return false;
 }
 
-// Cheap sanity checks before handing a file to OpenMesh, whose readers trust their input: the
-// magic words of PLY and OFF, STL's size arithmetic, and text for OBJ.
+// Cheap sanity checks before handing a file to OpenMesh, whose readers trust their input: OFF's
+// magic word, STL's size arithmetic, and text and well-formed face vertices for OBJ.
 Status check_header(const std::string& path, MeshFormat format, std::uintmax_t size) {
   const std::string head = file_head(path, 512);
   switch (format) {
-    case MeshFormat::ply:
-      if (!starts_with(head, "ply\n") && !starts_with(head, "ply\r\n"))
-        return Error{path + ": not a PLY file (it does not start with 'ply')"};
-    {
-      const std::string header = file_head(path, 1 << 16);
-      // 'end_header' must be a line of its own: OpenMesh's PLY reader loops forever on a header
-      // it cannot finish (found by fuzz_mesh: "end_header;").
-      std::size_t end = header.find("\nend_header");
-      while (end != std::string::npos && header.compare(end + 11, 1, "\n") != 0 &&
-             header.compare(end + 11, 2, "\r\n") != 0)
-        end = header.find("\nend_header", end + 1);
-      if (end == std::string::npos) return Error{path + ": PLY header has no 'end_header' line"};
-      std::istringstream lines(header.substr(0, end));
-      std::string line;
-      bool has_vertices = false, ascii = false;
-      struct Element {
-        long long count = 0;
-        std::vector<bool> is_list;  // per property, in order
-      };
-      std::vector<Element> elements;
-      for (int number = 1; std::getline(lines, line); ++number) {
-        std::istringstream words(line);
-        std::string first;
-        words >> first;
-        if (first != "ply" && first != "format" && first != "comment" && first != "obj_info" &&
-            first != "element" && first != "property")
-          return Error{path + ": PLY header line " + std::to_string(number) + ": unknown keyword '" +
-                       first + "'"};
-        if (first == "format") {  // OpenMesh also loops forever on a version it cannot read
-          std::string encoding, version, extra;
-          words >> encoding >> version;
-          if ((encoding != "ascii" && encoding != "binary_little_endian" &&
-               encoding != "binary_big_endian") || version != "1.0" || (words >> extra))
-            return Error{path + ": PLY header line " + std::to_string(number) +
-                         ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0'"};
-          ascii = encoding == "ascii";
-        }
-        if (first == "property") {  // and on a property type it does not know
-          static const std::set<std::string> kTypes = {
-              "char", "uchar", "short", "ushort", "int", "uint", "float", "double",
-              "int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"};
-          std::string type, count_type, item_type, name, extra;
-          words >> type;
-          const bool ok = type == "list"
-                              ? (words >> count_type >> item_type >> name) && !(words >> extra) &&
-                                    kTypes.count(count_type) && kTypes.count(item_type)
-                              : (words >> name) && !(words >> extra) && kTypes.count(type);
-          if (!ok)
-            return Error{path + ": PLY header line " + std::to_string(number) +
-                         ": expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with "
-                         "TYPE one of char, uchar, short, ushort, int, uint, float, double"};
-          if (elements.empty())
-            return Error{path + ": PLY header line " + std::to_string(number) +
-                         ": a property before any element"};
-          elements.back().is_list.push_back(type == "list");
-        }
-        words.clear();
-        words.seekg(0);
-        std::string keyword, element;
-        double count = 0;
-        if (!(words >> keyword >> element) || keyword != "element") continue;
-        if (!(words >> count) || count < 0)
-          return Error{path + ": PLY header: element '" + element + "' has no count"};
-        if (count > static_cast<double>(max_elements(size)))
-          return Error{path + ": PLY header: " + count_text(count) +
-                       " " + element + " elements cannot fit in " + std::to_string(size) +
-                       " bytes (truncated file?)"};
-        has_vertices |= element == "vertex";
-        elements.push_back({static_cast<long long>(count), {}});
-      }
-      if (!has_vertices) return Error{path + ": PLY header declares no 'element vertex'"};
-      if (!ascii) return {};
-      // ASCII: every element is a line, and a list's count cannot exceed what is left of its line.
-      // OpenMesh fills in the vertices a count promises (fuzz finding: 32,749,287 in a 1 KB file,
-      // 2 GB for 300,000,000).
-      std::ifstream body(path, std::ios::binary);
-      body.seekg(static_cast<std::streamoff>(end + 12));
-      std::size_t number = 0;
-      for (const Element& e : elements) {
-        for (long long i = 0; i < e.count; ++i) {
-          do {
-            if (!std::getline(body, line)) return {};  // truncated: OpenMesh says so
-            ++number;
-          } while (line.find_first_not_of(" \t\r") == std::string::npos);
-          if (std::find(e.is_list.begin(), e.is_list.end(), true) == e.is_list.end()) continue;
-          std::istringstream words(line);
-          std::vector<std::string> tokens;
-          for (std::string t; words >> t;) tokens.push_back(t);
-          std::size_t at = 0;
-          for (const bool list : e.is_list) {
-            if (at >= tokens.size()) break;  // short line: OpenMesh reports it
-            if (!list) { ++at; continue; }
-            const double n = std::strtod(tokens[at].c_str(), nullptr);
-            if (!(n >= 0) || n > static_cast<double>(tokens.size() - at - 1))
-              return Error{path + ": PLY body line " + std::to_string(number) + ": a list of " +
-                           tokens[at].substr(0, 20) + " items on a line of " +
-                           std::to_string(tokens.size()) + " values"};
-            at += 1 + static_cast<std::size_t>(n);
-          }
-        }
-      }
-      return {};
-    }
     case MeshFormat::off: {
       const std::size_t at = head.find("OFF");
       if (at == std::string::npos || at > 4)
@@ -733,6 +617,7 @@ Result<Mesh> read_mesh(const std::string& path) {
   Result<Mesh> mesh = (*format == MeshFormat::drc || *format == MeshFormat::glb)
                           ? read_with_draco(path, *format)
                           : *format == MeshFormat::off ? read_off(path, size)
+                          : *format == MeshFormat::ply ? detail::read_ply(path, size)
                                                        : read_with_openmesh(path, *format, size);
   if (!mesh) return mesh;
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};

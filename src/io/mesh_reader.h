@@ -1,6 +1,6 @@
-// Reading triangle meshes: PLY (ASCII and binary), OBJ, OFF, STL (ASCII and binary) through
-// OpenMesh's readers, DRC through Draco, GLB (glTF 2.0 binary, plain or Draco-compressed) through
-// Draco's glTF decoder.
+// Reading triangle meshes: PLY (ASCII and binary) and text OFF by the library's own strict readers,
+// OBJ and STL (ASCII and binary) through OpenMesh's readers, DRC through Draco, GLB (glTF 2.0
+// binary, plain or Draco-compressed) through Draco's glTF decoder.
 #pragma once
 
 #include <string>

@@ -273,7 +273,14 @@ TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
       "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header;\n0\n1\n2\n");
   const Result<Mesh> mesh = read_mesh(path);
   ASSERT_FALSE(mesh.ok());
-  EXPECT_EQ(mesh.error().message, path + ": PLY header has no 'end_header' line");
+  EXPECT_EQ(mesh.error().message, path + ": PLY header line 5: unknown keyword 'end_header;'");
+  // A header of comments that never ends: only its first 64 KiB are read.
+  std::string comments = "ply\nformat ascii 1.0\n";
+  while (comments.size() < (1 << 17)) comments += "comment the header goes on\n";
+  const std::string endless = dir.write("endless.ply", comments + "end_header\n");
+  const Result<Mesh> never = read_mesh(endless);
+  ASSERT_FALSE(never.ok());
+  EXPECT_EQ(never.error().message, endless + ": PLY header has no 'end_header' line");
   const std::string junk = dir.write(
       "junk.ply", "ply\nformat ascii 1.0\nelement vertex 3\nbogus line\nend_header\n0\n1\n2\n");
   const Result<Mesh> bad = read_mesh(junk);

@@ -1,0 +1,423 @@
+#include <lightvol/io/ply_reader.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace lightvol::detail {
+namespace {
+
+enum class Type : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+std::optional<Type> parse_type(std::string_view name) {
+  static constexpr std::pair<std::string_view, Type> kNames[] = {
+      {"char", Type::i8},     {"int8", Type::i8},    {"uchar", Type::u8},   {"uint8", Type::u8},
+      {"short", Type::i16},   {"int16", Type::i16},  {"ushort", Type::u16}, {"uint16", Type::u16},
+      {"int", Type::i32},     {"int32", Type::i32},  {"uint", Type::u32},   {"uint32", Type::u32},
+      {"float", Type::f32},   {"float32", Type::f32}, {"double", Type::f64}, {"float64", Type::f64}};
+  for (const auto& [n, t] : kNames)
+    if (n == name) return t;
+  return std::nullopt;
+}
+
+constexpr std::size_t size_of(Type t) {
+  constexpr std::size_t kSizes[] = {1, 1, 2, 2, 4, 4, 4, 8};
+  return kSizes[static_cast<int>(t)];
+}
+
+// What the reader keeps of a property.
+enum class Role : std::uint8_t { skip, x, y, z, face };
+
+struct Property {
+  std::string name;
+  bool list = false;
+  Type count_type = Type::u8;  // lists only
+  Type type = Type::f32;       // the value's, or each list item's
+  Role role = Role::skip;
+};
+
+struct Element {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<Property> properties;
+};
+
+enum class Encoding { ascii, little_endian, big_endian };
+
+struct Header {
+  Encoding encoding = Encoding::ascii;
+  std::vector<Element> elements;
+  std::size_t body = 0;        // offset of the first byte after "end_header\n"
+  std::uint64_t vertices = 0;  // the vertex element's count
+  std::uint64_t faces = 0;     // the face element's count (0 without one)
+};
+
+std::vector<std::string_view> split(std::string_view line) {
+  std::vector<std::string_view> words;
+  std::size_t at = 0;
+  while (true) {
+    at = line.find_first_not_of(" \t\r", at);
+    if (at == std::string_view::npos) return words;
+    const std::size_t end = std::min(line.find_first_of(" \t\r", at), line.size());
+    words.push_back(line.substr(at, end - at));
+    at = end;
+  }
+}
+
+std::string quoted(std::string_view word) { return "'" + std::string(word.substr(0, 40)) + "'"; }
+
+// The header: every line is one the format allows, every count fits in the bytes after it.
+Result<Header> read_header(const std::string& path, std::uintmax_t size) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
+  std::string head(std::size_t{1} << 16, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  if (head.rfind("ply\n", 0) != 0 && head.rfind("ply\r\n", 0) != 0)
+    return Error{path + ": not a PLY file (it does not start with 'ply')"};
+
+  Header header;
+  bool has_format = false, ended = false;
+  std::size_t at = 0;
+  for (int number = 1; at < head.size() && !ended; ++number) {
+    const std::size_t newline = head.find('\n', at);
+    if (newline == std::string::npos) break;
+    const std::vector<std::string_view> words =
+        split(std::string_view(head).substr(at, newline - at));
+    at = newline + 1;
+    const auto fail = [&](const std::string& what) -> Result<Header> {
+      return Error{path + ": PLY header line " + std::to_string(number) + ": " + what};
+    };
+    const std::string_view keyword = words.empty() ? std::string_view() : words[0];
+    if (number == 1 || keyword == "comment" || keyword == "obj_info") continue;
+    if (keyword == "end_header") {
+      if (words.size() != 1) return fail("expected 'end_header' alone");
+      ended = true;
+    } else if (keyword == "format") {
+      if (has_format) return fail("a second 'format' line");
+      if (words.size() != 3 || words[2] != "1.0" ||
+          (words[1] != "ascii" && words[1] != "binary_little_endian" &&
+           words[1] != "binary_big_endian"))
+        return fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      has_format = true;
+      header.encoding = words[1] == "ascii"                  ? Encoding::ascii
+                        : words[1] == "binary_little_endian" ? Encoding::little_endian
+                                                             : Encoding::big_endian;
+    } else if (keyword == "element") {
+      std::uint64_t count = 0;
+      const auto [end, ec] = words.size() == 3
+                                 ? std::from_chars(words[2].data(), words[2].data() + words[2].size(), count)
+                                 : std::from_chars_result{nullptr, std::errc::invalid_argument};
+      if (words.size() != 3 || (ec != std::errc() && ec != std::errc::result_out_of_range) ||
+          end != words[2].data() + words[2].size())
+        return fail("expected 'element NAME COUNT' with a whole-number COUNT");
+      if (ec == std::errc::result_out_of_range) count = std::numeric_limits<std::uint64_t>::max();
+      for (const Element& e : header.elements)
+        if (e.name == words[1]) return fail("a second element " + quoted(words[1]));
+      header.elements.push_back({std::string(words[1]), count, {}});
+    } else if (keyword == "property") {
+      Property p;
+      const bool list = words.size() > 1 && words[1] == "list";
+      std::optional<Type> count_type, type;
+      if (list && words.size() == 5) {
+        count_type = parse_type(words[2]);
+        type = parse_type(words[3]);
+      } else if (!list && words.size() == 3) {
+        count_type = Type::u8;
+        type = parse_type(words[1]);
+      }
+      if (!count_type || !type)
+        return fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with TYPE one "
+                    "of char, uchar, short, ushort, int, uint, float, double");
+      if (header.elements.empty()) return fail("a property before any element");
+      if (list && (*count_type == Type::f32 || *count_type == Type::f64))
+        return fail("a list's count must be of an integer type, not " + quoted(words[2]));
+      p.name = std::string(words.back());
+      p.list = list;
+      p.count_type = *count_type;
+      p.type = *type;
+      header.elements.back().properties.push_back(std::move(p));
+    } else {
+      return fail("unknown keyword " + quoted(keyword));
+    }
+  }
+  if (!ended) return Error{path + ": PLY header has no 'end_header' line"};
+  if (!has_format) return Error{path + ": PLY header has no 'format' line"};
+  header.body = at;
+
+  // What is kept, by name: the vertex element's x, y, z and the face element's index list.
+  bool has_vertices = false;
+  for (Element& e : header.elements) {
+    if (e.name == "vertex") {
+      has_vertices = true;
+      header.vertices = e.count;
+      for (const char* axis : {"x", "y", "z"}) {
+        const auto p = std::find_if(e.properties.begin(), e.properties.end(),
+                                    [&](const Property& q) { return q.name == axis && !q.list; });
+        if (p == e.properties.end())
+          return Error{path + ": PLY header: element 'vertex' has no property '" + axis + "'"};
+        p->role = static_cast<Role>(static_cast<int>(Role::x) + (axis[0] - 'x'));
+      }
+    } else if (e.name == "face") {
+      header.faces = e.count;
+      const auto p = std::find_if(e.properties.begin(), e.properties.end(), [](const Property& q) {
+        return q.list && (q.name == "vertex_indices" || q.name == "vertex_index");
+      });
+      if (p == e.properties.end())
+        return Error{path + ": PLY header: element 'face' has no list property 'vertex_indices'"};
+      p->role = Role::face;
+    }
+  }
+  if (!has_vertices) return Error{path + ": PLY header declares no 'element vertex'"};
+
+  // Counts against the bytes after the header, before anything is allocated: an element takes
+  // at least its fixed-size values and list counts in binary, and two characters a value in ASCII
+  // ("0 " or "0\n"); a face's list holds at least three items; an element without properties is
+  // counted as one byte.
+  // (An ASCII file may end without its last newline.)
+  const std::uintmax_t body =
+      (size > header.body ? size - header.body : 0) + (header.encoding == Encoding::ascii ? 1 : 0);
+  std::uintmax_t needed = 0;
+  for (const Element& e : header.elements) {
+    std::uintmax_t record = 0;
+    const bool ascii = header.encoding == Encoding::ascii;
+    for (const Property& p : e.properties) {
+      const std::size_t items = p.role == Role::face ? 3 : 0;
+      record += ascii ? 2 * (1 + items)
+                      : p.list ? size_of(p.count_type) + items * size_of(p.type) : size_of(p.type);
+    }
+    record = std::max<std::uintmax_t>(record, 1);
+    if (e.count > (body - std::min(body, needed)) / record)
+      return Error{path + ": PLY header: " + std::to_string(e.count) + " " + e.name +
+                   " elements cannot fit in " + std::to_string(size) + " bytes (truncated file?)"};
+    needed += e.count * record;
+  }
+  return header;
+}
+
+// Reads bytes after the header in blocks.
+class ByteReader {
+ public:
+  ByteReader(std::ifstream* in, std::uintmax_t left) : in_(in), left_(left), buffer_(1 << 20) {}
+
+  // The next n (≤ 8) bytes, or nullptr when the file ends first.
+  const unsigned char* take(std::size_t n) {
+    if (end_ - at_ < n && !refill(n)) return nullptr;
+    const unsigned char* p = buffer_.data() + at_;
+    at_ += n;
+    left_ -= std::min<std::uintmax_t>(left_, n);
+    return p;
+  }
+  // Skips n bytes; false when the file ends first.
+  bool skip(std::uintmax_t n) {
+    while (n > 0) {
+      if (at_ == end_ && !refill(1)) return false;
+      const std::size_t step = static_cast<std::size_t>(std::min<std::uintmax_t>(n, end_ - at_));
+      at_ += step;
+      left_ -= std::min<std::uintmax_t>(left_, step);
+      n -= step;
+    }
+    return true;
+  }
+  // Bytes the file has left, by its size when opened.
+  std::uintmax_t left() const { return left_; }
+
+ private:
+  bool refill(std::size_t n) {
+    std::memmove(buffer_.data(), buffer_.data() + at_, end_ - at_);
+    end_ -= at_;
+    at_ = 0;
+    in_->read(reinterpret_cast<char*>(buffer_.data() + end_), static_cast<std::streamsize>(buffer_.size() - end_));
+    end_ += static_cast<std::size_t>(std::max<std::streamsize>(in_->gcount(), 0));
+    return end_ >= n;
+  }
+
+  std::ifstream* in_;
+  std::uintmax_t left_;
+  std::vector<unsigned char> buffer_;
+  std::size_t at_ = 0, end_ = 0;
+};
+
+template <class T>
+double load(const unsigned char* p, bool swap) {
+  unsigned char bytes[sizeof(T)];
+  if (swap)
+    std::reverse_copy(p, p + sizeof(T), bytes);
+  else
+    std::memcpy(bytes, p, sizeof(T));
+  T v;
+  std::memcpy(&v, bytes, sizeof(T));
+  return static_cast<double>(v);
+}
+
+double decode(const unsigned char* p, Type t, bool swap) {
+  switch (t) {
+    case Type::i8: return load<std::int8_t>(p, false);
+    case Type::u8: return load<std::uint8_t>(p, false);
+    case Type::i16: return load<std::int16_t>(p, swap);
+    case Type::u16: return load<std::uint16_t>(p, swap);
+    case Type::i32: return load<std::int32_t>(p, swap);
+    case Type::u32: return load<std::uint32_t>(p, swap);
+    case Type::f32: return load<float>(p, swap);
+    case Type::f64: return load<double>(p, swap);
+  }
+  return 0;
+}
+
+// The mesh as it fills: positions by vertex number, faces fan-triangulated as they come.
+class Builder {
+ public:
+  Builder(const Header& header) : vertices_(header.vertices) {
+    mesh_.positions.resize(3 * static_cast<std::size_t>(header.vertices));
+    mesh_.indices.reserve(3 * static_cast<std::size_t>(header.faces));
+  }
+  void set(std::uint64_t vertex, Role axis, double value) {
+    mesh_.positions[3 * vertex + static_cast<std::size_t>(axis) - static_cast<std::size_t>(Role::x)] =
+        static_cast<float>(value);
+  }
+  // Adds face number `f`, whose vertex numbers are `face`; an empty string, or what is wrong.
+  std::string add_face(std::uint64_t f, const std::vector<double>& face) {
+    if (face.size() < 3) return "face " + std::to_string(f) + " has " + std::to_string(face.size()) + " vertices";
+    for (const double v : face) {
+      if (!(v >= 0 && v < static_cast<double>(vertices_) && v == std::floor(v)))
+        return "face " + std::to_string(f) + " names vertex " + number_text(v) + ", but there are " +
+               std::to_string(vertices_);
+    }
+    for (std::size_t k = 1; k + 1 < face.size(); ++k)
+      mesh_.indices.insert(mesh_.indices.end(), {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
+                                                 static_cast<std::uint32_t>(face[k + 1])});
+    return {};
+  }
+  Mesh take() { return std::move(mesh_); }
+
+ private:
+  static std::string number_text(double v) {
+    if (v == std::floor(v) && std::abs(v) < 1e18) return std::to_string(static_cast<long long>(v));
+    char text[32];
+    return std::string(text, std::to_chars(text, text + sizeof text, v).ptr);
+  }
+  std::uint64_t vertices_;
+  Mesh mesh_;
+};
+
+Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Header& header) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(header.body));
+  if (!in) return Error{path + ": cannot read: " + std::strerror(errno)};
+  ByteReader bytes(&in, size - header.body);
+  const bool swap = header.encoding == Encoding::big_endian;
+  Builder mesh(header);
+  std::vector<double> face;
+  for (const Element& e : header.elements) {
+    const auto ends = [&](std::uint64_t i) -> Result<Mesh> {
+      return Error{path + ": PLY file ends inside " + e.name + " element " + std::to_string(i) + " of " +
+                   std::to_string(e.count) + " (truncated?)"};
+    };
+    for (std::uint64_t i = 0; i < e.count; ++i) {
+      for (const Property& p : e.properties) {
+        if (!p.list) {
+          const unsigned char* value = bytes.take(size_of(p.type));
+          if (!value) return ends(i);
+          if (p.role != Role::skip) mesh.set(i, p.role, decode(value, p.type, swap));
+          continue;
+        }
+        const unsigned char* count = bytes.take(size_of(p.count_type));
+        if (!count) return ends(i);
+        const double n = decode(count, p.count_type, swap);
+        if (n < 0 || n * static_cast<double>(size_of(p.type)) > static_cast<double>(bytes.left()))
+          return Error{path + ": PLY body: " + e.name + " element " + std::to_string(i) + ": a list of " +
+                       std::to_string(static_cast<long long>(n)) + " items, more than the rest of the file holds"};
+        const auto items = static_cast<std::size_t>(n);
+        if (p.role != Role::face) {
+          if (!bytes.skip(items * size_of(p.type))) return ends(i);
+          continue;
+        }
+        face.resize(items);
+        for (double& v : face) {
+          const unsigned char* item = bytes.take(size_of(p.type));
+          if (!item) return ends(i);
+          v = decode(item, p.type, swap);
+        }
+        if (std::string bad = mesh.add_face(i, face); !bad.empty()) return Error{path + ": PLY body: " + bad};
+      }
+    }
+  }
+  return mesh.take();
+}
+
+bool parse_number(std::string_view word, double* value) {
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), *value);
+  return ec == std::errc() && end == word.data() + word.size();
+}
+
+// ASCII: one element a line (blank lines are skipped), its values separated by blanks.
+Result<Mesh> read_ascii(const std::string& path, const Header& header) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(header.body));
+  if (!in) return Error{path + ": cannot read: " + std::strerror(errno)};
+  Builder mesh(header);
+  std::string line;
+  std::vector<std::string_view> words;
+  std::size_t number = 0;  // body line
+  std::vector<double> face;
+  for (const Element& e : header.elements) {
+    if (e.properties.empty()) continue;
+    for (std::uint64_t i = 0; i < e.count; ++i) {
+      do {
+        if (!std::getline(in, line))
+          return Error{path + ": PLY file ends after " + std::to_string(i) + " of " + std::to_string(e.count) +
+                       " " + e.name + " elements (truncated?)"};
+        ++number;
+        words = split(line);
+      } while (words.empty());
+      const auto fail = [&](const std::string& what) -> Result<Mesh> {
+        return Error{path + ": PLY body line " + std::to_string(number) + ": " + what};
+      };
+      std::size_t at = 0;
+      for (const Property& p : e.properties) {
+        double value = 0;
+        if (at >= words.size())
+          return fail(std::to_string(words.size()) + " values, too few for the properties of element '" + e.name + "'");
+        if (!parse_number(words[at], &value)) return fail(quoted(words[at]) + " is not a number");
+        ++at;
+        if (!p.list) {
+          if (p.role != Role::skip) mesh.set(i, p.role, value);
+          continue;
+        }
+        if (!(value >= 0) || value > static_cast<double>(words.size() - at) || value != std::floor(value))
+          return fail("a list of " + std::string(words[at - 1].substr(0, 20)) + " items on a line of " +
+                      std::to_string(words.size()) + " values");
+        const auto items = static_cast<std::size_t>(value);
+        if (p.role == Role::face) {
+          face.resize(items);
+          for (std::size_t k = 0; k < items; ++k)
+            if (!parse_number(words[at + k], &face[k])) return fail(quoted(words[at + k]) + " is not a number");
+          if (std::string bad = mesh.add_face(i, face); !bad.empty()) return fail(bad);
+        }
+        at += items;
+      }
+      if (at != words.size())
+        return fail(std::to_string(words.size()) + " values, more than the properties of element '" + e.name +
+                    "' take (" + std::to_string(at) + ")");
+    }
+  }
+  return mesh.take();
+}
+
+}  // namespace
+
+Result<Mesh> read_ply(const std::string& path, std::uintmax_t size) {
+  Result<Header> header = read_header(path, size);
+  if (!header) return header.error();
+  return header->encoding == Encoding::ascii ? read_ascii(path, *header) : read_binary(path, size, *header);
+}
+
+}  // namespace lightvol::detail
