@@ -21,6 +21,7 @@
 #include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/obj_reader.h>
 #include <lightvol/io/ply_reader.h>
 
 namespace lightvol {
@@ -168,26 +169,8 @@ std::string file_head(const std::string& path, std::size_t n) {
   return head;
 }
 
-// An OBJ face vertex: v, v/t, v//n or v/t/n, each an integer (negative counts from the end).
-bool is_obj_face_vertex(const std::string& token) {
-  std::size_t field = 0, at = 0;
-  for (; field < 3; ++field) {
-    const std::size_t start = at;
-    if (at < token.size() && token[at] == '-') ++at;
-    const std::size_t digits = at;
-    while (at < token.size() && token[at] >= '0' && token[at] <= '9') ++at;
-    const bool number = at > digits;
-    if (!number && (field == 0 || at != start)) return false;  // v required; "-" alone is not
-    if (field != 1 && !number && field != 0) return false;     // n, when present, is required
-    if (at == token.size()) return true;
-    if (token[at] != '/') return false;
-    ++at;
-  }
-  return false;
-}
-
-// Cheap sanity checks before handing a file to OpenMesh, whose readers trust their input: OFF's
-// magic word, STL's size arithmetic, and text and well-formed face vertices for OBJ.
+// Cheap sanity checks before reading: OFF's magic word, and STL's size arithmetic before handing
+// the file to OpenMesh, whose reader trusts its input.
 Status check_header(const std::string& path, MeshFormat format, std::uintmax_t size) {
   const std::string head = file_head(path, 512);
   switch (format) {
@@ -209,25 +192,6 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
         return {};  // ASCII
       return Error{path + ": not an STL file (binary size does not match its triangle count, and "
                           "it does not start with 'solid')"};
-    }
-    case MeshFormat::obj: {
-      if (head.find('\0') != std::string::npos)
-        return Error{path + ": not an OBJ file (binary data in a text format)"};
-      // Every face vertex must be v, v/t, v//n or v/t/n with integer indices: OpenMesh's reader
-      // asserts (aborting the process) on one like "/1" (fuzz finding).
-      std::ifstream in(path, std::ios::binary);
-      std::string line;
-      for (std::size_t number = 1; std::getline(in, line); ++number) {
-        if (line.size() < 2 || line[0] != 'f' || (line[1] != ' ' && line[1] != '\t')) continue;
-        std::istringstream words(line.substr(2));
-        for (std::string vertex; words >> vertex;) {
-          if (vertex[0] == '#') break;
-          if (!is_obj_face_vertex(vertex))
-            return Error{path + ": OBJ line " + std::to_string(number) + ": face vertex '" +
-                         vertex.substr(0, 40) + "' is not v, v/t, v//n or v/t/n"};
-        }
-      }
-      return {};
     }
     default: return {};
   }
@@ -618,6 +582,7 @@ Result<Mesh> read_mesh(const std::string& path) {
                           ? read_with_draco(path, *format)
                           : *format == MeshFormat::off ? read_off(path, size)
                           : *format == MeshFormat::ply ? detail::read_ply(path, size)
+                          : *format == MeshFormat::obj ? detail::read_obj(path)
                                                        : read_with_openmesh(path, *format, size);
   if (!mesh) return mesh;
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};

@@ -1,5 +1,5 @@
-// Reading triangle meshes: PLY (ASCII and binary) and text OFF by the library's own strict readers,
-// OBJ and STL (ASCII and binary) through OpenMesh's readers, DRC through Draco, GLB (glTF 2.0
+// Reading triangle meshes: PLY (ASCII and binary), OBJ and text OFF by the library's own strict
+// readers, STL (ASCII and binary) through OpenMesh's reader, DRC through Draco, GLB (glTF 2.0
 // binary, plain or Draco-compressed) through Draco's glTF decoder.
 #pragma once
 

@@ -148,7 +148,7 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("node.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_node_names_no_mesh")),
                "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
-  // Found by fuzz_mesh: OpenMesh's OBJ reader aborts (an assertion) on a face vertex "/1".
+  // Found by fuzz_mesh: OpenMesh's OBJ reader aborted (an assertion) on a face vertex "/1".
   expect_error(dir.write("slash.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf /1 2 3\n"),
                "OBJ line 4: face vertex '/1' is not v, v/t, v//n or v/t/n");
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
@@ -160,7 +160,7 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
                                      "element face 1\nproperty list uchar int vertex_indices\n"
                                      "end_header\n0 0 0\n"),
                "huge.ply");
-  expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "face 0 names vertex");
+  expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "non-finite coordinate");
 
   // A binary PLY cut short: the header promises more than the body holds.
   const Mesh mesh = sample_volume();
