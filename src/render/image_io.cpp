@@ -6,6 +6,8 @@
 #include <OpenImageIO/imageio.h>
 
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/limits.h>
+#include <lightvol/depth/image_file.h>
 
 namespace lightvol {
 
@@ -69,17 +71,24 @@ Status write_image(const std::string& path, const Image& image, double exposure)
 }
 
 Result<Image> read_image(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return Error{path + ": cannot read image: " + OIIO::geterror()};
-  const OIIO::ImageSpec spec = in->spec();
+  // A float per texel while reading, and the image's own values.
+  const auto within_budget = [&](const OIIO::ImageSpec& spec) {
+    const auto texels = static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+    return check_memory(texels * (sizeof(float) + sizeof(double)), path,
+                        "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
+  };
+  Result<detail::OpenImage> opened = detail::open_image(path, within_budget);
+  if (!opened) return opened.error();
+  OIIO::ImageInput* const in = opened->input.get();
+  const OIIO::ImageSpec& spec = opened->spec;
   if (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8)
     return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
   Image image;
   image.width = spec.width;
   image.height = spec.height;
   std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height);
-  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, pixels.data()))
-    return Error{path + ": cannot read image: " + in->geterror()};
+  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, pixels.data()) || in->has_error())
+    return Error{path + ": cannot read image: " + detail::oiio_message(in->geterror())};
   image.values.assign(pixels.begin(), pixels.end());
   return image;
 }

@@ -110,5 +110,33 @@ TEST(DepthImage, RejectsMissingTruncatedJunkTinyAnd8Bit) {
   expect_error(read_depth_image(dir.file("eight.png")), "8-bit");
 }
 
+// The plugin is chosen by the file's first bytes for the formats depth images come in, else by
+// its extension among a vetted few: never OpenImageIO's try-every-plugin fallback, which hands an
+// unknown file to its video, camera-raw and DICOM decoders.
+TEST(DepthImage, FormatByContentThenByExtensionAmongTheVettedOnes) {
+  test::TempDir dir;
+  const DepthImage in = ramp(7, 5);
+  ASSERT_TRUE(write_depth_image(dir.file("d.exr"), in).ok());
+  std::filesystem::copy_file(dir.file("d.exr"), dir.file("misnamed.tif"));
+  std::filesystem::copy_file(dir.file("d.exr"), dir.file("depth.bin"));
+  for (const char* name : {"misnamed.tif", "depth.bin"}) {
+    const Result<DepthImage> back = read_depth_image(dir.file(name));
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->values, in.values) << name;
+  }
+  write_raw(dir.file("eight.bmp"), 3, 3, {"R", "G", "B"}, OIIO::TypeDesc::UINT8, std::vector<float>(27, 0.5f));
+  const std::string refused = ": not an image lightvol reads (EXR, TIFF, PFM, PNG, HDR, DPX, PSD, SGI, "
+                              "FITS, JPEG 2000, RLA, ZFile, IFF, DDS, Cineon, TGA), by its first bytes or its extension";
+  for (const std::string name : {"eight.bmp", "clip.mp4", "scan.dcm", "any.null", "noextension"}) {
+    if (!std::filesystem::exists(dir.file(name))) dir.write(name, std::string(64, '\x01'));
+    const Result<DepthImage> r = read_depth_image(dir.file(name));
+    ASSERT_FALSE(r.ok()) << name;
+    EXPECT_EQ(r.error().message, dir.file(name) + refused);
+  }
+  // A known extension on junk: that plugin alone says what is wrong.
+  dir.write("junk.dpx", std::string(64, '\x01'));
+  expect_error(read_depth_image(dir.file("junk.dpx")), "junk.dpx: cannot read image: ");
+}
+
 }  // namespace
 }  // namespace lightvol

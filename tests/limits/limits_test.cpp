@@ -20,6 +20,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/io/mesh_reader.h>
 #include <lightvol/light/light.h>
+#include <lightvol/render/image_io.h>
 
 #include "support/test_support.h"
 
@@ -114,6 +115,21 @@ TEST(ForgedHeaders, HugeImageIsRefusedBeforeAllocating) {
   EXPECT_TRUE(contains(image.error().message, path + ": a volume from 100000x100000 texels needs about"))
       << image.error().message;
   EXPECT_TRUE(contains(image.error().message, "--max-memory")) << image.error().message;
+}
+
+TEST(ForgedHeaders, HugeReferenceImageIsRefusedBeforeAllocating) {
+  // render --compare reads its reference through the same checked opening as depth images.
+  TempDir dir;
+  const std::string path = dir.write("huge.pfm", pfm(100000, 100000, 16));
+  const std::uint64_t before = peak_memory_bytes();
+  const Result<Image> image = read_image(path);
+  ASSERT_FALSE(image.ok());
+  EXPECT_LT(peak_memory_bytes() - before, kSmall);
+  EXPECT_TRUE(contains(image.error().message, path + ": a 100000x100000 image needs about"))
+      << image.error().message;
+  const Result<Image> device = read_image("/dev/zero");
+  ASSERT_FALSE(device.ok());
+  EXPECT_EQ(device.error().message, "/dev/zero: is not a regular file (a device or a pipe); images are read from files");
 }
 
 TEST(ForgedHeaders, TruncatedPfmWithinBudgetIsRefusedBeforeAllocating) {

@@ -1,0 +1,311 @@
+#include <lightvol/depth/image_file.h>
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+namespace lightvol::detail {
+
+// OpenImageIO keeps errors in per-thread (global) or per-object queues; fetch and tidy them.
+// OpenImageIO's error queue as one line: OpenEXR's core can queue a dozen lines per file, each
+// prefixed with "EXR Error (path): "; keep the first and the last (the cause and the conclusion).
+std::string oiio_message(const std::string& message) {
+  std::vector<std::string> lines;
+  std::istringstream in(message);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("EXR Error (", 0) == 0) {
+      if (const std::size_t end = line.find("): "); end != std::string::npos) line.erase(0, end + 3);
+    }
+    while (!line.empty() && (line.back() == ' ' || line.back() == '\r')) line.pop_back();
+    if (!line.empty()) lines.push_back(line);
+  }
+  if (lines.empty()) return "unknown OpenImageIO error";
+  std::string one = lines.front();
+  if (lines.size() > 2) one += "; ...";
+  if (lines.size() > 1) one += "; " + lines.back();
+  constexpr std::size_t kMaxLength = 400;
+  if (one.size() > kMaxLength) one = one.substr(0, kMaxLength) + "...";
+  return one;
+}
+
+namespace {
+
+// Up to `n` bytes from the stream's position.
+std::string file_prefix(std::ifstream& in, std::size_t n) {
+  std::string bytes(n, '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(n));
+  bytes.resize(static_cast<std::size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  return bytes;
+}
+
+// The first two bytes of a file ("" if it is shorter).
+std::string read_magic(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[2] = {};
+  if (!in.read(magic, 2)) return "";
+  return std::string(magic, 2);
+}
+
+// OpenEXR's readers allocate header attributes at the size the file claims (up to 2 GB), and lose
+// their place on malformed headers, reading text as sizes. Walk the header(s) as the format
+// defines them first: names within their length limit and unique per header, every attribute
+// inside the file. Only the structure is checked; OpenEXR judges the rest.
+// The value of one EXR header attribute against its type: fixed-size types must have their size,
+// and the variable ones (channel lists, string vectors, previews) must fill exactly their stated
+// size. OpenEXR's readers trust these and lose their place when they disagree (fuzz findings: a
+// channel list running past its size made the core read text as a 1.9 GB size). Returns why not.
+Status check_exr_attribute(std::string_view value, const std::string& type) {
+  static const std::map<std::string, std::size_t> kFixed = {
+      {"box2i", 16}, {"box2f", 16}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12},
+      {"v3f", 12}, {"v3d", 24}, {"int", 4}, {"float", 4}, {"double", 8}, {"compression", 1},
+      {"lineOrder", 1}, {"envmap", 1}, {"deepImageState", 1}, {"tiledesc", 9},
+      {"rational", 8}, {"timecode", 8}, {"keycode", 28}, {"chromaticities", 32},
+      {"m33f", 36}, {"m33d", 72}, {"m44f", 64}, {"m44d", 128}};
+  const auto i32 = [&](std::size_t at) {
+    std::int32_t v = 0;
+    std::memcpy(&v, value.data() + at, 4);
+    return v;
+  };
+  if (const auto fixed = kFixed.find(type); fixed != kFixed.end()) {
+    if (value.size() != fixed->second)
+      return Error{std::to_string(value.size()) + " bytes, where the type has " +
+                   std::to_string(fixed->second)};
+    return {};
+  }
+  if (type == "chlist") {  // (name \0, type, pLinear, 3 reserved, xSampling, ySampling)*, \0
+    std::size_t at = 0;
+    for (;;) {
+      const std::size_t end = value.find('\0', at);
+      if (end == std::string_view::npos) return Error{"the channel list has no end"};
+      if (end == at) break;
+      at = end + 1;
+      if (at + 16 > value.size()) return Error{"a channel runs past the attribute"};
+      if (i32(at) < 0 || i32(at) > 2 || i32(at + 8) < 1 || i32(at + 12) < 1)
+        return Error{"a channel has an unknown pixel type or a sampling below 1"};
+      at += 16;
+    }
+    if (at + 1 != value.size()) return Error{"the channel list does not fill the attribute"};
+    return {};
+  }
+  if (type == "stringvector") {  // (length, bytes)*
+    std::size_t at = 0;
+    while (at < value.size()) {
+      if (at + 4 > value.size() || i32(at) < 0 ||
+          static_cast<std::size_t>(i32(at)) > value.size() - at - 4)
+        return Error{"a string runs past the attribute"};
+      at += 4 + static_cast<std::size_t>(i32(at));
+    }
+    return {};
+  }
+  if (type == "preview") {  // width, height, then width × height RGBA bytes
+    if (value.size() < 8) return Error{"no preview size"};
+    const std::uint64_t w = static_cast<std::uint32_t>(i32(0)), h = static_cast<std::uint32_t>(i32(4));
+    if (8 + 4 * w * h != value.size()) return Error{"the preview's size does not match its pixels"};
+    return {};
+  }
+  return {};
+}
+
+Status check_exr_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 1 << 20);
+  if (head.size() < 8 || head.compare(0, 4, "\x76\x2f\x31\x01") != 0) return {};  // not EXR
+  std::uintmax_t file_size = 0;
+  std::error_code ec;
+  if (file_size = std::filesystem::file_size(path, ec); ec) return {};
+  const bool multipart = (static_cast<unsigned char>(head[5]) & 0x10) != 0;
+  const std::size_t max_name = (static_cast<unsigned char>(head[5]) & 0x04) != 0 ? 255 : 31;
+  const std::string where = path + ": EXR header: ";
+  std::size_t at = 8;
+  auto read_name = [&](std::string* name) {
+    const std::size_t end = head.find('\0', at);
+    if (end == std::string::npos) return false;
+    *name = head.substr(at, end - at);
+    at = end + 1;
+    return true;
+  };
+  std::set<std::string> names;  // of the current header
+  for (;;) {  // headers; a single-part file has one
+    std::string name, type;
+    if (!read_name(&name)) return {};  // header longer than the prefix: leave it to OpenEXR
+    if (name.empty()) {
+      if (!multipart) return {};
+      if (at < head.size() && head[at] == '\0') return {};  // empty header: end of the list
+      names.clear();
+      continue;
+    }
+    // OpenEXR's readers lose their place on these and then read text as sizes (fuzz findings:
+    // 1.7 GB requested by a 515-byte file with a repeated attribute).
+    if (name.size() > max_name)
+      return Error{where + "attribute name '" + name.substr(0, 40) + "' is longer than " +
+                   std::to_string(max_name) + " characters (corrupt)"};
+    if (!names.insert(name).second)
+      return Error{where + "attribute '" + name + "' appears twice (corrupt)"};
+    if (!read_name(&type) || at + 4 > head.size()) return {};
+    if (type.empty() || type.size() > max_name)
+      return Error{where + "attribute '" + name + "' has no valid type name (corrupt)"};
+    std::int32_t size = 0;
+    std::memcpy(&size, head.data() + at, sizeof size);
+    at += 4;
+    if (size < 0 || static_cast<std::uintmax_t>(size) > file_size - std::min<std::uintmax_t>(at, file_size))
+      return Error{where + "attribute '" + name + "' claims " + std::to_string(size) +
+                   " bytes, but the file has " + std::to_string(file_size) + " (truncated or corrupt)"};
+    if (at + static_cast<std::size_t>(size) > head.size()) return {};
+    if (Status s = check_exr_attribute(head.substr(at, static_cast<std::size_t>(size)), type); !s)
+      return Error{where + "attribute '" + name + "' (" + type + "): " + s.error().message +
+                   " (corrupt)"};
+    at += static_cast<std::size_t>(size);
+  }
+}
+
+// libpng allocates a chunk at the length the file claims (found by fuzz_depth_image: 1.9 GB);
+// every chunk must fit in the file.
+Status check_png_chunks(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 8);
+  if (head != "\x89PNG\r\n\x1a\n") return {};
+  std::uintmax_t file_size = 0;
+  std::error_code ec;
+  if (file_size = std::filesystem::file_size(path, ec); ec) return {};
+  std::uintmax_t at = 8;
+  for (int chunk = 0; at + 8 <= file_size && chunk < 100000; ++chunk) {
+    in.seekg(static_cast<std::streamoff>(at));
+    const std::string header = file_prefix(in, 8);
+    if (header.size() < 8) return {};
+    const auto* b = reinterpret_cast<const unsigned char*>(header.data());
+    const std::uintmax_t length = (std::uintmax_t{b[0]} << 24) | (std::uintmax_t{b[1]} << 16) |
+                                  (std::uintmax_t{b[2]} << 8) | b[3];
+    if (at + 12 + length > file_size)
+      return Error{path + ": PNG chunk '" + header.substr(4, 4) + "' claims " +
+                   std::to_string(length) + " bytes, but the file has " +
+                   std::to_string(file_size) + " (truncated or corrupt)"};
+    if (header.compare(4, 4, "IEND") == 0) return {};
+    at += 12 + length;
+  }
+  return {};
+}
+
+// The OpenImageIO plugin to read `path` with: by magic bytes for the formats depth images come in,
+// else by extension among the other plugins that can hold 16-bit or float values (and JPEG, so
+// that its 8 bits are refused by name). Never video, camera raw, DICOM, OpenVDB or HEIF decoders.
+Result<std::string> image_format(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string magic = file_prefix(in, 10);
+  const auto starts = [&](std::string_view prefix) { return std::string_view(magic).substr(0, prefix.size()) == prefix; };
+  if (starts("\x76\x2f\x31\x01")) return std::string("openexr");
+  if (starts("II*") || starts(std::string_view("MM\0*", 4)) || starts("II+") || starts(std::string_view("MM\0+", 4)))
+    return std::string("tiff");
+  if (starts("\x89PNG")) return std::string("png");
+  if (magic.size() >= 2 && magic[0] == 'P' && std::string_view("123456fF").find(magic[1]) != std::string_view::npos)
+    return std::string("pnm");
+  if (starts("#?RADIANCE") || starts("#?RGBE")) return std::string("hdr");
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  static const std::map<std::string, std::string> kByExtension = {
+      {".exr", "openexr"}, {".tif", "tiff"},   {".tiff", "tiff"},   {".tx", "tiff"},
+      {".png", "png"},     {".pfm", "pnm"},    {".pgm", "pnm"},     {".ppm", "pnm"},
+      {".pnm", "pnm"},     {".hdr", "hdr"},    {".rgbe", "hdr"},    {".dpx", "dpx"},
+      {".psd", "psd"},     {".sgi", "sgi"},    {".rgb", "sgi"},     {".bw", "sgi"},
+      {".fits", "fits"},   {".jp2", "jpeg2000"}, {".j2k", "jpeg2000"}, {".rla", "rla"},
+      {".zfile", "zfile"}, {".iff", "iff"},    {".dds", "dds"},     {".cin", "cineon"},
+      {".tga", "targa"},   {".jpg", "jpeg"},   {".jpeg", "jpeg"}};
+  if (const auto f = kByExtension.find(extension); f != kByExtension.end()) return f->second;
+  return Error{path + ": not an image lightvol reads (EXR, TIFF, PFM, PNG, HDR, DPX, PSD, SGI, FITS, "
+                      "JPEG 2000, RLA, ZFile, IFF, DDS, Cineon, TGA), by its first bytes or its extension"};
+}
+
+}  // namespace
+
+Result<OpenImage> open_image(const std::string& path,
+                             const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
+  if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
+  if (!std::filesystem::is_regular_file(path, ec))
+    return Error{path + ": is not a regular file (a device or a pipe); images are read from files"};
+  const Result<std::string> format = image_format(path);
+  if (!format) return format.error();
+  if (Status s = check_exr_header(path); !s) return s.error();
+  if (Status s = check_png_chunks(path); !s) return s.error();
+  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader
+  // allocates unknown attributes at whatever size the file claims and reads known ones (channel
+  // lists) past their stated size. The core checks most sizes; check_exr_header refuses what
+  // made either of them lose its place in fuzzing.
+  static const bool exr_core = OIIO::attribute("openexr:core", 1);
+  (void)exr_core;
+  OpenImage image;
+  image.input = OIIO::ImageInput::create(*format);
+  if (!image.input) return Error{path + ": cannot read image: no " + *format + " reader: " + oiio_message(OIIO::geterror())};
+  if (!image.input->open(path, image.spec))
+    return Error{path + ": cannot read image: " + oiio_message(image.input->geterror())};
+  const OIIO::ImageSpec& spec = image.spec;
+  if (spec.width < 2 || spec.height < 2)
+    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                 "; an image needs at least 2x2 texels"};
+  if (spec.depth > 1) return Error{path + ": is a volume image, not a 2D one"};
+  const std::int64_t texels = static_cast<std::int64_t>(spec.width) * spec.height;
+  if (Status s = within_budget(spec); !s) return s.error();
+  if (texels > (std::int64_t{1} << 30))
+    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                 ", more than 2^30 texels; lightvol's 32-bit indices cannot hold its volume"};
+  // The header against the file it came with: PFM exactly, EXR by its chunk table, every format
+  // by the most any compression packs into a byte.
+  const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
+  const bool sized = !ec;
+  // PFM is uncompressed: a header that promises more floats than the file holds is truncated (or
+  // forged); refuse it before allocating what it promises.
+  if (const std::string magic = read_magic(path); magic == "Pf" || magic == "PF") {
+    const std::uintmax_t needed = static_cast<std::uintmax_t>(texels) *
+                                  static_cast<std::uintmax_t>(spec.nchannels) * sizeof(float);
+    if (sized && file_size < needed)
+      return Error{path + ": PFM header says " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " (" + std::to_string(needed) +
+                   " bytes of floats), but the file has " + std::to_string(file_size) +
+                   " bytes (truncated file?)"};
+  }
+  // EXR stores an offset table of 8 bytes per chunk (scanline blocks or tiles) and each chunk
+  // starts with at least 8 bytes: a file smaller than that for its size is truncated or forged.
+  // Refuse it before OpenEXR walks (and allocates for) every missing chunk (fuzz finding).
+  if (*format == "openexr") {
+    const std::string compression = spec.get_string_attribute("compression", "none");
+    std::int64_t lines = 1;  // scanlines per chunk, by compression
+    if (compression == "zip" || compression == "pxr24") lines = 16;
+    if (compression == "piz" || compression == "b44" || compression == "b44a" ||
+        compression == "dwaa")
+      lines = 32;
+    if (compression == "dwab") lines = 256;
+    const std::int64_t chunks =
+        spec.tile_width > 0 && spec.tile_height > 0
+            ? ((spec.width + spec.tile_width - 1) / spec.tile_width) *
+                  std::int64_t{(spec.height + spec.tile_height - 1) / spec.tile_height}
+            : (spec.height + lines - 1) / lines;
+    if (sized && static_cast<std::uintmax_t>(chunks) * 16 > file_size)
+      return Error{path + ": EXR of " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " has " + std::to_string(chunks) +
+                   " chunks, needing at least " + std::to_string(chunks * 16) +
+                   " bytes, but the file has " + std::to_string(file_size) + " (truncated file?)"};
+  }
+  // No image format packs more than about 1,100 decoded bytes into a compressed byte (deflate,
+  // LZW, PIZ and DWA on constant data, measured); a header promising much more than that from a
+  // small file is forged (fuzz finding: 446 bytes of EXR claiming 6894084x17, and a 7 GB
+  // allocation in OpenImageIO).
+  {
+    constexpr std::uintmax_t kMaxRatio = 4096;
+    const std::uintmax_t decoded = static_cast<std::uintmax_t>(spec.image_bytes(true));
+    if (sized && decoded / kMaxRatio > file_size)
+      return Error{path + ": is " + std::to_string(spec.width) + "x" +
+                   std::to_string(spec.height) + " with " + std::to_string(spec.nchannels) +
+                   " channels, " + std::to_string(decoded) + " bytes, in a file of " +
+                   std::to_string(file_size) + ": more than any compression holds (truncated or forged)"};
+  }
+  return image;
+}
+
+}  // namespace lightvol::detail
