@@ -198,7 +198,7 @@ void add_build_command(CLI::App& app, Runner* run) {
       "An omni light takes six images (+X -X +Y -Y +Z -Z), one path with {face} (px nx py ny pz nz)\n"
       "or one W x 6W strip with the faces top to bottom.\n"
       "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file written.");
-  cmd->add_option("depth", o->depth_paths, "Depth image(s): EXR, TIFF, PFM, 16-bit PNG, ...")
+  cmd->add_option("depth", o->depth_paths, "Depth image(s): EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")->required();

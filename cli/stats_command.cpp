@@ -273,7 +273,7 @@ void add_stats_command(CLI::App& app, Runner* run) {
       "For each bound E (world units along the texel rays): the triangles and vertices that\n"
       "'lightvol build --adaptive --max-error E' writes, the largest error actually reached over\n"
       "all texels, and the time of each stage (the error pyramid is built once).");
-  cmd->add_option("depth", o->depth_paths, "Depth image: EXR, TIFF, PFM, 16-bit PNG, ...")->required();
+  cmd->add_option("depth", o->depth_paths, "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
   cmd->add_option("--max-error", o->max_errors, "Comma-separated error bounds in world units")

@@ -31,8 +31,9 @@ struct DepthReadOptions {
   int images = 1;
 };
 
-// Reads the first subimage of any file OpenImageIO reads with one float or 16-bit channel (EXR,
-// float TIFF, PFM, 16-bit PNG, ...): 16-bit integers become [0, 1], as a depth buffer stores them.
+// Reads the first subimage of an EXR, TIFF, PNG, PFM, PGM, HDR or ZFile image (chosen by its
+// first bytes, else its extension) with one float or 16-bit channel: 16-bit integers become
+// [0, 1], as a depth buffer stores them. Other formats are refused unopened.
 // Errors name the file: unreadable or truncated data, 8-bit or unknown channels, fewer than 2×2
 // texels, and the first NaN, infinite or negative depth, by pixel (column, row as stored).
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options = {});

@@ -19,13 +19,12 @@ struct OpenImage {
 };
 
 // Opens the image at `path` and reads its header, refusing before any pixel is allocated:
-// anything but a regular file; a format lightvol does not read images from (the plugin is chosen
-// by the file's magic bytes for EXR, TIFF, PNG, PNM/PFM and HDR, else by its extension among DPX,
-// PSD, SGI, FITS, JPEG 2000, RLA, ZFile, IFF, DDS, Cineon, TGA and JPEG: OpenImageIO's own
-// open() would try every plugin it has, video and camera-raw decoders included, on a file its
-// extension's plugin cannot open); EXR and PNG headers whose sizes run past the file; fewer than
-// 2×2 texels, volumes and deep images; more than 2^30 texels; `within_budget(spec)` failing (the
-// caller's memory check); and a header promising more decoded bytes than the file can hold.
+// anything but a regular file; a format other than EXR, TIFF, PNG, PFM/PGM, HDR and ZFile (by
+// magic bytes, else by extension: OpenImageIO's own open() would try every plugin it has, video
+// and camera-raw decoders included, on a file its extension's plugin cannot open); EXR and PNG
+// headers whose sizes run past the file; fewer than 2×2 texels, volumes and deep images; more
+// than 2^30 texels; `within_budget(spec)` failing (the caller's memory check); and a header
+// promising more decoded bytes than the file can hold.
 Result<OpenImage> open_image(const std::string& path,
                              const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
 

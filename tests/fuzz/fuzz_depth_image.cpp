@@ -11,11 +11,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  // The formats of depth images first; then every other OpenImageIO plugin that can hold 16-bit
-  // or float values (and JPEG, which cannot), since read_depth_image reads anything OIIO reads.
-  static const char* const kExtensions[] = {".exr", ".png", ".tif", ".pfm", ".hdr", ".dpx",
-                                            ".psd", ".sgi", ".fits", ".jp2", ".rla", ".zfile",
-                                            ".iff", ".dds", ".cin", ".tga", ".pgm", ".jpg"};
+  // The formats read_depth_image reads, then three it refuses without opening.
+  static const char* const kExtensions[] = {".exr", ".png", ".tif", ".pfm", ".hdr",
+                                            ".zfile", ".pgm", ".dpx", ".jpg", ".bmp"};
   constexpr std::size_t kCount = sizeof kExtensions / sizeof kExtensions[0];
   const lightvol::fuzz::TempInput file(data + 1, size - 1, kExtensions[data[0] % kCount]);
   const lightvol::Result<lightvol::DepthImage> image = lightvol::read_depth_image(file.path());
