@@ -90,6 +90,20 @@ TEST(ReadPly, AsciiFacesBeforeVerticesBlankLinesAndCrLf) {
       "0.5 0.25 -2.5 1 -1e3\r\n")));
 }
 
+TEST(ReadPly, AsciiAsShortAsTheFormatAllowsWithoutAFinalNewline) {
+  // Every value one character and one separator, the last newline missing: exactly at the bound
+  // the header's counts are checked against.
+  TempDir dir;
+  const Result<Mesh> tet = read_mesh(dir.write(
+      "tet.ply",
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3"));
+  ASSERT_TRUE(tet.ok()) << tet.error().message;
+  EXPECT_EQ(tet->num_triangles(), 4u);
+  EXPECT_DOUBLE_EQ(signed_volume(*tet), 1.0 / 6.0);
+}
+
 TEST(ReadPly, MalformedFilesAreRefusedNamingWhere) {
   TempDir dir;
   const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
