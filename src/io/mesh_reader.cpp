@@ -368,7 +368,7 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
     const std::int64_t view_offset = integer(*buffer_view, "byteOffset", 0), view_length = integer(*buffer_view, "byteLength", -1);
     if (view_offset < 0 || view_length < 0 || view_offset > static_cast<std::int64_t>(bin.size()) ||
         view_length > static_cast<std::int64_t>(bin.size()) - view_offset)
-      return fail(name + ": its buffer view lies outside the BIN chunk");
+      return fail(name + ": its buffer view lies outside buffer 0");
     const std::int64_t element_size = components->second * size;
     const std::int64_t stride = integer(*buffer_view, "byteStride", element_size);
     const std::int64_t offset = integer(*accessor, "byteOffset", 0);
@@ -475,15 +475,18 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
     const nlohmann::json* buffers = member(doc, "buffers");
     if (!buffers || !buffers->is_array() || buffers->size() != 1)
       return fail("expected exactly one buffer, the BIN chunk");
-    if (integer((*buffers)[0], "byteLength", -1) < 0 ||
-        integer((*buffers)[0], "byteLength", -1) > static_cast<std::int64_t>(bin.size()))
+    const std::int64_t length = integer((*buffers)[0], "byteLength", -1);
+    if (length < 0 || length > static_cast<std::int64_t>(bin.size()))
       return fail("buffer 0 is longer than the BIN chunk");
+    // Draco keeps the buffer's byteLength bytes of the chunk: views are checked against those
+    // (fuzz finding: a view inside the chunk but past the buffer made it read freed memory).
+    bin = bin.substr(0, static_cast<std::size_t>(length));
   }
   if (Status s = each("bufferViews", [&](const nlohmann::json& view, std::int64_t, const std::string& w) -> Status {
         const std::int64_t offset = integer(view, "byteOffset", 0), length = integer(view, "byteLength", -1);
         if (integer(view, "buffer", -1) != 0 || offset < 0 || length < 0 ||
             offset > static_cast<std::int64_t>(bin.size()) || length > static_cast<std::int64_t>(bin.size()) - offset)
-          return fail(w + " lies outside the BIN chunk");
+          return fail(w + " lies outside buffer 0");
         return {};
       }); !s) return s;
   if (Status s = each("accessors", [&](const nlohmann::json& accessor, std::int64_t index, const std::string&) -> Status {

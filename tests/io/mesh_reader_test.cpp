@@ -145,6 +145,11 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("index.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_index_past_attribute")),
                "mesh 0 primitive 0: index 60 is 46, but its attributes have 17 elements");
+  // Found by fuzz_mesh: a buffer view inside the BIN chunk but past buffer 0's byteLength made
+  // Draco's glTF decoder read freed memory.
+  expect_error(dir.write("view.glb",
+                         test::fuzz_regression_file("mesh", "regression_glb_view_past_buffer")),
+               "glTF binary: bufferViews 1 lies outside buffer 0");
   expect_error(dir.write("node.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_node_names_no_mesh")),
                "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
