@@ -293,12 +293,17 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
   return mesh;
 }
 
-// Draco's glTF decoder trusts the file: an index past the end of an attribute made it copy out of
-// bounds (found by fuzz_mesh). So a GLB is checked first: the container's chunks fit the file,
-// and every primitive's accessors lie inside their buffer views, inside the BIN chunk, with
-// every index below the count of each attribute. Draco-compressed primitives
-// (KHR_draco_mesh_compression) are left to Draco's own decoder. Returns the first problem.
-Status validate_glb(const std::string& bytes, const std::string& path) {
+// Draco's glTF decoder (tinygltf underneath) trusts the file: an index past the end of an
+// attribute made it copy out of bounds, a view past its buffer made it read freed memory (fuzz
+// findings), and it reads any file an image's or a buffer's 'uri' names. So a GLB is checked
+// first, and Draco gets a rebuilt one holding only what a mesh's positions need. Checked: the
+// container's chunks fit the file; every reference names an existing object; the nodes form
+// trees; every accessor lies inside its buffer view, inside buffer 0 (the BIN chunk); every
+// index is below its primitive's POSITION count. Rebuilt without: materials, textures, images,
+// samplers, skins, animations, cameras, morph targets, attributes other than POSITION, 'uri's,
+// extensions other than KHR_draco_mesh_compression (whose primitives Draco's own decoder
+// checks). Returns the rebuilt GLB, or the first problem.
+Result<std::string> sanitize_glb(const std::string& bytes, const std::string& path) {
   const auto u32 = [&](std::size_t at) {
     std::uint32_t v = 0;
     std::memcpy(&v, bytes.data() + at, 4);
@@ -417,8 +422,8 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
         return fail(where + ": '" + key + "' names no element of '" + array + "'");
     return {};
   };
-  if (Status s = reference(doc, "scene", "scenes", "the document"); !s) return s;
-  if (Status s = each("scenes", [&](const nlohmann::json& o, std::int64_t, const std::string& w) { return references(o, "nodes", "nodes", w); }); !s) return s;
+  if (Status s = reference(doc, "scene", "scenes", "the document"); !s) return s.error();
+  if (Status s = each("scenes", [&](const nlohmann::json& o, std::int64_t, const std::string& w) { return references(o, "nodes", "nodes", w); }); !s) return s.error();
   std::vector<std::int64_t> parent(static_cast<std::size_t>(array_size("nodes")), -1);
   if (Status s = each("nodes", [&](const nlohmann::json& o, std::int64_t self, const std::string& w) -> Status {
         for (const char* key : {"mesh", "skin", "camera"}) {
@@ -434,7 +439,7 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
           }
         }
         return {};
-      }); !s) return s;
+      }); !s) return s.error();
   for (std::size_t n = 0; n < parent.size(); ++n) {  // no cycles: every chain of parents ends
     std::int64_t at = static_cast<std::int64_t>(n);
     for (std::size_t steps = 0; at != -1; ++steps, at = parent[static_cast<std::size_t>(at)])
@@ -443,34 +448,8 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
   if (Status s = each("meshes", [&](const nlohmann::json& mesh, std::int64_t, const std::string& w) -> Status {
         const nlohmann::json* primitives = member(mesh, "primitives");
         if (!primitives || !primitives->is_array()) return fail(w + " has no primitives");
-        for (const nlohmann::json& primitive : *primitives) {
-          if (Status r = reference(primitive, "material", "materials", w); !r) return r;
-          if (member(primitive, "targets")) return fail(w + ": morph targets are not supported");
-        }
         return {};
-      }); !s) return s;
-  if (Status s = each("materials", [&](const nlohmann::json& material, std::int64_t, const std::string& w) -> Status {
-        const nlohmann::json* pbr = member(material, "pbrMetallicRoughness");
-        for (const auto& [holder, key] : {std::pair{pbr, "baseColorTexture"}, std::pair{pbr, "metallicRoughnessTexture"},
-                                          std::pair{&material, "normalTexture"}, std::pair{&material, "occlusionTexture"},
-                                          std::pair{&material, "emissiveTexture"}}) {
-          const nlohmann::json* texture = holder ? member(*holder, key) : nullptr;
-          if (texture)
-            if (Status r = reference(*texture, "index", "textures", w + " " + key); !r) return r;
-        }
-        return {};
-      }); !s) return s;
-  if (Status s = each("textures", [&](const nlohmann::json& o, std::int64_t, const std::string& w) -> Status {
-        if (Status r = reference(o, "source", "images", w); !r) return r;
-        return reference(o, "sampler", "samplers", w);
-      }); !s) return s;
-  if (Status s = each("images", [&](const nlohmann::json& o, std::int64_t, const std::string& w) { return reference(o, "bufferView", "bufferViews", w); }); !s) return s;
-  if (Status s = each("skins", [&](const nlohmann::json& o, std::int64_t, const std::string& w) -> Status {
-        if (Status r = references(o, "joints", "nodes", w); !r) return r;
-        if (Status r = reference(o, "skeleton", "nodes", w); !r) return r;
-        return reference(o, "inverseBindMatrices", "accessors", w);
-      }); !s) return s;
-  if (member(doc, "animations")) return fail("animations are not supported");
+      }); !s) return s.error();
   if (array_size("bufferViews") > 0) {
     const nlohmann::json* buffers = member(doc, "buffers");
     if (!buffers || !buffers->is_array() || buffers->size() != 1)
@@ -488,54 +467,123 @@ Status validate_glb(const std::string& bytes, const std::string& path) {
             offset > static_cast<std::int64_t>(bin.size()) || length > static_cast<std::int64_t>(bin.size()) - offset)
           return fail(w + " lies outside buffer 0");
         return {};
-      }); !s) return s;
+      }); !s) return s.error();
   if (Status s = each("accessors", [&](const nlohmann::json& accessor, std::int64_t index, const std::string&) -> Status {
         if (!member(accessor, "bufferView")) return {};  // Draco-compressed data, or unused
         View view;
         return accessor_view(index, &view);
-      }); !s) return s;
+      }); !s) return s.error();
 
-  const nlohmann::json* meshes = member(doc, "meshes");
-  if (!meshes || !meshes->is_array()) return {};
-  for (std::size_t m = 0; m < meshes->size(); ++m) {
-    const nlohmann::json* primitives = member((*meshes)[m], "primitives");
-    if (!primitives || !primitives->is_array()) continue;
-    for (std::size_t p = 0; p < primitives->size(); ++p) {
-      const nlohmann::json& primitive = (*primitives)[p];
-      const std::string where = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
-      const nlohmann::json* extensions = member(primitive, "extensions");
-      if (extensions && member(*extensions, "KHR_draco_mesh_compression")) continue;
-      const nlohmann::json* attributes = member(primitive, "attributes");
-      if (!attributes || !attributes->is_object()) return fail(where + " has no attributes");
-      std::size_t min_count = std::numeric_limits<std::size_t>::max();
-      for (const auto& [name, index] : attributes->items()) {
-        View view;
-        if (!index.is_number_integer()) return fail(where + ": attribute " + name + " is not an accessor index");
-        if (Status s = accessor_view(index.get<std::int64_t>(), &view); !s) return s;
-        min_count = std::min(min_count, view.count);
-      }
-      if (const nlohmann::json* indices = member(primitive, "indices")) {
-        View view;
-        if (!indices->is_number_integer()) return fail(where + ": indices is not an accessor index");
-        if (Status s = accessor_view(indices->get<std::int64_t>(), &view); !s) return s;
-        const int size = component_size(view.component_type);
-        if (view.element != static_cast<std::size_t>(size) || view.component_type == 5120 ||
-            view.component_type == 5122 || view.component_type == 5126)
-          return fail(where + ": indices are not unsigned integer scalars");
-        for (std::size_t i = 0; i < view.count; ++i) {
-          const char* at = view.data + i * view.stride;
-          std::uint32_t value = 0;
-          if (size == 1) value = static_cast<std::uint8_t>(*at);
-          if (size == 2) { std::uint16_t v16; std::memcpy(&v16, at, 2); value = v16; }
-          if (size == 4) std::memcpy(&value, at, 4);
-          if (value >= min_count)
-            return fail(where + ": index " + std::to_string(i) + " is " + std::to_string(value) +
-                        ", but its attributes have " + std::to_string(min_count) + " elements");
+  // What Draco gets: the document's geometry and nothing else.
+  nlohmann::json clean = {{"asset", {{"version", "2.0"}}}};
+  for (const char* key : {"scene", "accessors", "bufferViews"})
+    if (const nlohmann::json* m = member(doc, key)) clean[key] = *m;
+  if (array_size("bufferViews") > 0) clean["buffers"] = nlohmann::json::array({{{"byteLength", bin.size()}}});
+  if (Status s = each("scenes", [&](const nlohmann::json& o, std::int64_t, const std::string&) -> Status {
+        nlohmann::json scene = nlohmann::json::object();
+        if (const nlohmann::json* nodes = member(o, "nodes")) scene["nodes"] = *nodes;
+        clean["scenes"].push_back(scene);
+        return {};
+      }); !s) return s.error();
+  if (Status s = each("nodes", [&](const nlohmann::json& o, std::int64_t, const std::string&) -> Status {
+        nlohmann::json node = nlohmann::json::object();
+        for (const char* key : {"mesh", "children", "matrix", "translation", "rotation", "scale"})
+          if (const nlohmann::json* m = member(o, key)) node[key] = *m;
+        clean["nodes"].push_back(node);
+        return {};
+      }); !s) return s.error();
+  constexpr const char* kDraco = "KHR_draco_mesh_compression";
+  if (Status s = each("meshes", [&](const nlohmann::json& mesh, std::int64_t m, const std::string&) -> Status {
+        nlohmann::json kept = {{"primitives", nlohmann::json::array()}};
+        const nlohmann::json& primitives = *member(mesh, "primitives");
+        for (std::size_t p = 0; p < primitives.size(); ++p) {
+          const nlohmann::json& primitive = primitives[p];
+          const std::string where = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
+          nlohmann::json out = nlohmann::json::object();
+          if (const nlohmann::json* mode = member(primitive, "mode")) out["mode"] = *mode;
+          const nlohmann::json* extensions = member(primitive, "extensions");
+          const nlohmann::json* attributes = member(primitive, "attributes");
+          if (!attributes || !attributes->is_object()) return fail(where + " has no attributes");
+          if (extensions && member(*extensions, kDraco)) {  // Draco's decoder checks its data
+            out["extensions"] = {{kDraco, *member(*extensions, kDraco)}};
+            out["attributes"] = *attributes;
+            if (const nlohmann::json* indices = member(primitive, "indices")) out["indices"] = *indices;
+            kept["primitives"].push_back(out);
+            continue;
+          }
+          const nlohmann::json* position = member(*attributes, "POSITION");
+          if (!position || !position->is_number_integer()) return fail(where + " has no POSITION accessor");
+          View positions;
+          if (Status r = accessor_view(position->get<std::int64_t>(), &positions); !r) return r;
+          out["attributes"] = {{"POSITION", *position}};
+          if (const nlohmann::json* indices = member(primitive, "indices")) {
+            View view;
+            if (!indices->is_number_integer()) return fail(where + ": indices is not an accessor index");
+            if (Status r = accessor_view(indices->get<std::int64_t>(), &view); !r) return r;
+            const int size = component_size(view.component_type);
+            if (view.element != static_cast<std::size_t>(size) || view.component_type == 5120 ||
+                view.component_type == 5122 || view.component_type == 5126)
+              return fail(where + ": indices are not unsigned integer scalars");
+            for (std::size_t i = 0; i < view.count; ++i) {
+              const char* at = view.data + i * view.stride;
+              std::uint32_t value = 0;
+              if (size == 1) value = static_cast<std::uint8_t>(*at);
+              if (size == 2) { std::uint16_t v16; std::memcpy(&v16, at, 2); value = v16; }
+              if (size == 4) std::memcpy(&value, at, 4);
+              if (value >= positions.count)
+                return fail(where + ": index " + std::to_string(i) + " is " + std::to_string(value) +
+                            ", but its attributes have " + std::to_string(positions.count) + " elements");
+            }
+            out["indices"] = *indices;
+          }
+          kept["primitives"].push_back(out);
         }
-      }
-    }
+        clean["meshes"].push_back(kept);
+        return {};
+      }); !s) return s.error();
+  for (const char* key : {"extensionsUsed", "extensionsRequired"}) {
+    const nlohmann::json* list = member(doc, key);
+    if (list && list->is_array() && std::find(list->begin(), list->end(), kDraco) != list->end())
+      clean[key] = nlohmann::json::array({kDraco});
   }
-  return {};
+
+  // The rebuilt container: JSON padded with spaces, BIN with zeros, to 4 bytes.
+  std::string json = clean.dump();
+  json.resize((json.size() + 3) & ~std::size_t{3}, ' ');
+  std::string glb;
+  const auto put = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+  const std::size_t bin_padded = (bin.size() + 3) & ~std::size_t{3};
+  const std::size_t total = 12 + 8 + json.size() + (bin.empty() ? 0 : 8 + bin_padded);
+  if (total > std::numeric_limits<std::uint32_t>::max()) return fail("larger than 4 GiB");
+  glb.append("glTF");
+  put(2);
+  put(static_cast<std::uint32_t>(total));
+  put(static_cast<std::uint32_t>(json.size()));
+  put(0x4E4F534Au);
+  glb += json;
+  if (!bin.empty()) {
+    put(static_cast<std::uint32_t>(bin_padded));
+    put(0x004E4942u);
+    glb.append(bin);
+    glb.resize(total, '\0');
+  }
+  return glb;
+}
+
+// A third-party message on one line: runs of line breaks become "; ".
+std::string one_line(const std::string& message) {
+  std::string out;
+  bool broken = false;
+  for (const char c : message) {
+    if (c == '\n' || c == '\r') {
+      broken = !out.empty();
+      continue;
+    }
+    if (broken) out += "; ";
+    broken = false;
+    out += c;
+  }
+  return out;
 }
 
 Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
@@ -549,16 +597,19 @@ Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
     draco::Decoder decoder;
     auto result = decoder.DecodeMeshFromBuffer(&buffer);
     if (!result.ok())
-      return Error{path + ": not a Draco mesh: " + result.status().error_msg_string()};
+      return Error{path + ": not a Draco mesh: " + one_line(result.status().error_msg_string())};
     decoded = std::move(result).value();
   } else {
     if (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0)
       return Error{path + ": not a GLB file (no 'glTF' magic)"};
-    if (Status s = validate_glb(bytes, path); !s) return s.error();
+    const Result<std::string> clean = sanitize_glb(bytes, path);
+    if (!clean) return clean.error();
+    draco::DecoderBuffer rebuilt;
+    rebuilt.Init(clean->data(), clean->size());
     draco::GltfDecoder decoder;
-    auto result = decoder.DecodeFromBuffer(&buffer);
+    auto result = decoder.DecodeFromBuffer(&rebuilt);
     if (!result.ok())
-      return Error{path + ": cannot decode glTF: " + result.status().error_msg_string()};
+      return Error{path + ": cannot decode glTF: " + one_line(result.status().error_msg_string())};
     decoded = std::move(result).value();
   }
   if (!decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION))

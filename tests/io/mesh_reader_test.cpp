@@ -1,10 +1,13 @@
 // read_mesh: every format write_mesh writes comes back with the same triangles at the same
 // positions; polygons are fan-triangulated; junk, empty, truncated and missing files are Errors
 // naming the file.
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <iterator>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <lightvol/check/check.h>
 #include <lightvol/export/export.h>
@@ -101,6 +104,47 @@ TEST(ReadMesh, DracoFormatsKeepCountsAndStaySound) {
     const CheckReport report = check_volume_linear(*back, &light);
     EXPECT_TRUE(report.valid()) << name << ": " << report.first_failure();
   }
+}
+
+// A GLB whose JSON chunk is `edit`ed; the BIN chunk stays as it was.
+std::string edit_glb(const std::string& glb, const std::function<void(nlohmann::json&)>& edit) {
+  std::uint32_t json_length = 0;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  nlohmann::json doc = nlohmann::json::parse(glb.substr(20, json_length));
+  edit(doc);
+  std::string json = doc.dump();
+  json.resize((json.size() + 3) & ~std::size_t{3}, ' ');
+  const std::string bin = glb.substr(20 + json_length);
+  std::string out = "glTF";
+  const auto put = [&](std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  put(2);
+  put(static_cast<std::uint32_t>(20 + json.size() + bin.size()));
+  put(static_cast<std::uint32_t>(json.size()));
+  put(0x4E4F534Au);
+  return out + json + bin;
+}
+
+// A GLB names other files through 'uri's (buffers, images): none is opened, and everything but
+// the positions and faces (materials, textures, normals) is dropped before Draco sees the file.
+TEST(ReadMesh, GlbIsReadForItsGeometryAloneAndOpensNoOtherFile) {
+  TempDir dir;
+  const Mesh mesh = sample_volume();
+  ASSERT_TRUE(write_mesh(dir.file("v.glb"), mesh).ok());
+  std::ifstream in(dir.file("v.glb"), std::ios::binary);
+  const std::string glb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // A file that exists, is readable and is not an image: decoding it would fail the read.
+  const std::string bait = dir.write("bait.png", "not a png");
+  const std::string edited = edit_glb(glb, [&](nlohmann::json& doc) {
+    doc["buffers"][0]["uri"] = bait;
+    doc["images"] = {{{"uri", bait}}, {{"uri", "data:image/png;base64,AAAA"}}};
+    doc["textures"] = {{{"source", 0}}, {{"source", 1}}};
+    doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+    doc["meshes"][0]["primitives"][0]["material"] = 0;
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 99;  // names no accessor
+  });
+  const Result<Mesh> back = read_mesh(dir.write("uri.glb", edited));
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_TRUE(same_triangles(mesh, *back));
 }
 
 TEST(ReadMesh, PolygonsAreFanTriangulated) {
