@@ -151,8 +151,9 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       auto decoded = decoder.DecodeMeshFromBuffer(&in);
       if (!decoded.ok()) return Error{path + ": Draco cannot decode what it encoded: " +
                                       decoded.status().error_msg_string()};
-      if (Status s = verify_decoded(mesh, detail::from_draco(*decoded.value()), path + " (decoded)"); !s)
-        return s;
+      const Result<Mesh> back = detail::from_draco(*decoded.value());
+      if (!back) return Error{path + ": Draco decoded what it encoded wrongly: " + back.error().message};
+      if (Status s = verify_decoded(mesh, *back, path + " (decoded)"); !s) return s;
       return write_bytes_atomically(path, *bytes);
     }
     case MeshFormat::glb: {
@@ -165,8 +166,9 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
         auto decoded = decoder.DecodeFromBuffer(&in);
         if (!decoded.ok()) return Error{path + ": cannot decode the glTF just encoded: " +
                                         decoded.status().error_msg_string()};
-        if (Status s = verify_decoded(mesh, detail::from_draco(*decoded.value()), path + " (decoded)"); !s)
-          return s;
+        const Result<Mesh> back = detail::from_draco(*decoded.value());
+        if (!back) return Error{path + ": Draco decoded what it encoded wrongly: " + back.error().message};
+        if (Status s = verify_decoded(mesh, *back, path + " (decoded)"); !s) return s;
       }
       return write_bytes_atomically(path, *bytes);
     }

@@ -5,11 +5,14 @@
 #include <draco/mesh/mesh.h>
 
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
 
 namespace lightvol::detail {
 
 // A decoded Draco mesh as flat buffers: its POSITION attribute (an empty mesh when it has none)
-// and its faces, with bit-identical positions welded (Draco may split points by attribute).
-Mesh from_draco(const draco::Mesh& in);
+// and its faces, with bit-identical positions welded (Draco may split points by attribute). A
+// POSITION of other than 3 components, a point mapped past the attribute's values or a face
+// naming a missing point is an Error (its message names no file: the caller prefixes it).
+Result<Mesh> from_draco(const draco::Mesh& in);
 
 }  // namespace lightvol::detail

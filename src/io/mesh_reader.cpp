@@ -614,7 +614,9 @@ Result<Mesh> read_with_draco(const std::string& path, MeshFormat format) {
   }
   if (!decoded->GetNamedAttribute(draco::GeometryAttribute::POSITION))
     return Error{path + ": the mesh has no POSITION attribute"};
-  return detail::from_draco(*decoded);
+  Result<Mesh> mesh = detail::from_draco(*decoded);
+  if (!mesh) return Error{path + ": " + mesh.error().message};
+  return mesh;
 }
 
 }  // namespace

@@ -189,6 +189,10 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("index.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_index_past_attribute")),
                "mesh 0 primitive 0: index 60 is 46, but its attributes have 17 elements");
+  // Found by fuzz_mesh: a Draco file whose POSITION has 7 components was copied into 3 floats.
+  expect_error(dir.write("seven.drc",
+                         test::fuzz_regression_file("mesh", "regression_drc_position_components")),
+               "seven.drc: POSITION has 7 components, not 3");
   // Found by fuzz_mesh: a buffer view inside the BIN chunk but past buffer 0's byteLength made
   // Draco's glTF decoder read freed memory.
   expect_error(dir.write("view.glb",
