@@ -505,8 +505,40 @@ Result<std::string> sanitize_glb(const std::string& bytes, const std::string& pa
           const nlohmann::json* attributes = member(primitive, "attributes");
           if (!attributes || !attributes->is_object()) return fail(where + " has no attributes");
           if (extensions && member(*extensions, kDraco)) {  // Draco's decoder checks its data
-            out["extensions"] = {{kDraco, *member(*extensions, kDraco)}};
-            out["attributes"] = *attributes;
+            // ... but not the references around it (fuzz finding: 'indices' naming accessor 77
+            // of 2 crashed it).
+            const nlohmann::json& draco = *member(*extensions, kDraco);
+            if (Status r = reference(primitive, "indices", "accessors", where); !r) return r;
+            if (Status r = reference(draco, "bufferView", "bufferViews", where + " " + kDraco); !r) return r;
+            const nlohmann::json* ids = member(draco, "attributes");
+            if (!member(draco, "bufferView") || !ids || !ids->is_object())
+              return fail(where + ": " + kDraco + " needs a bufferView and attributes");
+            // POSITION alone is kept: its accessor must be float VEC3, and its id must name a
+            // 3-component attribute of the compressed data, which is decoded here to see (a
+            // missing id crashed Draco's glTF decoder).
+            const nlohmann::json* id = member(*ids, "POSITION");
+            const nlohmann::json* position = member(*attributes, "POSITION");
+            if (!id || !id->is_number_integer() || !position || !position->is_number_integer())
+              return fail(where + ": " + kDraco + " has no POSITION");
+            if (Status r = reference(*attributes, "POSITION", "accessors", where); !r) return r;
+            const nlohmann::json& accessor = (*member(doc, "accessors"))[position->get<std::size_t>()];
+            const nlohmann::json* type = member(accessor, "type");
+            if (integer(accessor, "componentType", 0) != 5126 || !type || *type != "VEC3")
+              return fail(where + ": POSITION is not a float VEC3 accessor");
+            const nlohmann::json& view = (*member(doc, "bufferViews"))[static_cast<std::size_t>(integer(draco, "bufferView", 0))];
+            draco::DecoderBuffer compressed;
+            compressed.Init(bin.data() + integer(view, "byteOffset", 0), static_cast<std::size_t>(integer(view, "byteLength", 0)));
+            draco::Decoder decoder;
+            auto decoded = decoder.DecodeMeshFromBuffer(&compressed);
+            if (!decoded.ok()) return fail(where + ": its Draco data does not decode: " + decoded.status().error_msg_string());
+            const draco::PointAttribute* attribute =
+                id->get<std::int64_t>() < 0 || id->get<std::int64_t>() > std::numeric_limits<std::int32_t>::max()
+                    ? nullptr
+                    : decoded.value()->GetAttributeByUniqueId(static_cast<std::uint32_t>(id->get<std::int64_t>()));
+            if (!attribute || attribute->num_components() != 3)
+              return fail(where + ": " + kDraco + " POSITION names no 3-component attribute of its data");
+            out["extensions"] = {{kDraco, {{"bufferView", draco["bufferView"]}, {"attributes", {{"POSITION", *id}}}}}};
+            out["attributes"] = {{"POSITION", *position}};
             if (const nlohmann::json* indices = member(primitive, "indices")) out["indices"] = *indices;
             kept["primitives"].push_back(out);
             continue;

@@ -147,6 +147,38 @@ TEST(ReadMesh, GlbIsReadForItsGeometryAloneAndOpensNoOtherFile) {
   EXPECT_TRUE(same_triangles(mesh, *back));
 }
 
+// Draco-compressed primitives: their data is Draco's to check, the references around it are
+// lightvol's (an 'indices' naming a missing accessor and a POSITION id naming no attribute of the
+// compressed data both crashed Draco's glTF decoder).
+TEST(ReadMesh, DracoGlbReferencesAreChecked) {
+  TempDir dir;
+  ExportOptions options;
+  options.draco = true;
+  ASSERT_TRUE(write_mesh(dir.file("d.glb"), sample_volume(), options).ok());
+  std::ifstream in(dir.file("d.glb"), std::ios::binary);
+  const std::string glb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_TRUE(read_mesh(dir.file("d.glb")).ok());
+  const auto primitive = [](nlohmann::json& doc) -> nlohmann::json& { return doc["meshes"][0]["primitives"][0]; };
+  const struct {
+    std::function<void(nlohmann::json&)> edit;
+    std::string message;
+  } cases[] = {
+      {[&](nlohmann::json& d) { primitive(d)["indices"] = 77; }, "mesh 0 primitive 0: 'indices' names no element of 'accessors'"},
+      {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5; },
+       "mesh 0 primitive 0: KHR_draco_mesh_compression POSITION names no 3-component attribute of its data"},
+      {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["bufferView"] = 99; },
+       "mesh 0 primitive 0 KHR_draco_mesh_compression: 'bufferView' names no element of 'bufferViews'"},
+      {[&](nlohmann::json& d) { d["accessors"][primitive(d)["attributes"]["POSITION"].get<int>()]["type"] = "VEC2"; },
+       "mesh 0 primitive 0: POSITION is not a float VEC3 accessor"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = dir.write("bad.glb", edit_glb(glb, c.edit));
+    const Result<Mesh> mesh = read_mesh(path);
+    ASSERT_FALSE(mesh.ok()) << c.message;
+    EXPECT_EQ(mesh.error().message, path + ": glTF binary: " + c.message);
+  }
+}
+
 TEST(ReadMesh, PolygonsAreFanTriangulated) {
   TempDir dir;
   // A cube of six quads, and one pentagon-free OBJ with negative (relative) indices.
