@@ -14,6 +14,12 @@ Result<Mesh> from_draco(const draco::Mesh& in) {
   // beyond the attribute (fuzz finding: a 7-component POSITION was copied into 3 floats).
   if (position->num_components() != 3)
     return Error{"POSITION has " + std::to_string(position->num_components()) + " components, not 3"};
+  // Numbers only (fuzz finding: a bool POSITION holding other bytes than 0 and 1 was read as bool).
+  switch (position->data_type()) {
+    case draco::DT_FLOAT32: case draco::DT_FLOAT64: case draco::DT_INT8: case draco::DT_UINT8:
+    case draco::DT_INT16: case draco::DT_UINT16: case draco::DT_INT32: case draco::DT_UINT32: break;
+    default: return Error{"POSITION is not of a number type"};
+  }
   out.positions.resize(3 * static_cast<std::size_t>(in.num_points()));
   for (draco::PointIndex p(0); p < in.num_points(); ++p) {
     const draco::AttributeValueIndex value = position->mapped_index(p);

@@ -225,6 +225,9 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   expect_error(dir.write("seven.drc",
                          test::fuzz_regression_file("mesh", "regression_drc_position_components")),
                "seven.drc: POSITION has 7 components, not 3");
+  // Found by fuzz_mesh: a Draco file with a bool POSITION was read as bools holding other bytes.
+  expect_error(dir.write("bool.drc", test::fuzz_regression_file("mesh", "regression_drc_bool_position")),
+               "bool.drc: POSITION is not of a number type");
   // Found by fuzz_mesh: a buffer view inside the BIN chunk but past buffer 0's byteLength made
   // Draco's glTF decoder read freed memory.
   expect_error(dir.write("view.glb",
