@@ -122,7 +122,7 @@ int run_build(const BuildOptions& o) {
     const CheckReport check = check_volume_linear(*mesh, &frame_light);
     if (!check.valid()) {
       std::fprintf(stderr, "lightvol: %s: the built volume fails its checks, nothing written: %s\n",
-                   o.out_path.c_str(), check.first_failure().c_str());
+                   printable(o.out_path).c_str(), printable(check.first_failure()).c_str());
       return 1;
     }
     progress.end("valid");

@@ -131,8 +131,8 @@ int run_check(const CheckCommandOptions& o) {
     print_table(o, report);
   }
   if (!report.valid()) {
-    if (o.quiet) std::fprintf(stderr, "lightvol: %s: invalid: %s\n", o.mesh_path.c_str(),
-                              report.first_failure().c_str());
+    if (o.quiet) std::fprintf(stderr, "lightvol: %s: invalid: %s\n", printable(o.mesh_path).c_str(),
+                              printable(report.first_failure()).c_str());
     return 1;
   }
   return 0;

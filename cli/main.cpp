@@ -10,8 +10,24 @@
 
 namespace lightvol::cli {
 
+std::string printable(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte != 0x7f) {
+      out += c;
+      continue;
+    }
+    char escaped[5];
+    std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
+    out += escaped;
+  }
+  return out;
+}
+
 int fail(const std::string& message) {
-  std::fprintf(stderr, "lightvol: %s\n", message.c_str());
+  std::fprintf(stderr, "lightvol: %s\n", printable(message).c_str());
   return 2;
 }
 

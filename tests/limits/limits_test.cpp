@@ -401,6 +401,15 @@ TEST(Adversarial, AllFacesShareOneVertex) {
   EXPECT_FALSE(report.valid());  // open: the rim is a boundary
 }
 
+TEST(Cli, BytesQuotedFromAFileCannotSteerTheTerminal) {
+  // An escape sequence, a NUL and a line break quoted from a header come out as \xNN, on one line.
+  TempDir dir;
+  const std::string path = dir.write("esc.ply", std::string("ply\nformat ascii 1.0\n\x1b[31mRED\0x\rmore\nend_header\n", 48));
+  const test::CommandResult r = test::run_lightvol("check " + path);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err, "lightvol: " + path + ": PLY header line 3: unknown keyword '\\x1b[31mRED\\x00x'\n");
+}
+
 TEST(Cli, ForgedInputsExitTwoWithOneLineAndNoOutput) {
   TempDir dir;
   const std::string light = dir.write("spot.json", test::spot_json());
