@@ -44,14 +44,6 @@ std::string file_prefix(std::ifstream& in, std::size_t n) {
   return bytes;
 }
 
-// The first two bytes of a file ("" if it is shorter).
-std::string read_magic(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[2] = {};
-  if (!in.read(magic, 2)) return "";
-  return std::string(magic, 2);
-}
-
 // OpenEXR's readers allocate header attributes at the size the file claims (up to 2 GB), and lose
 // their place on malformed headers, reading text as sizes. Walk the header(s) as the format
 // defines them first: names within their length limit and unique per header, every attribute
@@ -196,9 +188,7 @@ Status check_png_chunks(const std::string& path) {
 // the one among those its extension names (the plugin then says what is wrong with the file).
 // Never any other: OpenImageIO's DPX reader allocated 1.9 GB for a 2 KB header (fuzz finding),
 // and its try-every-plugin fallback reaches video, camera-raw and DICOM decoders.
-Result<std::string> image_format(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string magic = file_prefix(in, 10);
+Result<std::string> image_format(const std::string& path, const std::string& magic) {
   const auto starts = [&](std::string_view prefix) { return std::string_view(magic).substr(0, prefix.size()) == prefix; };
   using namespace std::string_view_literals;
   if (starts("\x76\x2f\x31\x01"sv)) return std::string("openexr");
@@ -224,11 +214,14 @@ Result<std::string> image_format(const std::string& path) {
 Result<OpenImage> open_image(const std::string& path,
                              const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) return Error{path + ": no such file"};
-  if (std::filesystem::is_directory(path, ec)) return Error{path + ": is a directory, not an image"};
-  if (!std::filesystem::is_regular_file(path, ec))
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) return Error{path + ": no such file"};
+  if (std::filesystem::is_directory(status)) return Error{path + ": is a directory, not an image"};
+  if (!std::filesystem::is_regular_file(status))
     return Error{path + ": is not a regular file (a device or a pipe); images are read from files"};
-  const Result<std::string> format = image_format(path);
+  std::ifstream head(path, std::ios::binary);
+  const std::string magic = file_prefix(head, 10);  // read once: the format, then PFM's sizes
+  const Result<std::string> format = image_format(path, magic);
   if (!format) return format.error();
   if (Status s = check_exr_header(path); !s) return s.error();
   if (Status s = check_png_chunks(path); !s) return s.error();
@@ -259,7 +252,7 @@ Result<OpenImage> open_image(const std::string& path,
   const bool sized = !ec;
   // PFM is uncompressed: a header that promises more floats than the file holds is truncated (or
   // forged); refuse it before allocating what it promises.
-  if (const std::string magic = read_magic(path); magic == "Pf" || magic == "PF") {
+  if (magic.rfind("Pf", 0) == 0 || magic.rfind("PF", 0) == 0) {
     const std::uintmax_t needed = static_cast<std::uintmax_t>(texels) *
                                   static_cast<std::uintmax_t>(spec.nchannels) * sizeof(float);
     if (sized && file_size < needed)
