@@ -115,10 +115,10 @@ int run_build(const BuildOptions& o) {
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
+  const Light frame_light = light_in_space(*light, vo.space);
   if (!o.no_check) {
     // The linear-time checks with the light: refuse to write a volume that is not sound.
     progress.begin("checking");
-    const Light frame_light = light_in_space(*light, vo.space);
     const CheckReport check = check_volume_linear(*mesh, &frame_light);
     if (!check.valid()) {
       std::fprintf(stderr, "lightvol: %s: the built volume fails its checks, nothing written: %s\n",
@@ -133,6 +133,7 @@ int run_build(const BuildOptions& o) {
   eo.ascii = o.ascii;
   eo.draco = o.draco;
   eo.draco_bits = o.draco_bits;
+  if (!o.no_check) eo.light = &frame_light;  // a lossy encoding must stay sound seen from the light
   if (Status s = write_mesh(o.out_path, *mesh, eo); !s) return fail(s.error().message);
   progress.end();
 

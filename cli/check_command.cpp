@@ -77,6 +77,7 @@ nlohmann::json report_json(const CheckCommandOptions& o, const CheckReport& r) {
       {"volume", r.volume},
       {"bounds", {{"min", r.bounds.min}, {"max", r.bounds.max}}},
       {"nesting_proof", to_string(r.proof)},
+      {"quantization_step", r.quantization_step},
       {"checks", checks},
   };
   if (!o.light_path.empty())
@@ -100,6 +101,9 @@ void print_table(const CheckCommandOptions& o, const CheckReport& r) {
               r.bounds.min[0], r.bounds.min[1], r.bounds.min[2], r.bounds.max[0], r.bounds.max[1],
               r.bounds.max[2]);
   std::printf("  non-self-nesting proof: %s\n", std::string(to_string(r.proof)).c_str());
+  if (r.quantization_step > 0)
+    std::printf("  positions quantized to a grid of step %.3g (Draco): the checks allow for it\n",
+                r.quantization_step);
   for (const CheckResult& c : r.checks)
     if (c.status == CheckStatus::failed) std::printf("  %s: %s\n", c.name.c_str(), c.detail.c_str());
   std::printf("%s\n", r.valid() ? "valid" : "INVALID");
@@ -114,12 +118,14 @@ int run_check(const CheckCommandOptions& o) {
     light = *loaded;
   }
   progress.begin("reading " + o.mesh_path);
-  Result<Mesh> mesh = read_mesh(o.mesh_path);
+  double quantization_step = 0;
+  Result<Mesh> mesh = read_mesh(o.mesh_path, &quantization_step);
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
   progress.begin("checking");
   CheckOptions options;
+  options.quantization_step = quantization_step;
   options.cgal_with_light = o.cgal;
   options.max_offenders = o.offenders;
   const CheckReport report = check_volume(*mesh, o.light_path.empty() ? nullptr : &light, options);

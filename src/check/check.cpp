@@ -352,7 +352,7 @@ double apex_cone_solid_angle(const Mesh& mesh, std::uint32_t apex_vertex, Vec3d 
   return 2 * kPi + turning;
 }
 
-CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos,
+CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos, double quantum,
                                 int max_offenders, CheckReport* report) {
   CheckResult r;
   r.name = kCheckNesting;
@@ -363,14 +363,19 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   std::vector<std::uint32_t> at_light;
   // "At the light" means within the rounding of coordinates there (a few float ulps of the light's
   // own position), not of the largest coordinate: a spot volume's near plane can lie 10^-6 of the
-  // far distance from its apex.
+  // far distance from its apex. Quantized positions are only known to within their step.
   const double light_ulp =
       std::ldexp(std::max({std::abs(light_pos.x), std::abs(light_pos.y), std::abs(light_pos.z),
                            static_cast<double>(std::numeric_limits<float>::min())}), -23);
+  const double at_light_tol = std::max(4 * light_ulp, quantum);
+  double light_offset = 0;  // of the vertex at the light, max-norm
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
     const Vec3d d = position(mesh, static_cast<std::uint32_t>(v)) - light_pos;
-    if (std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}) <= 4 * light_ulp)
+    const double offset = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+    if (offset <= at_light_tol) {
       at_light.push_back(static_cast<std::uint32_t>(v));
+      light_offset = offset;
+    }
   }
   if (at_light.size() > 1) {
     r.status = CheckStatus::failed;
@@ -384,7 +389,7 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   const bool at_vertex = !at_light.empty();
   const Vec3d eye = at_vertex ? position(mesh, at_light.front()) : light_pos;
   const std::uint32_t apex = at_vertex ? at_light.front() : ~0u;
-  const double ulp_tol = 8 * eps_pos;
+  const double ulp_tol = 8 * eps_pos + quantum;
 
   // Van Oosterom–Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
   // The sign of det = a·(b×c) says which side the light sees; |det| within what moving each
@@ -439,6 +444,12 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   if (at_vertex) {
     expected = apex_cone_solid_angle(mesh, apex, eye);
     where = "the light at vertex " + std::to_string(apex);
+    if (light_offset > 4 * light_ulp) {
+      std::ostringstream off;
+      off.precision(3);
+      off << " (" << light_offset << " from it, within the positions' quantization step " << quantum << ")";
+      where += off.str();
+    }
     if (expected < 0) {
       r.status = CheckStatus::failed;
       r.count = 1;
@@ -471,12 +482,12 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
 }
 
 CheckResult nesting_check_directional(const Mesh& mesh, const Light& light, double eps_pos,
-                                      int max_offenders, CheckReport* report) {
+                                      double quantum, int max_offenders, CheckReport* report) {
   CheckResult r;
   r.name = kCheckNesting;
   report->proof = NestingProof::projected_areas;
   const Vec3d f = normalize(light.direction), origin = light.position + light.near * f;
-  const double plane_tol = 8 * eps_pos, ulp_tol = 8 * eps_pos;
+  const double plane_tol = 8 * eps_pos + quantum, ulp_tol = 8 * eps_pos + quantum;
   const auto on_near_plane = [&](std::uint32_t v) {
     return std::abs(dot(position(mesh, v) - origin, f)) <= plane_tol;
   };
@@ -549,11 +560,13 @@ Light light_in_space(const Light& light, Space space) {
   return out;
 }
 
-CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders) {
+CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders,
+                                double quantization_step) {
   CheckReport report;
   report.vertices = mesh.num_vertices();
   report.triangles = mesh.num_triangles();
   report.bounds = bounding_box(mesh);
+  report.quantization_step = quantization_step;
 
   // Indices first: nothing else can look at a face that names a missing vertex.
   CheckResult indices;
@@ -623,15 +636,17 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
     report.checks.push_back(skipped(kCheckNesting, "needs a closed, edge-manifold, oriented mesh"));
   } else if (light->type == LightType::directional) {
     report.checks.push_back(
-        nesting_check_directional(mesh, *light, eps_pos, max_offenders, &report));
+        nesting_check_directional(mesh, *light, eps_pos, quantization_step, max_offenders, &report));
   } else {
-    report.checks.push_back(nesting_check_point(mesh, *light, eps_pos, max_offenders, &report));
+    report.checks.push_back(
+        nesting_check_point(mesh, *light, eps_pos, quantization_step, max_offenders, &report));
   }
   return report;
 }
 
 CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOptions& options) {
-  CheckReport report = check_volume_linear(mesh, light, options.max_offenders);
+  CheckReport report =
+      check_volume_linear(mesh, light, options.max_offenders, options.quantization_step);
   const auto nesting_it = std::find_if(report.checks.begin(), report.checks.end(),
                                        [](const CheckResult& c) { return c.name == kCheckNesting; });
   LV_CHECK(nesting_it != report.checks.end());

@@ -71,6 +71,7 @@ struct CheckReport {
   // square units for a directional one) and what a sound volume's must add up to.
   double light_sum = 0;
   double light_expected = 0;
+  double quantization_step = 0;  // the positions' quantization the checks allowed for (0: exact)
   std::vector<CheckResult> checks;
 
   // Sound: no check failed and non-self-nesting was proved.
@@ -85,11 +86,17 @@ struct CheckOptions {
   // proof implies. Without a light they always run.
   bool cgal_with_light = false;
   int max_offenders = 5;  // offenders kept per check
+  // The spacing of the grid the positions were quantized to (read_mesh reports it for Draco
+  // files), 0 for exact ones; see check_volume_linear.
+  double quantization_step = 0;
 };
 
 // Tolerance: a triangle whose solid angle (or projected area) is within what rounding its
 // vertices to float could produce counts as seen edge-on (zero): 8 float ulps of the largest
-// coordinate, propagated through the determinant.
+// coordinate, propagated through the determinant. Quantized positions (`quantization_step` > 0,
+// e.g. a Draco file's) widen that by the step, and so the distance within which a vertex counts
+// as at the light (a spot volume's apex, which quantization moves off the light) or on the
+// directional light's near plane.
 
 // The linear-time checks: indices, closed, edge-manifold, oriented, outward, non-degenerate,
 // T-junctions (boundary vertices lying inside boundary edges), and, with a light, the
@@ -103,7 +110,8 @@ struct CheckOptions {
 //   where rays enter, which must be ≤ 0; exits must add up to the entries.
 // Without a light, non-self-nesting is skipped (CGAL's proof is in check_volume).
 // Runs in O(n log n) (a sort of the edges), in parallel.
-CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders = 5);
+CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders = 5,
+                                double quantization_step = 0);
 
 // The light in a volume's output frame, for checking a volume built with `space`: unchanged for
 // world space; in light space at the origin, looking down −Z (omni: world axes at the origin).

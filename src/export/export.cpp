@@ -8,18 +8,18 @@
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/System/omstream.hh>
-#include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
-#include <draco/io/gltf_decoder.h>
 #include <draco/io/gltf_encoder.h>
 #include <draco/mesh/mesh.h>
 
+#include <lightvol/check/check.h>
 #include <lightvol/check/topology.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/check.h>
 #include <lightvol/export/flat_exporter.h>
 #include <lightvol/export/ply_writer.h>
 #include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/glb_reader.h>
 
 namespace lightvol {
 
@@ -66,12 +66,19 @@ Status check_bits(int bits) {
   return {};
 }
 
-// What a lossy encoding must preserve: the same number of faces, and a sound volume.
-Status verify_decoded(const Mesh& original, const Mesh& decoded, const std::string& what) {
-  if (decoded.num_triangles() != original.num_triangles())
-    return Error{what + ": " + std::to_string(original.num_triangles() - decoded.num_triangles()) +
+// What a lossy encoding must preserve: the same number of faces, and a sound volume, proved with
+// the light when there is one, allowing for the quantization step (as `check` does on the file).
+Status verify_decoded(const Mesh& original, const detail::DracoMesh& decoded, const std::string& what,
+                      const ExportOptions& options) {
+  if (decoded.mesh.num_triangles() != original.num_triangles())
+    return Error{what + ": " + std::to_string(original.num_triangles() - decoded.mesh.num_triangles()) +
                  " faces were lost (collapsed by quantization); raise --draco-bits"};
-  if (Status s = check_closed_outward(decoded, what); !s)
+  if (options.light) {
+    const CheckReport report = check_volume_linear(decoded.mesh, options.light, 1, decoded.step);
+    if (!report.valid()) return Error{what + ": " + report.first_failure() + "; raise --draco-bits"};
+    return {};
+  }
+  if (Status s = check_closed_outward(decoded.mesh, what); !s)
     return Error{s.error().message + "; raise --draco-bits"};
   return {};
 }
@@ -145,30 +152,18 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
     case MeshFormat::drc: {
       Result<std::string> bytes = encode_draco(mesh, options.draco_bits);
       if (!bytes) return Error{path + ": " + bytes.error().message};
-      draco::DecoderBuffer in;
-      in.Init(bytes->data(), bytes->size());
-      draco::Decoder decoder;
-      auto decoded = decoder.DecodeMeshFromBuffer(&in);
-      if (!decoded.ok()) return Error{path + ": Draco cannot decode what it encoded: " +
-                                      decoded.status().error_msg_string()};
-      const Result<Mesh> back = detail::from_draco(*decoded.value());
-      if (!back) return Error{path + ": Draco decoded what it encoded wrongly: " + back.error().message};
-      if (Status s = verify_decoded(mesh, *back, path + " (decoded)"); !s) return s;
+      const Result<detail::DracoMesh> back = detail::decode_draco(*bytes);
+      if (!back) return Error{path + ": Draco cannot decode what it encoded: " + back.error().message};
+      if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
       return write_bytes_atomically(path, *bytes);
     }
     case MeshFormat::glb: {
       Result<std::string> bytes = encode_glb(mesh, options.draco, options.draco_bits);
       if (!bytes) return Error{path + ": " + bytes.error().message};
       if (options.draco) {
-        draco::DecoderBuffer in;
-        in.Init(bytes->data(), bytes->size());
-        draco::GltfDecoder decoder;
-        auto decoded = decoder.DecodeFromBuffer(&in);
-        if (!decoded.ok()) return Error{path + ": cannot decode the glTF just encoded: " +
-                                        decoded.status().error_msg_string()};
-        const Result<Mesh> back = detail::from_draco(*decoded.value());
-        if (!back) return Error{path + ": Draco decoded what it encoded wrongly: " + back.error().message};
-        if (Status s = verify_decoded(mesh, *back, path + " (decoded)"); !s) return s;
+        const Result<detail::DracoMesh> back = detail::read_glb(*bytes, path);
+        if (!back) return Error{path + ": cannot read the glTF just encoded: " + back.error().message};
+        if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
       }
       return write_bytes_atomically(path, *bytes);
     }

@@ -1,15 +1,50 @@
 #include <lightvol/io/draco_mesh.h>
 
+#include <cmath>
 #include <string>
+
+#include <draco/attributes/attribute_quantization_transform.h>
+#include <draco/compression/decode.h>
+#include <draco/mesh/mesh.h>
 
 #include <lightvol/check/topology.h>
 
 namespace lightvol::detail {
+namespace {
 
-Result<Mesh> from_draco(const draco::Mesh& in) {
-  Mesh out;
-  const draco::PointAttribute* position = in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (!position) return out;
+// A third-party message on one line: runs of line breaks become "; ".
+std::string one_line(const std::string& message) {
+  std::string out;
+  bool broken = false;
+  for (const char c : message) {
+    if (c == '\n' || c == '\r') {
+      broken = !out.empty();
+      continue;
+    }
+    if (broken) out += "; ";
+    broken = false;
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id) {
+  draco::DecoderBuffer buffer;
+  buffer.Init(bytes.data(), bytes.size());
+  draco::Decoder decoder;
+  // Quantized positions come back as Draco's integers with the grid beside them, so that the grid's
+  // spacing is known; they are dequantized below with Draco's own arithmetic.
+  decoder.SetSkipAttributeTransform(draco::GeometryAttribute::POSITION);
+  auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
+  if (!decoded.ok()) return Error{"not a Draco mesh: " + one_line(decoded.status().error_msg_string())};
+  const draco::Mesh& in = *decoded.value();
+  const draco::PointAttribute* position =
+      position_id ? in.GetAttributeByUniqueId(*position_id) : in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+  if (!position)
+    return Error{position_id ? "no attribute has the POSITION id " + std::to_string(*position_id)
+                             : std::string("the mesh has no POSITION attribute")};
   // A decoded file can hold any number of components of any type, and map points to values
   // beyond the attribute (fuzz finding: a 7-component POSITION was copied into 3 floats).
   if (position->num_components() != 3)
@@ -20,24 +55,48 @@ Result<Mesh> from_draco(const draco::Mesh& in) {
     case draco::DT_INT16: case draco::DT_UINT16: case draco::DT_INT32: case draco::DT_UINT32: break;
     default: return Error{"POSITION is not of a number type"};
   }
-  out.positions.resize(3 * static_cast<std::size_t>(in.num_points()));
+  // Draco's dequantization (AttributeQuantizationTransform): value = float(q) * (range / max) + min,
+  // in float, with max = 2^bits − 1.
+  draco::AttributeQuantizationTransform quantization;
+  const bool quantized = position->GetAttributeTransformData() != nullptr;
+  float delta = 0;
+  if (quantized) {
+    if (!quantization.InitFromAttribute(*position) || quantization.quantization_bits() < 1 ||
+        quantization.quantization_bits() > 30 || quantization.min_values().size() != 3 ||
+        !std::isfinite(quantization.range()) || quantization.range() < 0)
+      return Error{"POSITION has an invalid quantization"};
+    delta = quantization.range() / static_cast<float>((1u << quantization.quantization_bits()) - 1);
+  }
+
+  DracoMesh out;
+  out.step = delta;
+  std::vector<float>& positions = out.mesh.positions;
+  positions.resize(3 * static_cast<std::size_t>(in.num_points()));
   for (draco::PointIndex p(0); p < in.num_points(); ++p) {
     const draco::AttributeValueIndex value = position->mapped_index(p);
-    if (value.value() >= position->size() ||
-        !position->ConvertValue<float, 3>(value, &out.positions[3 * static_cast<std::size_t>(p.value())]))
-      return Error{"point " + std::to_string(p.value()) + " has no POSITION value"};
+    float* xyz = &positions[3 * static_cast<std::size_t>(p.value())];
+    bool ok = value.value() < position->size();
+    if (ok && quantized) {
+      std::int32_t q[3];
+      ok = position->ConvertValue<std::int32_t, 3>(value, q);
+      for (int c = 0; c < 3; ++c) xyz[c] = static_cast<float>(q[c]) * delta + quantization.min_value(c);
+    } else if (ok) {
+      ok = position->ConvertValue<float, 3>(value, xyz);
+    }
+    if (!ok) return Error{"point " + std::to_string(p.value()) + " has no POSITION value"};
   }
-  out.indices.reserve(3 * static_cast<std::size_t>(in.num_faces()));
+  out.mesh.indices.reserve(3 * static_cast<std::size_t>(in.num_faces()));
   for (draco::FaceIndex f(0); f < in.num_faces(); ++f) {
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = in.face(f)[k].value();
       if (v >= in.num_points())
         return Error{"face " + std::to_string(f.value()) + " names point " + std::to_string(v) + ", but there are " +
                      std::to_string(in.num_points())};
-      out.indices.push_back(v);
+      out.mesh.indices.push_back(v);
     }
   }
-  return weld_identical_positions(out);
+  out.mesh = weld_identical_positions(out.mesh);
+  return out;
 }
 
 }  // namespace lightvol::detail

@@ -1,18 +1,30 @@
-// Conversion from Draco's mesh to the flat Mesh, shared by the exporters (which decode what they
-// encoded, to verify it) and the reader. Internal to the library: it names Draco types.
+// Decoding Draco meshes into the flat Mesh, shared by the reader (DRC files, Draco-compressed GLB
+// primitives) and the exporters (which decode what they encoded, to verify it). Internal to the
+// library.
 #pragma once
 
-#include <draco/mesh/mesh.h>
+#include <cstdint>
+#include <optional>
+#include <string_view>
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 
 namespace lightvol::detail {
 
-// A decoded Draco mesh as flat buffers: its POSITION attribute (an empty mesh when it has none)
-// and its faces, with bit-identical positions welded (Draco may split points by attribute). A
-// POSITION of other than 3 components, a point mapped past the attribute's values or a face
-// naming a missing point is an Error (its message names no file: the caller prefixes it).
-Result<Mesh> from_draco(const draco::Mesh& in);
+// A decoded Draco mesh and the spacing of the grid its positions were quantized to (0 when they
+// were stored unquantized): each position lies within half a step of what was encoded.
+struct DracoMesh {
+  Mesh mesh;
+  double step = 0;
+};
+
+// Decodes `bytes` as a Draco mesh: the positions (dequantized exactly as Draco's decoder does) of
+// the attribute with unique id `position_id` (glTF names it) or else of the POSITION attribute,
+// and the faces, with bit-identical positions welded (Draco may split points by attribute). Data
+// Draco cannot decode, a missing position attribute or one of other than 3 numeric components, a
+// point mapped past its values or a face naming a missing point is an Error whose message names
+// no file (the caller prefixes it).
+Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id = {});
 
 }  // namespace lightvol::detail

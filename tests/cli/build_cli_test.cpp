@@ -107,6 +107,26 @@ TEST(BuildCli, FailureNeverClobbersAnExistingOutput) {
   EXPECT_EQ(slurp(out), "an existing good file");
 }
 
+// Draco's default 16 bits move the apex off the light; what build writes, check --light accepts,
+// allowing for the step the file declares (and reporting it).
+TEST(BuildCli, DracoVolumesPassCheckWithTheLight) {
+  Workspace w;
+  const std::string light = w.dir.write(
+      "off_grid.json", R"({"type": "spot", "position": [0.37, 4.13, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1],)"
+                       R"( "fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})");
+  for (const std::string name : {"v.drc", "v.glb"}) {
+    const std::string out = w.dir.file(name);
+    const test::CommandResult r = test::run_lightvol("build " + q(w.depth) + " --light " + q(light) + " --quiet --out " +
+                                                     q(out) + (name == "v.glb" ? " --draco" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const test::CommandResult check = test::run_lightvol("check " + q(out) + " --light " + q(light) + " --json");
+    EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+    const nlohmann::json j = nlohmann::json::parse(check.out);
+    EXPECT_GT(j["quantization_step"].get<double>(), 0) << name;
+    EXPECT_LT(j["quantization_step"].get<double>(), 1e-3) << name;
+  }
+}
+
 TEST(BuildCli, UsageErrorsAndHelp) {
   EXPECT_EQ(test::run_lightvol("").exit_code, 2);
   EXPECT_EQ(test::run_lightvol("frobnicate").exit_code, 2);

@@ -106,6 +106,47 @@ TEST(ReadMesh, DracoFormatsKeepCountsAndStaySound) {
   }
 }
 
+// Draco's default 16 bits move a spot volume's apex off the light and a directional volume's cap
+// off the near plane. What `build` writes with the light must still pass `check --light`: the
+// reader reports the file's quantization step, and the light proof allows for it (without it,
+// the same files fail).
+TEST(ReadMesh, DracoFilesReportTheirQuantizationStepAndStaySoundSeenFromTheLight) {
+  TempDir dir;
+  const DepthImage depth = test::make_depth(
+      40, 30, [](int c, int r) { return (c > 10 && c < 20 && r > 5) ? 0.9f : 0.97f + 0.0005f * static_cast<float>(r); });
+  // Lights off the origin, whose coordinates are no multiples of the grid's step.
+  const std::string at = R"("position": [0.37, 4.17, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1], )";
+  for (const std::string& json :
+       {R"({"type": "spot", )" + at + R"("fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})",
+        R"({"type": "directional", )" + at + R"("ortho": [-5, 5, -4, 4], "near": 0, "far": 6, "depth": "window"})"}) {
+    const Light light = test::light_from_json(json);
+    Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    const Bounds box = bounding_box(*mesh);
+    double extent = 0;
+    for (int k = 0; k < 3; ++k) extent = std::max(extent, box.max[k] - box.min[k]);
+    for (const char* name : {"v.drc", "v_draco.glb"}) {
+      ExportOptions options;
+      options.draco = std::string(name) == "v_draco.glb";
+      options.light = &light;
+      const std::string path = dir.file(name);
+      ASSERT_TRUE(write_mesh(path, *mesh, options).ok()) << name;
+      double step = -1;
+      Result<Mesh> back = read_mesh(path, &step);
+      ASSERT_TRUE(back.ok()) << back.error().message;
+      // Draco's grid: the largest extent over 2^16 − 1 steps.
+      EXPECT_NEAR(step, extent / 65535, 1e-3 * extent / 65535) << name;
+      const CheckReport allowed = check_volume_linear(*back, &light, 5, step);
+      EXPECT_TRUE(allowed.valid()) << name << ": " << allowed.first_failure();
+      EXPECT_FALSE(check_volume_linear(*back, &light).valid()) << name << ": " << json;
+    }
+  }
+  double step = -1;
+  ASSERT_TRUE(write_mesh(dir.file("v.ply"), sample_volume()).ok());
+  ASSERT_TRUE(read_mesh(dir.file("v.ply"), &step).ok());
+  EXPECT_EQ(step, 0.0);
+}
+
 // A GLB whose JSON chunk is `edit`ed; the BIN chunk stays as it was.
 std::string edit_glb(const std::string& glb, const std::function<void(nlohmann::json&)>& edit) {
   std::uint32_t json_length = 0;
@@ -165,7 +206,7 @@ TEST(ReadMesh, DracoGlbReferencesAreChecked) {
   } cases[] = {
       {[&](nlohmann::json& d) { primitive(d)["indices"] = 77; }, "mesh 0 primitive 0: 'indices' names no element of 'accessors'"},
       {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5; },
-       "mesh 0 primitive 0: KHR_draco_mesh_compression POSITION names no 3-component attribute of its data"},
+       "mesh 0 primitive 0: KHR_draco_mesh_compression data: no attribute has the POSITION id 5"},
       {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["bufferView"] = 99; },
        "mesh 0 primitive 0 KHR_draco_mesh_compression: 'bufferView' names no element of 'bufferViews'"},
       {[&](nlohmann::json& d) { d["accessors"][primitive(d)["attributes"]["POSITION"].get<int>()]["type"] = "VEC2"; },
