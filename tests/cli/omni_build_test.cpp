@@ -89,6 +89,19 @@ TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
 }
 
+// Draco at its default 16 bits, compressed GLB and DRC: build verifies the decoded volume with the
+// light, and check --light agrees.
+TEST_F(OmniBuildCli, DracoBuildPassesCheckWithTheLight) {
+  for (const std::string out : {"v.drc", "v.glb"}) {
+    const test::CommandResult r = run_lightvol("build " + q(dir_.file("strip.exr")) + " --light " + q(light_) +
+                                               " --quiet --adaptive --max-error 0.05 --out " + q(dir_.file(out)) +
+                                               (out == "v.glb" ? " --draco" : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const test::CommandResult check = run_lightvol("check " + q(dir_.file(out)) + " --light " + q(light_));
+    EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  }
+}
+
 TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
   const test::CommandResult r = run_lightvol("stats " + q(dir_.file("room_{face}.exr")) + " --light " +
                                              q(light_) + " --max-error 0.01,0.1 --csv");
