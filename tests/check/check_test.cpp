@@ -368,6 +368,22 @@ TEST_F(BrokenVolume, LightAwayFromTheApex) {
   EXPECT_NEAR(inside.light_sum, 4 * std::numbers::pi, 1e-9);
 }
 
+TEST_F(BrokenVolume, ApexWithinTheQuantizationStepOfTheLight) {
+  // A quantized file's apex lies up to half a step off the light: 5·10⁻⁵ below it here (the
+  // light above the apex, outside the volume), but within a 10⁻⁴ step of it.
+  light.position = {0, 4 + 5e-5, 0};
+  EXPECT_FALSE(check_volume_linear(mesh, &light).valid());
+  const CheckReport r = check_volume_linear(mesh, &light, 5, 1e-4);
+  EXPECT_TRUE(r.valid()) << r.first_failure();
+  EXPECT_EQ(r.quantization_step, 1e-4);
+  EXPECT_NE(r.find(kCheckNesting)->detail.find("the light at vertex"), std::string::npos);
+  EXPECT_NE(r.find(kCheckNesting)->detail.find("from it, within the positions' quantization step 0.0001"), std::string::npos)
+      << r.find(kCheckNesting)->detail;
+  // Beyond the step it is a light outside the volume again.
+  light.position = {0, 4 + 5e-4, 0};
+  EXPECT_FALSE(check_volume_linear(mesh, &light, 5, 1e-4).valid());
+}
+
 // Long faces (the fan) go through an AABB tree instead of CGAL's box sweep: both routes must find
 // the same intersecting pairs. Ratio 0 sends every face through the tree, a huge ratio none.
 TEST_F(BrokenVolume, LongFacesRouteFindsTheSamePairsAsTheSweep) {
