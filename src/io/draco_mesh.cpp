@@ -1,6 +1,8 @@
 #include <lightvol/io/draco_mesh.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include <draco/attributes/attribute_quantization_transform.h>
@@ -8,6 +10,8 @@
 #include <draco/mesh/mesh.h>
 
 #include <lightvol/check/topology.h>
+#include <lightvol/core/isolated.h>
+#include <lightvol/core/limits.h>
 
 namespace lightvol::detail {
 namespace {
@@ -28,9 +32,9 @@ std::string one_line(const std::string& message) {
   return out;
 }
 
-}  // namespace
-
-Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id) {
+// Draco's decoding, unwelded: run in a child process (decode_draco), since Draco's decoders are not
+// hardened against hostile data.
+Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<std::uint32_t> position_id) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::Decoder decoder;
@@ -95,8 +99,79 @@ Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32
       out.mesh.indices.push_back(v);
     }
   }
-  out.mesh = weld_identical_positions(out.mesh);
   return out;
+}
+
+// The child's answer: a flag byte, then either a message (length, bytes) or the step, the
+// numbers of position floats and of indices, and both arrays.
+constexpr std::size_t kMaxMessage = 4096;
+
+void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
+  out.write_value(static_cast<std::uint8_t>(decoded.ok()));
+  if (!decoded) {
+    const std::string& message = decoded.error().message;
+    const std::uint64_t length = std::min(message.size(), kMaxMessage);
+    out.write_value(length);
+    out.write(message.data(), length);
+    return;
+  }
+  const Mesh& mesh = decoded->mesh;
+  out.write_value(decoded->step);
+  out.write_value(static_cast<std::uint64_t>(mesh.positions.size()));
+  out.write_value(static_cast<std::uint64_t>(mesh.indices.size()));
+  out.write(mesh.positions.data(), mesh.positions.size() * sizeof(float));
+  out.write(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
+}
+
+// Reads the child's answer, trusting nothing but what it can check: counts within the budget and
+// whole triangles, every index naming a point.
+Status receive(ChildInput& in, Result<DracoMesh>* result) {
+  const Error broken{"Draco's decoder broke off its answer"};
+  std::uint8_t ok = 0;
+  if (!in.read_value(&ok)) return broken;
+  if (!ok) {
+    std::uint64_t length = 0;
+    if (!in.read_value(&length) || length > kMaxMessage) return broken;
+    std::string message(length, '\0');
+    if (!in.read(message.data(), length)) return broken;
+    *result = Error{std::move(message)};
+    return {};
+  }
+  DracoMesh out;
+  std::uint64_t floats = 0, indices = 0;
+  if (!in.read_value(&out.step) || !in.read_value(&floats) || !in.read_value(&indices)) return broken;
+  if (floats % 3 != 0 || indices % 3 != 0 || floats / 3 >= std::numeric_limits<std::uint32_t>::max() ||
+      !std::isfinite(out.step) || out.step < 0)
+    return broken;
+  if (Status s = check_memory(8 * (floats + indices), "the Draco data", "decoding " + std::to_string(indices / 3) + " faces"); !s)
+    return s;
+  out.mesh.positions.resize(floats);
+  out.mesh.indices.resize(indices);
+  if (!in.read(out.mesh.positions.data(), floats * sizeof(float)) ||
+      !in.read(out.mesh.indices.data(), indices * sizeof(std::uint32_t)))
+    return broken;
+  const std::uint64_t points = floats / 3;
+  if (!std::all_of(out.mesh.indices.begin(), out.mesh.indices.end(), [&](std::uint32_t v) { return v < points; }))
+    return broken;
+  *result = std::move(out);
+  return {};
+}
+
+}  // namespace
+
+Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id) {
+  // A child process per decoding: a crash, hang or runaway allocation in Draco stays there. It may
+  // take 5 s and 2 s per MiB (a 33 M-triangle volume is about 40 MiB and decodes in a few seconds).
+  IsolationLimits limits;
+  limits.seconds = 5 + 2.0 * static_cast<double>(bytes.size()) / (1 << 20);
+  Result<DracoMesh> decoded = Error{"not decoded"};
+  const Status run = run_isolated(
+      "Draco's decoder", limits, [&](ChildOutput& out) { send(decode_in_this_process(bytes, position_id), out); },
+      [&](ChildInput& in) { return receive(in, &decoded); });
+  if (!run) return run.error();
+  if (!decoded) return decoded;
+  decoded->mesh = weld_identical_positions(decoded->mesh);
+  return decoded;
 }
 
 }  // namespace lightvol::detail

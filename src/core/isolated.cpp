@@ -1,0 +1,168 @@
+#include <lightvol/core/isolated.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <new>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <lightvol/core/limits.h>
+
+#if defined(__SANITIZE_ADDRESS__)
+#define LV_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LV_ASAN 1
+#endif
+#endif
+#ifdef LV_ASAN
+#include <sanitizer/common_interface_defs.h>
+#endif
+
+namespace lightvol {
+namespace {
+
+// How the child ends when it cannot finish `child` (exit codes of its own, beside 0).
+constexpr int kOutOfMemory = 97, kThrew = 98, kBrokenPipe = 99;
+
+double now_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The process's address space now (bytes), from /proc/self/statm; 0 if unknown.
+std::uint64_t address_space_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (!f) return 0;
+  unsigned long long pages = 0;
+  const bool ok = std::fscanf(f, "%llu", &pages) == 1;
+  std::fclose(f);
+  return ok ? pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
+}
+
+// In the child: no core files, and at most `limit` bytes of address space (not under
+// AddressSanitizer, whose shadow memory alone exceeds any such limit).
+void limit_child(std::uint64_t limit) {
+  const rlimit no_core{0, 0};
+  setrlimit(RLIMIT_CORE, &no_core);
+#ifdef LV_ASAN
+  (void)limit;
+  // A report in the child is the child's end, not the fuzzer's finding (libFuzzer would record
+  // the parent's current input as a crash).
+  __sanitizer_set_death_callback(nullptr);
+#else
+  if (limit > 0) {
+    const rlimit space{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
+    setrlimit(RLIMIT_AS, &space);
+  }
+#endif
+}
+
+}  // namespace
+
+void ChildOutput::write(const void* data, std::size_t bytes) {
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::write(fd_, p, bytes);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) _exit(kBrokenPipe);  // the parent stopped listening
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+  }
+}
+
+bool ChildInput::read(void* data, std::size_t bytes) {
+  char* p = static_cast<char*>(data);
+  while (bytes > 0) {
+    const double left = deadline_ - now_seconds();
+    if (left <= 0) {
+      timed_out_ = true;
+      return false;
+    }
+    pollfd ready{fd_, POLLIN, 0};
+    const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000)));
+    if (polled < 0 && errno == EINTR) continue;
+    if (polled < 0) return false;
+    if (polled == 0) continue;  // the deadline is tested above
+    const ssize_t n = ::read(fd_, p, bytes);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;  // the child ended or broke off
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+Status run_isolated(const std::string& what, const IsolationLimits& limits,
+                    const std::function<void(ChildOutput&)>& child,
+                    const std::function<Status(ChildInput&)>& parent) {
+  const std::uint64_t memory = limits.memory > 0 ? limits.memory : memory_budget();
+  const std::uint64_t space = address_space_bytes() + memory;
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
+  const double deadline = now_seconds() + limits.seconds;
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int e = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return Error{what + ": cannot start a process for it: " + std::strerror(e)};
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    limit_child(space);
+    int code = 0;
+    try {
+      ChildOutput out(fds[1]);
+      child(out);
+    } catch (const std::bad_alloc&) {
+      code = kOutOfMemory;
+    } catch (...) {
+      code = kThrew;
+    }
+    _exit(code);
+  }
+  ::close(fds[1]);
+  ChildInput in(fds[0], deadline);
+  const Status answer = parent(in);
+  // The child's answer is whole: it must end (close the pipe) before the deadline too.
+  bool ended = false;
+  if (answer) {
+    char extra = 0;
+    while (in.read(&extra, 1)) {
+      // Bytes beyond the answer are read to the end and ignored: the answer is the one parsed.
+    }
+    ended = !in.timed_out();
+  }
+  if (!ended) ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  ::close(fds[0]);
+
+  if (in.timed_out()) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof(seconds), "%g", limits.seconds);
+    return Error{what + " took longer than " + seconds + " s on this input and was stopped"};
+  }
+  const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+  if (WIFSIGNALED(status) && !killed_by_us) {
+    const int sig = WTERMSIG(status);
+    const char* name = ::strsignal(sig);
+    return Error{what + " crashed on this input (signal " + std::to_string(sig) + (name ? std::string(": ") + name : "") + ")"};
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
+    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; raise it with --max-memory)"};
+  if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
+    return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
+  return answer;
+}
+
+}  // namespace lightvol

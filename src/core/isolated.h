@@ -1,0 +1,65 @@
+// Running untrusted third-party decoding in a child process.
+//
+// Some decoders lightvol relies on (Draco's) are not hardened against hostile input: no public
+// fuzzing covers them, and fuzzing here found crashes, hangs and huge allocations in them. Their
+// input is checked as far as its structure can be seen from outside; what remains is contained:
+// the work runs in a forked child with an address-space limit (the memory budget) and a deadline,
+// and sends its answer back through a pipe. A crash, a hang or an exhausted limit in the child is
+// then an Error for the parent, never a signal, a hang or an allocation in it; nothing the child
+// sends is trusted beyond the byte counts the parent asked for.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <lightvol/core/result.h>
+
+namespace lightvol {
+
+// The child's end of the pipe. Writes go straight to the parent; a parent that stopped reading
+// ends the child.
+class ChildOutput {
+ public:
+  explicit ChildOutput(int fd) : fd_(fd) {}
+  void write(const void* data, std::size_t bytes);
+  template <class T>
+  void write_value(const T& value) { write(&value, sizeof(value)); }
+
+ private:
+  int fd_;
+};
+
+// The parent's end: reads exactly the bytes asked for before the deadline, or fails.
+class ChildInput {
+ public:
+  ChildInput(int fd, double deadline_seconds) : fd_(fd), deadline_(deadline_seconds) {}
+  // False (and `timed_out()` true if so) when the child ended, broke off or ran out of time first.
+  bool read(void* data, std::size_t bytes);
+  template <class T>
+  bool read_value(T* value) { return read(value, sizeof(*value)); }
+  bool timed_out() const { return timed_out_; }
+
+ private:
+  int fd_;
+  double deadline_;  // seconds on the monotonic clock
+  bool timed_out_ = false;
+};
+
+struct IsolationLimits {
+  double seconds = 10;           // wall-clock time the child may take, start to last byte
+  std::uint64_t memory = 0;      // bytes the child may allocate beyond what it inherits; 0: the budget
+};
+
+// Runs `child` in a forked process and `parent` on what it writes. `child` must not use threads
+// (only the forking thread exists in the child). The result is `parent`'s, unless the child was
+// killed by a signal, ran out of time, or exited otherwise than after `child` returned: then it is
+// an Error "<what> crashed (signal N) ...", "... took longer than S s" or "... ran out of memory".
+// When `parent` fails because the child's answer broke off, the child's fate is the message.
+// Where fork is not possible the Error says so.
+Status run_isolated(const std::string& what, const IsolationLimits& limits,
+                    const std::function<void(ChildOutput&)>& child,
+                    const std::function<Status(ChildInput&)>& parent);
+
+}  // namespace lightvol

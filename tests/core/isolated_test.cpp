@@ -1,0 +1,163 @@
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <lightvol/core/isolated.h>
+
+namespace lightvol {
+namespace {
+
+
+// No child is left behind: every run_isolated reaps its process.
+void expect_no_children() {
+  int status = 0;
+  EXPECT_EQ(::waitpid(-1, &status, WNOHANG), -1);
+  EXPECT_EQ(errno, ECHILD);
+}
+
+TEST(Isolated, ParentReadsWhatTheChildWrites) {
+  std::vector<double> got(3);
+  const Status s = run_isolated(
+      "the work", {},
+      [](ChildOutput& out) {
+        const double values[3] = {1.5, -2, 1e300};
+        out.write(values, sizeof(values));
+      },
+      [&](ChildInput& in) -> Status {
+        if (!in.read(got.data(), 3 * sizeof(double))) return Error{"short"};
+        return {};
+      });
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(got, (std::vector<double>{1.5, -2, 1e300}));
+  expect_no_children();
+}
+
+TEST(Isolated, ALargeAnswerPassesThePipeWhole) {
+  const std::size_t n = 50'000'000;  // 200 MB, far beyond a pipe's buffer
+  std::vector<std::uint32_t> got(n);
+  const Status s = run_isolated(
+      "the work", {},
+      [&](ChildOutput& out) {
+        std::vector<std::uint32_t> values(n);
+        for (std::size_t i = 0; i < n; ++i) values[i] = static_cast<std::uint32_t>(i * 2654435761u);
+        out.write(values.data(), n * 4);
+      },
+      [&](ChildInput& in) -> Status { return in.read(got.data(), n * 4) ? Status{} : Error{"short"}; });
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  for (std::size_t i = 0; i < n; i += 9973) ASSERT_EQ(got[i], static_cast<std::uint32_t>(i * 2654435761u));
+  EXPECT_EQ(got[n - 1], static_cast<std::uint32_t>((n - 1) * 2654435761u));
+}
+
+TEST(Isolated, AChildThatCrashesIsAnErrorNamingTheSignal) {
+  const Status s = run_isolated(
+      "the decoder", {}, [](ChildOutput&) { std::abort(); },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        return in.read_value(&x) ? Status{} : Error{"short"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder crashed on this input (signal 6: Aborted)");
+  expect_no_children();
+}
+
+TEST(Isolated, AChildThatCrashesAfterItsAnswerIsStillAnError) {
+  const Status s = run_isolated(
+      "the decoder", {},
+      [](ChildOutput& out) {
+        out.write_value(7);
+        std::abort();
+      },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        return in.read_value(&x) && x == 7 ? Status{} : Error{"short"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder crashed on this input (signal 6: Aborted)");
+}
+
+TEST(Isolated, AChildThatHangsIsStoppedAtTheDeadline) {
+  IsolationLimits limits;
+  limits.seconds = 0.5;
+  const auto start = std::chrono::steady_clock::now();
+  const Status s = run_isolated(
+      "the decoder", limits,
+      [](ChildOutput&) {
+        for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+      },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        return in.read_value(&x) ? Status{} : Error{"short"};
+      });
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder took longer than 0.5 s on this input and was stopped");
+  EXPECT_GE(seconds, 0.5);
+  EXPECT_LT(seconds, 30);  // not waiting for the child: it was killed
+  expect_no_children();
+}
+
+TEST(Isolated, AChildThatExceedsItsMemoryIsAnError) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "no address-space limit under AddressSanitizer";
+#endif
+  IsolationLimits limits;
+  limits.memory = 64 << 20;
+  const Status s = run_isolated(
+      "the decoder", limits,
+      [](ChildOutput& out) {
+        std::vector<char> huge(std::size_t{1} << 30, 1);
+        out.write_value(huge[12345]);
+      },
+      [](ChildInput& in) -> Status {
+        char x = 0;
+        return in.read_value(&x) ? Status{} : Error{"short"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder ran out of memory (its limit is 64.0 MiB; raise it with --max-memory)");
+}
+
+TEST(Isolated, TheParentsOwnRefusalIsTheAnswerAndTheChildIsEnded) {
+  const Status s = run_isolated(
+      "the decoder", {},
+      [](ChildOutput& out) {
+        for (int i = 0;; ++i) out.write_value(i);  // would write forever
+      },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        if (!in.read_value(&x)) return Error{"short"};
+        return Error{"the count is absurd"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the count is absurd");
+  expect_no_children();
+}
+
+TEST(Isolated, AChildThatExitsEarlyIsAnError) {
+  const Status s = run_isolated(
+      "the decoder", {}, [](ChildOutput&) { _exit(3); },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        return in.read_value(&x) ? Status{} : Error{"short"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder failed (exit status 3)");
+}
+
+TEST(Isolated, AnAnswerThatBreaksOffIsTheParentsError) {
+  const Status s = run_isolated(
+      "the decoder", {}, [](ChildOutput& out) { out.write_value(std::uint8_t{1}); },
+      [](ChildInput& in) -> Status {
+        std::uint64_t x = 0;
+        return in.read_value(&x) ? Status{} : Error{"broke off"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "broke off");
+}
+
+}  // namespace
+}  // namespace lightvol
