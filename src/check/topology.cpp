@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstring>
 #include <sstream>
-#include <unordered_map>
 
 #include <tbb/parallel_sort.h>
 
@@ -20,31 +19,43 @@ std::string describe_vertex(const Mesh& mesh, std::uint32_t v) {
 }  // namespace
 
 Mesh weld_identical_positions(const Mesh& mesh) {
-  struct Key {
-    float x, y, z;
-    bool operator==(const Key& o) const {
-      return std::memcmp(this, &o, sizeof(Key)) == 0;
+  // By sorting (bits of x, y, z, then the vertex): O(n log n) whatever the positions, where a hash
+  // table can be made quadratic by positions chosen to collide. Each run of equal positions is
+  // one vertex, numbered in the order of its first occurrence, so the result is the one a
+  // first-come map would give.
+  struct Record {
+    std::uint32_t x, y, z, v;
+    bool operator<(const Record& o) const {
+      return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : v < o.v;
     }
+    bool same_position(const Record& o) const { return x == o.x && y == o.y && z == o.z; }
   };
-  struct Hash {
-    std::size_t operator()(const Key& k) const {
-      std::uint32_t b[3];
-      std::memcpy(b, &k, sizeof(b));
-      std::uint64_t h = b[0] * 0x9E3779B97F4A7C15ull;
-      h ^= (b[1] + 0x7F4A7C15ull) * 0xC2B2AE3D27D4EB4Full;
-      h ^= (b[2] + 0x165667B1ull) * 0x165667B19E3779F9ull;
-      return static_cast<std::size_t>(h ^ (h >> 29));
-    }
-  };
+  const std::size_t nv = mesh.num_vertices();
+  std::vector<Record> records(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    std::memcpy(&records[v], &mesh.positions[3 * v], 12);
+    records[v].v = static_cast<std::uint32_t>(v);
+  }
+  tbb::parallel_sort(records.begin(), records.end());
+  // first[v]: the first vertex at v's position.
+  std::vector<std::uint32_t> first(nv);
+  for (std::size_t i = 0, run = 0; i < nv; ++i) {
+    if (i == 0 || !records[i].same_position(records[i - 1])) run = i;
+    first[records[i].v] = records[run].v;
+  }
+  records = {};
   Mesh out;
-  std::unordered_map<Key, std::uint32_t, Hash> ids;
-  ids.reserve(mesh.num_vertices());
-  std::vector<std::uint32_t> remap(mesh.num_vertices());
-  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
-    const Key k{mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
-    auto [it, inserted] = ids.emplace(k, static_cast<std::uint32_t>(out.num_vertices()));
-    if (inserted) out.positions.insert(out.positions.end(), {k.x, k.y, k.z});
-    remap[v] = it->second;
+  std::vector<std::uint32_t>& remap = first;  // becomes the new index of each vertex, in place
+  std::size_t kept = 0;
+  for (std::size_t v = 0; v < nv; ++v) kept += first[v] == v;
+  out.positions.resize(3 * kept);
+  for (std::size_t v = 0, next = 0; v < nv; ++v) {
+    if (first[v] == v) {  // a first occurrence: numbered now (first[u] ≤ u, so u's first is set)
+      std::memcpy(&out.positions[3 * next], &mesh.positions[3 * v], 12);
+      remap[v] = static_cast<std::uint32_t>(next++);
+    } else {
+      remap[v] = remap[first[v]];
+    }
   }
   out.indices.resize(mesh.indices.size());
   for (std::size_t i = 0; i < mesh.indices.size(); ++i) out.indices[i] = remap[mesh.indices[i]];

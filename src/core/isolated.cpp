@@ -1,5 +1,6 @@
 #include <lightvol/core/isolated.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -9,6 +10,7 @@
 #include <new>
 
 #include <fcntl.h>
+#include <malloc.h>
 #include <poll.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -47,20 +49,27 @@ std::uint64_t address_space_bytes() {
   return ok ? pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
 }
 
-// In the child: no core files, and at most `limit` bytes of address space (not under
-// AddressSanitizer, whose shadow memory alone exceeds any such limit).
-void limit_child(std::uint64_t limit) {
+// In the child: no core files, `cpu` seconds of processor time (SIGXCPU, then SIGKILL a second
+// later), and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
+// memory alone exceeds any such limit).
+void limit_child(rlim_t cpu, std::uint64_t space) {
+  // Large blocks from fresh mappings: the heap's free pages are the parent's, shared copy-on-write,
+  // and each one the child reused would be copied first (glibc raises this threshold as blocks
+  // are freed).
+  ::mallopt(M_MMAP_THRESHOLD, 256 * 1024);
   const rlimit no_core{0, 0};
   setrlimit(RLIMIT_CORE, &no_core);
+  const rlimit processor{cpu, cpu + 1};
+  setrlimit(RLIMIT_CPU, &processor);
 #ifdef LV_ASAN
-  (void)limit;
+  (void)space;
   // A report in the child is the child's end, not the fuzzer's finding (libFuzzer would record
   // the parent's current input as a crash).
   __sanitizer_set_death_callback(nullptr);
 #else
-  if (limit > 0) {
-    const rlimit space{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
-    setrlimit(RLIMIT_AS, &space);
+  if (space > 0) {
+    const rlimit bytes{static_cast<rlim_t>(space), static_cast<rlim_t>(space)};
+    setrlimit(RLIMIT_AS, &bytes);
   }
 #endif
 }
@@ -107,7 +116,8 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   const std::uint64_t space = address_space_bytes() + memory;
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
-  const double deadline = now_seconds() + limits.seconds;
+  const double deadline = now_seconds() + limits.wall_seconds;
+  const auto cpu = static_cast<rlim_t>(std::max(1.0, std::floor(limits.cpu_seconds)));
   const pid_t pid = ::fork();
   if (pid < 0) {
     const int e = errno;
@@ -117,7 +127,7 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   }
   if (pid == 0) {
     ::close(fds[0]);
-    limit_child(space);
+    limit_child(cpu, space);
     int code = 0;
     try {
       ChildOutput out(fds[1]);
@@ -143,15 +153,22 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   }
   if (!ended) ::kill(pid, SIGKILL);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  rusage usage{};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
   }
   ::close(fds[0]);
 
-  if (in.timed_out()) {
-    char seconds[32];
-    std::snprintf(seconds, sizeof(seconds), "%g", limits.seconds);
-    return Error{what + " took longer than " + seconds + " s on this input and was stopped"};
-  }
+  const auto seconds = [](double s) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", s);
+    return std::string(text);
+  };
+  const double used = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                      1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= static_cast<double>(cpu))))
+    return Error{what + " used more than " + seconds(static_cast<double>(cpu)) + " s of processor time on this input and was stopped"};
+  if (in.timed_out())
+    return Error{what + " took longer than " + seconds(limits.wall_seconds) + " s on this input and was stopped"};
   const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
   if (WIFSIGNALED(status) && !killed_by_us) {
     const int sig = WTERMSIG(status);
@@ -159,7 +176,7 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
     return Error{what + " crashed on this input (signal " + std::to_string(sig) + (name ? std::string(": ") + name : "") + ")"};
   }
   if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
-    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; raise it with --max-memory)"};
+    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " + limits.memory_advice + ")"};
   if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
     return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
   return answer;

@@ -3,8 +3,8 @@
 // Some decoders lightvol relies on (Draco's) are not hardened against hostile input: no public
 // fuzzing covers them, and fuzzing here found crashes, hangs and huge allocations in them. Their
 // input is checked as far as its structure can be seen from outside; what remains is contained:
-// the work runs in a forked child with an address-space limit (the memory budget) and a deadline,
-// and sends its answer back through a pipe. A crash, a hang or an exhausted limit in the child is
+// the work runs in a forked child with an address-space limit (the memory budget), a limit on its
+// processor time and a wall-clock deadline, and sends its answer back through a pipe. A crash, a hang or an exhausted limit in the child is
 // then an Error for the parent, never a signal, a hang or an allocation in it; nothing the child
 // sends is trusted beyond the byte counts the parent asked for.
 #pragma once
@@ -48,14 +48,22 @@ class ChildInput {
 };
 
 struct IsolationLimits {
-  double seconds = 10;           // wall-clock time the child may take, start to last byte
-  std::uint64_t memory = 0;      // bytes the child may allocate beyond what it inherits; 0: the budget
+  // Processor time the child may use (the kernel's RLIMIT_CPU, whole seconds, at least 1): a
+  // limit on work that a loaded machine does not tighten.
+  double cpu_seconds = 10;
+  // Wall-clock time from start to the last byte, a backstop for a child that waits instead of
+  // working.
+  double wall_seconds = 60;
+  std::uint64_t memory = 0;  // bytes the child may allocate beyond what it inherits; 0: the budget
+  // What the message says to do when `memory` ran out.
+  std::string memory_advice = "raise it with --max-memory";
 };
 
 // Runs `child` in a forked process and `parent` on what it writes. `child` must not use threads
 // (only the forking thread exists in the child). The result is `parent`'s, unless the child was
 // killed by a signal, ran out of time, or exited otherwise than after `child` returned: then it is
-// an Error "<what> crashed (signal N) ...", "... took longer than S s" or "... ran out of memory".
+// an Error "<what> crashed on this input (signal N: name)", "<what> used more than S s of processor
+// time ...", "<what> took longer than S s ...", "<what> ran out of memory ..." or "<what> failed ...".
 // When `parent` fails because the child's answer broke off, the child's fate is the message.
 // Where fork is not possible the Error says so.
 Status run_isolated(const std::string& what, const IsolationLimits& limits,

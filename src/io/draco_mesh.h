@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
@@ -25,6 +26,21 @@ struct DracoMesh {
 // Draco cannot decode, a missing position attribute or one of other than 3 numeric components, a
 // point mapped past its values or a face naming a missing point is an Error whose message names
 // no file (the caller prefixes it).
+// Draco runs in a child process (core/isolated.h): a crash inside Draco, more than 5 s + 10 s per
+// MiB of `bytes` of processor time, or an allocation beyond the memory budget is an Error too.
 Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id = {});
+
+// Several decodings in one child process (a GLB's compressed primitives), each as decode_draco,
+// in order. If the child fails, the data it was decoding gets that Error, the data after it an
+// Error saying it was not reached.
+struct DracoRequest {
+  std::string_view bytes;
+  std::optional<std::uint32_t> position_id;
+};
+std::vector<Result<DracoMesh>> decode_draco_all(const std::vector<DracoRequest>& requests);
+
+// The same decoding in this process, trusting Draco: only for measuring what the isolation costs
+// (tests/bench/draco_bench). Readers use decode_draco.
+Result<DracoMesh> decode_draco_unisolated(std::string_view bytes, std::optional<std::uint32_t> position_id = {});
 
 }  // namespace lightvol::detail

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include <lightvol/core/check.h>
 #include <lightvol/core/limits.h>
 
 namespace lightvol::detail {
@@ -67,6 +68,7 @@ class GlbReader {
     } else if (Status s = traverse(integer(doc_, "scene", 0)); !s) {
       return s.error();
     }
+    decode_draco_primitives();
     if (Status s = check_size(); !s) return s.error();
     for (const Instance& instance : instances_) emit(*cache_[static_cast<std::size_t>(instance.mesh)], instance.transform);
     return std::move(out_);
@@ -216,8 +218,9 @@ class GlbReader {
     return position->get<std::int64_t>();
   }
 
-  // A KHR_draco_mesh_compression primitive: its buffer view decoded by Draco.
-  Result<DracoMesh> draco_primitive(const Json& primitive, const Json& draco, const std::string& where) const {
+  // A KHR_draco_mesh_compression primitive's data: its buffer view and POSITION's unique id there.
+  using DracoKey = std::pair<std::int64_t, std::uint32_t>;
+  Result<DracoKey> draco_key(const Json& primitive, const Json& draco, const std::string& where) const {
     // Its data is Draco's to check, the references around it are ours ('indices' naming accessor
     // 77 of 2 crashed Draco's glTF decoder, whose fuzzing led to this reader).
     if (Status s = reference(primitive, "indices", "accessors", where); !s) return s.error();
@@ -230,9 +233,46 @@ class GlbReader {
     const std::int64_t unique_id = id->get<std::int64_t>();
     if (unique_id < 0 || unique_id > std::numeric_limits<std::int32_t>::max())
       return fail(where + ": " + kDraco + " POSITION names no 3-component attribute of its data");
-    Result<DracoMesh> decoded = decode_draco(view_bytes(integer(draco, "bufferView", 0)), static_cast<std::uint32_t>(unique_id));
-    if (!decoded) return fail(where + ": " + kDraco + " data: " + decoded.error().message);
-    return decoded;
+    return DracoKey{integer(draco, "bufferView", 0), static_cast<std::uint32_t>(unique_id)};
+  }
+
+  // The Draco extension of a primitive, or nullptr.
+  static const Json* draco_extension(const Json& primitive) {
+    const Json* extensions = member(primitive, "extensions");
+    return extensions ? member(*extensions, kDraco) : nullptr;
+  }
+
+  // Decodes the compressed data of every instanced mesh at once, in one child process however
+  // many primitives there are (a process each would make a GLB of many small primitives slow).
+  // Primitives whose references are broken are left out: mesh() reports them.
+  void decode_draco_primitives() {
+    std::vector<char> seen(cache_.size(), 0);
+    std::vector<DracoKey> keys;
+    std::vector<DracoRequest> requests;
+    for (const Instance& instance : instances_) {
+      if (seen[static_cast<std::size_t>(instance.mesh)]++) continue;
+      for (const Json& primitive : *member(at("meshes", instance.mesh), "primitives")) {
+        const Json* draco = draco_extension(primitive);
+        if (!draco || !member(primitive, "attributes")) continue;
+        const Result<DracoKey> key = draco_key(primitive, *draco, "");
+        if (!key || draco_.count(*key)) continue;
+        draco_.emplace(*key, Error{""});
+        keys.push_back(*key);
+        requests.push_back({view_bytes(key->first), key->second});
+      }
+    }
+    std::vector<Result<DracoMesh>> decoded = decode_draco_all(requests);
+    for (std::size_t i = 0; i < keys.size(); ++i) draco_.at(keys[i]) = std::move(decoded[i]);
+  }
+
+  // A KHR_draco_mesh_compression primitive: its buffer view as decoded by Draco.
+  Result<const DracoMesh*> draco_primitive(const Json& primitive, const Json& draco, const std::string& where) const {
+    const Result<DracoKey> key = draco_key(primitive, draco, where);
+    if (!key) return key.error();
+    const auto decoded = draco_.find(*key);
+    LV_CHECK(decoded != draco_.end());  // decode_draco_primitives covered every instanced mesh
+    if (!decoded->second) return fail(where + ": " + kDraco + " data: " + decoded->second.error().message);
+    return &*decoded->second;
   }
 
   // A plain primitive: POSITION and optional indices, as triangles, a strip or a fan.
@@ -308,10 +348,18 @@ class GlbReader {
       const std::string where = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
       const Json* attributes = member(primitive, "attributes");
       if (!attributes || !attributes->is_object()) return fail(where + " has no attributes");
-      const Json* extensions = member(primitive, "extensions");
-      const Json* draco = extensions ? member(*extensions, kDraco) : nullptr;
-      const Result<DracoMesh> part = draco ? draco_primitive(primitive, *draco, where) : plain_primitive(primitive, where);
-      if (!part) return part.error();
+      const Json* draco = draco_extension(primitive);
+      Result<DracoMesh> plain = Error{""};
+      const DracoMesh* part = nullptr;
+      if (draco) {
+        const Result<const DracoMesh*> decoded = draco_primitive(primitive, *draco, where);
+        if (!decoded) return decoded.error();
+        part = *decoded;
+      } else {
+        plain = plain_primitive(primitive, where);
+        if (!plain) return plain.error();
+        part = &*plain;
+      }
       if (all.mesh.num_vertices() + part->mesh.num_vertices() >= std::numeric_limits<std::uint32_t>::max())
         return fail("mesh " + std::to_string(m) + " has too many vertices");
       const auto base = static_cast<std::uint32_t>(all.mesh.num_vertices());
@@ -427,6 +475,7 @@ class GlbReader {
   Json doc_;
   std::string_view bin_;
   std::vector<std::optional<DracoMesh>> cache_;  // decoded meshes, by index
+  std::map<DracoKey, Result<DracoMesh>> draco_;   // decoded compressed data
   std::vector<Instance> instances_;               // of the scene, in traversal order
   DracoMesh out_;
 };

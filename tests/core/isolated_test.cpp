@@ -80,9 +80,27 @@ TEST(Isolated, AChildThatCrashesAfterItsAnswerIsStillAnError) {
   EXPECT_EQ(s.error().message, "the decoder crashed on this input (signal 6: Aborted)");
 }
 
-TEST(Isolated, AChildThatHangsIsStoppedAtTheDeadline) {
+TEST(Isolated, AChildThatSpinsIsStoppedAtItsProcessorTime) {
   IsolationLimits limits;
-  limits.seconds = 0.5;
+  limits.cpu_seconds = 1;
+  const Status s = run_isolated(
+      "the decoder", limits,
+      [](ChildOutput&) {
+        volatile std::uint64_t x = 0;
+        for (;;) x = x + 1;
+      },
+      [](ChildInput& in) -> Status {
+        int x = 0;
+        return in.read_value(&x) ? Status{} : Error{"short"};
+      });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
+  expect_no_children();
+}
+
+TEST(Isolated, AChildThatWaitsIsStoppedAtTheDeadline) {
+  IsolationLimits limits;
+  limits.wall_seconds = 0.5;
   const auto start = std::chrono::steady_clock::now();
   const Status s = run_isolated(
       "the decoder", limits,
