@@ -49,17 +49,23 @@ std::uint64_t address_space_bytes() {
   return ok ? pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
 }
 
+// RLIMIT_CPU for `seconds`: SIGXCPU at the soft limit, SIGKILL a second later.
+rlimit cpu_limit(double seconds) {
+  const auto soft = static_cast<rlim_t>(std::max(1.0, std::floor(seconds)));
+  return {soft, soft + 1};
+}
+
 // In the child: no core files, `cpu` seconds of processor time (SIGXCPU, then SIGKILL a second
 // later), and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
 // memory alone exceeds any such limit).
-void limit_child(rlim_t cpu, std::uint64_t space) {
+void limit_child(double cpu, std::uint64_t space) {
   // Large blocks from fresh mappings: the heap's free pages are the parent's, shared copy-on-write,
   // and each one the child reused would be copied first (glibc raises this threshold as blocks
   // are freed).
   ::mallopt(M_MMAP_THRESHOLD, 256 * 1024);
   const rlimit no_core{0, 0};
   setrlimit(RLIMIT_CORE, &no_core);
-  const rlimit processor{cpu, cpu + 1};
+  const rlimit processor = cpu_limit(cpu);
   setrlimit(RLIMIT_CPU, &processor);
 #ifdef LV_ASAN
   (void)space;
@@ -85,6 +91,28 @@ void ChildOutput::write(const void* data, std::size_t bytes) {
     p += n;
     bytes -= static_cast<std::size_t>(n);
   }
+}
+
+void ChildOutput::write_string(const std::string& text) {
+  const std::uint64_t length = std::min(text.size(), kMaxString);
+  write_value(length);
+  write(text.data(), length);
+}
+
+bool ChildInput::read_string(std::string* text) {
+  std::uint64_t length = 0;
+  if (!read_value(&length) || length > ChildOutput::kMaxString) return false;
+  text->assign(length, '\0');
+  return read(text->data(), length);
+}
+
+void ChildInput::allow_more(double cpu_seconds) {
+  if (!(cpu_seconds > 0)) return;
+  cpu_ += cpu_seconds;
+  deadline_ += 4 * cpu_seconds;
+  wall_added_ += 4 * cpu_seconds;
+  const rlimit limit = cpu_limit(cpu_);
+  ::prlimit(pid_, RLIMIT_CPU, &limit, nullptr);  // the parent may raise its own child's limits
 }
 
 bool ChildInput::read(void* data, std::size_t bytes) {
@@ -117,7 +145,6 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
   const double deadline = now_seconds() + limits.wall_seconds;
-  const auto cpu = static_cast<rlim_t>(std::max(1.0, std::floor(limits.cpu_seconds)));
   const pid_t pid = ::fork();
   if (pid < 0) {
     const int e = errno;
@@ -127,7 +154,7 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   }
   if (pid == 0) {
     ::close(fds[0]);
-    limit_child(cpu, space);
+    limit_child(limits.cpu_seconds, space);
     int code = 0;
     try {
       ChildOutput out(fds[1]);
@@ -140,7 +167,7 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
     _exit(code);
   }
   ::close(fds[1]);
-  ChildInput in(fds[0], deadline);
+  ChildInput in(fds[0], pid, limits.cpu_seconds, deadline);
   const Status answer = parent(in);
   // The child's answer is whole: it must end (close the pipe) before the deadline too.
   bool ended = false;
@@ -165,10 +192,12 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   };
   const double used = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
                       1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= static_cast<double>(cpu))))
-    return Error{what + " used more than " + seconds(static_cast<double>(cpu)) + " s of processor time on this input and was stopped"};
+  const auto cpu = static_cast<double>(cpu_limit(in.cpu_seconds()).rlim_cur);
+  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= cpu)))
+    return Error{what + " used more than " + seconds(cpu) + " s of processor time on this input and was stopped"};
   if (in.timed_out())
-    return Error{what + " took longer than " + seconds(limits.wall_seconds) + " s on this input and was stopped"};
+    return Error{what + " took longer than " + seconds(limits.wall_seconds + in.wall_seconds_added()) +
+                 " s on this input and was stopped"};
   const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
   if (WIFSIGNALED(status) && !killed_by_us) {
     const int sig = WTERMSIG(status);

@@ -26,6 +26,9 @@ class ChildOutput {
   void write(const void* data, std::size_t bytes);
   template <class T>
   void write_value(const T& value) { write(&value, sizeof(value)); }
+  // Its length, then its bytes (at most kMaxString of them).
+  void write_string(const std::string& text);
+  static constexpr std::size_t kMaxString = 4096;
 
  private:
   int fd_;
@@ -34,22 +37,32 @@ class ChildOutput {
 // The parent's end: reads exactly the bytes asked for before the deadline, or fails.
 class ChildInput {
  public:
-  ChildInput(int fd, double deadline_seconds) : fd_(fd), deadline_(deadline_seconds) {}
+  ChildInput(int fd, int pid, double cpu_seconds, double deadline) : fd_(fd), pid_(pid), cpu_(cpu_seconds), deadline_(deadline) {}
   // False (and `timed_out()` true if so) when the child ended, broke off or ran out of time first.
   bool read(void* data, std::size_t bytes);
   template <class T>
   bool read_value(T* value) { return read(value, sizeof(*value)); }
+  // A string as ChildOutput::write_string sends it; false if it breaks off or is too long.
+  bool read_string(std::string* text);
   bool timed_out() const { return timed_out_; }
+  // Grants the child `cpu_seconds` more processor time, and four times that more wall-clock time:
+  // for work whose size only the child's first answer tells (an image's texel count).
+  void allow_more(double cpu_seconds);
+  double cpu_seconds() const { return cpu_; }
+  double wall_seconds_added() const { return wall_added_; }
 
  private:
   int fd_;
+  int pid_;
+  double cpu_;       // processor seconds granted (the child's RLIMIT_CPU)
   double deadline_;  // seconds on the monotonic clock
+  double wall_added_ = 0;
   bool timed_out_ = false;
 };
 
 struct IsolationLimits {
-  // Processor time the child may use (the kernel's RLIMIT_CPU, whole seconds, at least 1): a
-  // limit on work that a loaded machine does not tighten.
+  // Processor time the child may use (the kernel's RLIMIT_CPU, rounded down to whole seconds, at
+  // least 1): a limit on work that a loaded machine does not tighten.
   double cpu_seconds = 10;
   // Wall-clock time from start to the last byte, a backstop for a child that waits instead of
   // working.

@@ -69,29 +69,21 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
                         "a volume from " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                             " texels" + (options.images > 1 ? " x " + std::to_string(options.images) : ""));
   };
-  Result<detail::OpenImage> opened = detail::open_image(path, within_budget);
-  if (!opened) return opened.error();
-  OIIO::ImageInput* const in = opened->input.get();
-  const OIIO::ImageSpec& spec = opened->spec;
-  const std::int64_t texels = static_cast<std::int64_t>(spec.width) * spec.height;
-
-  const Result<int> channel = choose_channel(spec, options, path);
-  if (!channel) return channel.error();
-  const OIIO::TypeDesc format = spec.channelformat(*channel);
-  if (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::INT8)
-    return Error{path + ": channel '" + spec.channelnames[*channel] +
-                 "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
-
+  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
+    const Result<int> channel = choose_channel(spec, options, path);
+    if (!channel) return channel.error();
+    const OIIO::TypeDesc format = spec.channelformat(*channel);
+    if (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::INT8)
+      return Error{path + ": channel '" + spec.channelnames[*channel] +
+                   "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
+    return channel;
+  };
+  Result<detail::ImageChannel> read = detail::read_image_channel(path, within_budget, select, "cannot read pixels");
+  if (!read) return read.error();
   DepthImage image;
-  image.width = spec.width;
-  image.height = spec.height;
-  image.values.resize(static_cast<std::size_t>(texels));
-  const bool read = in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT,
-                                   image.values.data());
-  // A truncated file can come back "read" with the damage reported only in the error queue.
-  if (!read || in->has_error())
-    return Error{path + ": cannot read pixels: " + detail::oiio_message(in->geterror())};
-  in->close();
+  image.width = read->width;
+  image.height = read->height;
+  image.values = std::move(read->values);
   if (Status s = validate_depths(image, path); !s) return s.error();
   return image;
 }

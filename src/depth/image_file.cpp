@@ -10,6 +10,9 @@
 #include <string_view>
 #include <vector>
 
+#include <lightvol/core/isolated.h>
+#include <lightvol/core/limits.h>
+
 namespace lightvol::detail {
 
 // OpenImageIO keeps errors in per-thread (global) or per-object queues; fetch and tidy them.
@@ -297,6 +300,75 @@ Result<OpenImage> open_image(const std::string& path,
                    std::to_string(file_size) + ": more than any compression holds (truncated or forged)"};
   }
   return image;
+}
+
+Result<ImageChannel> read_image_channel(const std::string& path,
+                                        const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
+                                        const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
+                                        const std::string& read_failure) {
+  // The child's answer: a flag byte, then a message, or the size and a second flag byte, then a
+  // message or the pixels.
+  const auto child = [&](ChildOutput& out) {
+    const auto refuse = [&](const Error& e) {
+      out.write_value(std::uint8_t{0});
+      out.write_string(e.message);
+    };
+    Result<OpenImage> opened = open_image(path, within_budget);
+    if (!opened) return refuse(opened.error());
+    const Result<int> channel = select(opened->spec);
+    if (!channel) return refuse(channel.error());
+    const OIIO::ImageSpec& spec = opened->spec;
+    out.write_value(std::uint8_t{1});
+    out.write_value(static_cast<std::int32_t>(spec.width));
+    out.write_value(static_cast<std::int32_t>(spec.height));
+    std::vector<float> values(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
+    OIIO::ImageInput* const in = opened->input.get();
+    // A truncated file can come back "read" with the damage reported only in the error queue.
+    if (!in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT, values.data()) || in->has_error())
+      return refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
+    in->close();
+    out.write_value(std::uint8_t{1});
+    out.write(values.data(), values.size() * sizeof(float));
+  };
+
+  Result<ImageChannel> result = Error{""};
+  // Reads one flag byte; false (and `result` the message) when it says the child refused.
+  const auto accepted = [&](ChildInput& in, Status* broken) {
+    std::uint8_t ok = 0;
+    std::string message;
+    if (!in.read_value(&ok) || (!ok && !in.read_string(&message))) {
+      *broken = Error{path + ": the image reader broke off its answer"};
+      return false;
+    }
+    if (!ok) result = Error{std::move(message)};
+    return ok != 0;
+  };
+  const auto parent = [&](ChildInput& in) -> Status {
+    Status broken;
+    if (!accepted(in, &broken)) return broken;
+    std::int32_t width = 0, height = 0;
+    if (!in.read_value(&width) || !in.read_value(&height) || width < 2 || height < 2 ||
+        static_cast<std::int64_t>(width) * height > (std::int64_t{1} << 30))
+      return Error{path + ": the image reader broke off its answer"};
+    const auto texels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    if (Status s = check_memory(texels * sizeof(float), path, "its pixels"); !s) return s;
+    in.allow_more(2 + 200e-9 * static_cast<double>(texels));
+    if (!accepted(in, &broken)) return broken;
+    ImageChannel image;
+    image.width = width;
+    image.height = height;
+    image.values.resize(texels);
+    if (!in.read(image.values.data(), texels * sizeof(float))) return Error{path + ": the image reader broke off its answer"};
+    result = std::move(image);
+    return {};
+  };
+  IsolationLimits limits;
+  limits.memory = (std::uint64_t{256} << 20) + memory_budget();  // the budget, and room for the libraries' own state
+  limits.cpu_seconds = 5;
+  limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
+  const Status run = run_isolated("OpenImageIO's reader", limits, child, parent);
+  if (!run) return Error{run.error().message.rfind(path, 0) == 0 ? run.error().message : path + ": " + run.error().message};
+  return result;
 }
 
 }  // namespace lightvol::detail

@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <OpenImageIO/imageio.h>
 
@@ -27,6 +28,26 @@ struct OpenImage {
 // promising more decoded bytes than the file can hold.
 Result<OpenImage> open_image(const std::string& path,
                              const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
+
+// One channel of an image as floats, rows as stored.
+struct ImageChannel {
+  int width = 0;
+  int height = 0;
+  std::vector<float> values;  // width × height
+};
+
+// Opens the image at `path` as open_image does, lets `select(spec)` pick the channel to read (or
+// refuse the image with an Error), and reads it as floats: all of it in a child process
+// (core/isolated.h), since OpenImageIO 2.4's readers and the libraries behind them are not
+// hardened against forged files (OpenImageIO's own fuzzing began in 2026 and found, among
+// others, a heap overflow in its TIFF reader). A crash, more than 5 s of processor time for the
+// header (then 2 s and 200 ns per texel for the pixels), or memory beyond the budget is an Error
+// naming the file; so is a pixel read that fails, as "<path>: <read_failure>: <OpenImageIO's
+// message>".
+Result<ImageChannel> read_image_channel(const std::string& path,
+                                        const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
+                                        const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
+                                        const std::string& read_failure);
 
 // OpenImageIO's error queue as one line.
 std::string oiio_message(const std::string& message);

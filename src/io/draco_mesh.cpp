@@ -102,17 +102,12 @@ Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<s
   return out;
 }
 
-// The child's answer: a flag byte, then either a message (length, bytes) or the step, the
-// numbers of position floats and of indices, and both arrays.
-constexpr std::size_t kMaxMessage = 4096;
-
+// The child's answer: a flag byte, then either a message or the step, the numbers of position
+// floats and of indices, and both arrays.
 void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
   out.write_value(static_cast<std::uint8_t>(decoded.ok()));
   if (!decoded) {
-    const std::string& message = decoded.error().message;
-    const std::uint64_t length = std::min(message.size(), kMaxMessage);
-    out.write_value(length);
-    out.write(message.data(), length);
+    out.write_string(decoded.error().message);
     return;
   }
   const Mesh& mesh = decoded->mesh;
@@ -130,10 +125,8 @@ Status receive(ChildInput& in, Result<DracoMesh>* result) {
   std::uint8_t ok = 0;
   if (!in.read_value(&ok)) return broken;
   if (!ok) {
-    std::uint64_t length = 0;
-    if (!in.read_value(&length) || length > kMaxMessage) return broken;
-    std::string message(length, '\0');
-    if (!in.read(message.data(), length)) return broken;
+    std::string message;
+    if (!in.read_string(&message)) return broken;
     *result = Error{std::move(message)};
     return {};
   }
@@ -165,16 +158,16 @@ std::vector<Result<DracoMesh>> decode_draco_all(const std::vector<DracoRequest>&
   // 8.4 M-triangle volume is 4.2 MiB and decodes in 1.3 s, in 540 MiB, a flat one of as many
   // triangles is 2.2 MiB in as much memory; so 5 s of processor time and 10 s per MiB of data,
   // four times that in wall-clock time on a loaded machine, and 256 MiB and 4096 bytes per byte
-  // of data, within the memory budget (fuzzing found data of 52 bytes for which Draco allocates
-  // 2.8 GB).
+  // of data, this within the memory budget (fuzzing found data of 52 bytes for which Draco
+  // allocates 2.8 GB).
   std::size_t bytes = 0;
   for (const DracoRequest& r : requests) bytes += r.bytes.size();
   IsolationLimits limits;
   limits.cpu_seconds = 5 + 10.0 * static_cast<double>(bytes) / (1 << 20);
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
-  const std::uint64_t needed = (std::uint64_t{256} << 20) + 4096 * static_cast<std::uint64_t>(bytes);
-  limits.memory = std::min(needed, memory_budget());
-  if (needed <= memory_budget())
+  const std::uint64_t per_byte = 4096 * static_cast<std::uint64_t>(bytes);
+  limits.memory = (std::uint64_t{256} << 20) + std::min(per_byte, memory_budget());
+  if (per_byte <= memory_budget())
     limits.memory_advice = "no Draco mesh of " + std::to_string(bytes) + " bytes needs that much: the data is corrupt";
   std::vector<Result<DracoMesh>> decoded;
   decoded.reserve(requests.size());

@@ -77,18 +77,17 @@ Result<Image> read_image(const std::string& path) {
     return check_memory(texels * (sizeof(float) + sizeof(double)), path,
                         "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
   };
-  Result<detail::OpenImage> opened = detail::open_image(path, within_budget);
-  if (!opened) return opened.error();
-  OIIO::ImageInput* const in = opened->input.get();
-  const OIIO::ImageSpec& spec = opened->spec;
-  if (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8)
-    return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
+  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
+    if (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8)
+      return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
+    return 0;
+  };
+  const Result<detail::ImageChannel> read = detail::read_image_channel(path, within_budget, select, "cannot read image");
+  if (!read) return read.error();
   Image image;
-  image.width = spec.width;
-  image.height = spec.height;
-  std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height);
-  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, pixels.data()) || in->has_error())
-    return Error{path + ": cannot read image: " + detail::oiio_message(in->geterror())};
+  image.width = read->width;
+  image.height = read->height;
+  const std::vector<float>& pixels = read->values;
   image.values.assign(pixels.begin(), pixels.end());
   return image;
 }
