@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <new>
 
 #include <fcntl.h>
@@ -104,6 +105,32 @@ bool ChildInput::read_string(std::string* text) {
   if (!read_value(&length) || length > ChildOutput::kMaxString) return false;
   text->assign(length, '\0');
   return read(text->data(), length);
+}
+
+void ChildOutput::write_mesh(const Mesh& mesh) {
+  write_value(static_cast<std::uint64_t>(mesh.positions.size()));
+  write_value(static_cast<std::uint64_t>(mesh.indices.size()));
+  write(mesh.positions.data(), mesh.positions.size() * sizeof(float));
+  write(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
+}
+
+bool ChildInput::read_mesh(Mesh* mesh, const std::string& source, Status* refused) {
+  std::uint64_t floats = 0, indices = 0;
+  if (!read_value(&floats) || !read_value(&indices)) return false;
+  if (floats % 3 != 0 || indices % 3 != 0 || floats / 3 >= std::numeric_limits<std::uint32_t>::max() ||
+      indices > std::numeric_limits<std::uint64_t>::max() / 16 || floats > std::numeric_limits<std::uint64_t>::max() / 16)
+    return false;
+  // The arrays, and the copy welding makes of them.
+  if (Status s = check_memory(8 * (floats + indices), source, "reading " + std::to_string(indices / 3) + " triangles"); !s) {
+    *refused = s;
+    return false;
+  }
+  mesh->positions.resize(floats);
+  mesh->indices.resize(indices);
+  if (!read(mesh->positions.data(), floats * sizeof(float)) || !read(mesh->indices.data(), indices * sizeof(std::uint32_t)))
+    return false;
+  const std::uint64_t vertices = floats / 3;
+  return std::all_of(mesh->indices.begin(), mesh->indices.end(), [&](std::uint32_t v) { return v < vertices; });
 }
 
 void ChildInput::allow_more(double cpu_seconds) {

@@ -14,6 +14,7 @@
 #include <functional>
 #include <string>
 
+#include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 
 namespace lightvol {
@@ -29,6 +30,8 @@ class ChildOutput {
   // Its length, then its bytes (at most kMaxString of them).
   void write_string(const std::string& text);
   static constexpr std::size_t kMaxString = 4096;
+  // The numbers of position floats and of indices, then both arrays.
+  void write_mesh(const Mesh& mesh);
 
  private:
   int fd_;
@@ -44,6 +47,10 @@ class ChildInput {
   bool read_value(T* value) { return read(value, sizeof(*value)); }
   // A string as ChildOutput::write_string sends it; false if it breaks off or is too long.
   bool read_string(std::string* text);
+  // A mesh as ChildOutput::write_mesh sends it, checked: whole triangles, every index naming a
+  // vertex, fewer than 2^32 vertices, the arrays within the memory budget (an Error naming
+  // `source` if not). False if the answer breaks off or does not hold together.
+  bool read_mesh(Mesh* mesh, const std::string& source, Status* refused);
   bool timed_out() const { return timed_out_; }
   // Grants the child `cpu_seconds` more processor time, and four times that more wall-clock time:
   // for work whose size only the child's first answer tells (an image's texel count).

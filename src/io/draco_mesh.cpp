@@ -110,12 +110,8 @@ void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
     out.write_string(decoded.error().message);
     return;
   }
-  const Mesh& mesh = decoded->mesh;
   out.write_value(decoded->step);
-  out.write_value(static_cast<std::uint64_t>(mesh.positions.size()));
-  out.write_value(static_cast<std::uint64_t>(mesh.indices.size()));
-  out.write(mesh.positions.data(), mesh.positions.size() * sizeof(float));
-  out.write(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
+  out.write_mesh(decoded->mesh);
 }
 
 // Reads the child's answer, trusting nothing but what it can check: counts within the budget and
@@ -131,21 +127,9 @@ Status receive(ChildInput& in, Result<DracoMesh>* result) {
     return {};
   }
   DracoMesh out;
-  std::uint64_t floats = 0, indices = 0;
-  if (!in.read_value(&out.step) || !in.read_value(&floats) || !in.read_value(&indices)) return broken;
-  if (floats % 3 != 0 || indices % 3 != 0 || floats / 3 >= std::numeric_limits<std::uint32_t>::max() ||
-      !std::isfinite(out.step) || out.step < 0)
-    return broken;
-  if (Status s = check_memory(8 * (floats + indices), "the Draco data", "decoding " + std::to_string(indices / 3) + " faces"); !s)
-    return s;
-  out.mesh.positions.resize(floats);
-  out.mesh.indices.resize(indices);
-  if (!in.read(out.mesh.positions.data(), floats * sizeof(float)) ||
-      !in.read(out.mesh.indices.data(), indices * sizeof(std::uint32_t)))
-    return broken;
-  const std::uint64_t points = floats / 3;
-  if (!std::all_of(out.mesh.indices.begin(), out.mesh.indices.end(), [&](std::uint32_t v) { return v < points; }))
-    return broken;
+  if (!in.read_value(&out.step) || !std::isfinite(out.step) || out.step < 0) return broken;
+  Status refused;
+  if (!in.read_mesh(&out.mesh, "the Draco data", &refused)) return refused ? Status{broken} : refused;
   *result = std::move(out);
   return {};
 }

@@ -16,6 +16,8 @@
 #include <OpenMesh/Core/System/omstream.hh>
 
 #include <lightvol/check/topology.h>
+#include <lightvol/core/isolated.h>
+#include <lightvol/core/limits.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/draco_mesh.h>
 #include <lightvol/io/glb_reader.h>
@@ -271,8 +273,7 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
   return mesh;
 }
 
-Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std::uintmax_t size) {
-  if (Status s = check_header(path, format, size); !s) return s.error();
+Result<Mesh> read_with_openmesh_here(const std::string& path, std::uintmax_t size) {
   // OpenMesh chats (and complains) on its log streams; the Error says what went wrong instead.
   omlog().disable();
   omout().disable();
@@ -289,6 +290,43 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
   if (!importer.error.empty()) return Error{path + ": " + importer.error};
   if (!read) return Error{path + ": cannot read: malformed or truncated file"};
   return mesh;
+}
+
+// STL through OpenMesh's reader, which trusts its input: in a child process (core/isolated.h),
+// with 5 s of processor time and 10 s per MiB (it parses tens of MiB a second) and the budget.
+Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std::uintmax_t size) {
+  if (Status s = check_header(path, format, size); !s) return s.error();
+  IsolationLimits limits;
+  limits.cpu_seconds = 5 + 10.0 * static_cast<double>(size) / (1 << 20);
+  limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
+  limits.memory = (std::uint64_t{256} << 20) + memory_budget();
+  Result<Mesh> result = Error{""};
+  const Status run = run_isolated(
+      "OpenMesh's reader", limits,
+      [&](ChildOutput& out) {
+        const Result<Mesh> mesh = read_with_openmesh_here(path, size);
+        out.write_value(static_cast<std::uint8_t>(mesh.ok()));
+        if (mesh) out.write_mesh(*mesh);
+        else out.write_string(mesh.error().message);
+      },
+      [&](ChildInput& in) -> Status {
+        const Error broken{path + ": OpenMesh's reader broke off its answer"};
+        std::uint8_t ok = 0;
+        if (!in.read_value(&ok)) return broken;
+        if (!ok) {
+          std::string message;
+          if (!in.read_string(&message)) return broken;
+          result = Error{std::move(message)};
+          return {};
+        }
+        Mesh mesh;
+        Status refused;
+        if (!in.read_mesh(&mesh, path, &refused)) return refused ? Status{broken} : refused;
+        result = std::move(mesh);
+        return {};
+      });
+  if (!run) return Error{run.error().message.rfind(path, 0) == 0 ? run.error().message : path + ": " + run.error().message};
+  return result;
 }
 
 // DRC and GLB: the whole file in memory, decoded by Draco or read by the GLB reader.
