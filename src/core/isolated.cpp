@@ -11,7 +11,6 @@
 #include <new>
 
 #include <fcntl.h>
-#include <malloc.h>
 #include <poll.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -60,10 +59,6 @@ rlimit cpu_limit(double seconds) {
 // later), and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
 // memory alone exceeds any such limit).
 void limit_child(double cpu, std::uint64_t space) {
-  // Large blocks from fresh mappings: the heap's free pages are the parent's, shared copy-on-write,
-  // and each one the child reused would be copied first (glibc raises this threshold as blocks
-  // are freed).
-  ::mallopt(M_MMAP_THRESHOLD, 256 * 1024);
   const rlimit no_core{0, 0};
   setrlimit(RLIMIT_CORE, &no_core);
   const rlimit processor = cpu_limit(cpu);
