@@ -29,6 +29,17 @@ struct OpenImage {
 Result<OpenImage> open_image(const std::string& path,
                              const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
 
+// open_image in two steps: lightvol's checks of the file before any third-party code reads it
+// (regular file, format by magic bytes or extension, EXR and PNG structure), then OpenImageIO's
+// open and the checks of the header it reads.
+struct ImageFile {
+  std::string format;  // OpenImageIO's plugin name
+  std::string magic;   // the file's first bytes
+};
+Result<ImageFile> check_image_file(const std::string& path);
+Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& file,
+                                     const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
+
 // One channel of an image as floats, rows as stored.
 struct ImageChannel {
   int width = 0;

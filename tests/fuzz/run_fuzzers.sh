@@ -5,7 +5,8 @@
 # Third-party decoders run in child processes (src/core/isolated.h): when one of them fails, the
 # child may leave an artifact too (libFuzzer's state is inherited) while lightvol returns an error
 # and the run goes on. Each artifact is replayed after the run: those the target survives are
-# moved to BUILD_DIR/fuzz-artifacts/contained and listed, not counted as failures.
+# moved to BUILD_DIR/fuzz-artifacts/contained and listed, not counted as failures. A sanitizer
+# report that a child printed in lightvol's own code fails the run all the same.
 #   tests/fuzz/run_fuzzers.sh BUILD_DIR [SECONDS=20] [TARGET...]
 # With RUNS=N (and optionally SEED, default 1) each target stops after N inputs from a fixed seed,
 # SECONDS still capping it: the same inputs on every machine, as CI wants.
@@ -50,6 +51,8 @@ for t in "${targets[@]}"; do
   else
     grep -E "^stat::number_of_executed_units|^Done" "$build_dir/fuzz_$t.log" || true
   fi
+  # A child's report in our own code is a failure too (tests/fuzz/child_reports.py).
+  python3 "$source_dir/tests/fuzz/child_reports.py" "$build_dir/fuzz_$t.log" "$source_dir" || status=1
   for a in "$artifacts/${t}-"*; do
     [ -f "$a" ] || continue
     if "$build_dir/tests/fuzz/fuzz_$t" -rss_limit_mb=3072 -malloc_limit_mb=1024 -timeout=10 "$a" >/dev/null 2>&1; then
