@@ -11,6 +11,9 @@ import sys
 log_path, source_dir = sys.argv[1], sys.argv[2].rstrip("/") + "/src/"
 lines = open(log_path, errors="replace").read().splitlines()
 ours, contained = [], 0
+# libFuzzer's malloc limit is inherited by the children: a decoder asking for more prints this and
+# ends its child (lightvol then reports the decoder's failure).
+allocations = sum("ERROR: libFuzzer: out-of-memory (malloc(" in line for line in lines)
 # Frames of the sanitizer runtimes and libc that sit above the faulting code in a report.
 runtime = re.compile(r"(compiler-rt|sanitizer|asan_|ubsan|libc\.so|libstdc\+\+|__interceptor|libFuzzer|fuzzer::)")
 i = 0
@@ -40,4 +43,6 @@ for report in ours:
     print("sanitizer report in lightvol's code inside a child process: " + report)
 if contained:
     print(f"{contained} sanitizer report(s) inside third-party decoders, contained in their child processes")
+if allocations:
+    print(f"{allocations} allocation(s) beyond -malloc_limit_mb, each ending a decoder's child process")
 sys.exit(1 if ours else 0)
