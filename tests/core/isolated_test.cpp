@@ -20,6 +20,12 @@ void expect_no_children() {
   EXPECT_EQ(errno, ECHILD);
 }
 
+// A parent that expects one int from its child.
+Status read_an_int(ChildInput& in) {
+  int x = 0;
+  return in.read_value(&x) ? Status{} : Error{"short"};
+}
+
 TEST(Isolated, ParentReadsWhatTheChildWrites) {
   std::vector<double> got(3);
   const Status s = run_isolated(
@@ -56,10 +62,7 @@ TEST(Isolated, ALargeAnswerPassesThePipeWhole) {
 TEST(Isolated, AChildThatCrashesIsAnErrorNamingTheSignal) {
   const Status s = run_isolated(
       "the decoder", {}, [](ChildOutput&) { std::abort(); },
-      [](ChildInput& in) -> Status {
-        int x = 0;
-        return in.read_value(&x) ? Status{} : Error{"short"};
-      });
+      read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder crashed on this input (signal 6: Aborted)");
   expect_no_children();
@@ -89,10 +92,7 @@ TEST(Isolated, AChildThatSpinsIsStoppedAtItsProcessorTime) {
         volatile std::uint64_t x = 0;
         for (;;) x = x + 1;
       },
-      [](ChildInput& in) -> Status {
-        int x = 0;
-        return in.read_value(&x) ? Status{} : Error{"short"};
-      });
+      read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
   expect_no_children();
@@ -107,10 +107,7 @@ TEST(Isolated, AChildThatWaitsIsStoppedAtTheDeadline) {
       [](ChildOutput&) {
         for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
       },
-      [](ChildInput& in) -> Status {
-        int x = 0;
-        return in.read_value(&x) ? Status{} : Error{"short"};
-      });
+      read_an_int);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder took longer than 0.5 s on this input and was stopped");
@@ -158,10 +155,7 @@ TEST(Isolated, TheParentsOwnRefusalIsTheAnswerAndTheChildIsEnded) {
 TEST(Isolated, AChildThatExitsEarlyIsAnError) {
   const Status s = run_isolated(
       "the decoder", {}, [](ChildOutput&) { _exit(3); },
-      [](ChildInput& in) -> Status {
-        int x = 0;
-        return in.read_value(&x) ? Status{} : Error{"short"};
-      });
+      read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder failed (exit status 3)");
 }
