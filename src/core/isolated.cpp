@@ -49,14 +49,15 @@ std::uint64_t address_space_bytes() {
   return ok ? pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
 }
 
-// RLIMIT_CPU for `seconds`: SIGXCPU at the soft limit, SIGKILL a second later.
+// RLIMIT_CPU for `seconds`: SIGXCPU, which ends the child, at the soft limit. The hard limit stays
+// open, so that the parent may raise the soft one later (ChildInput::allow_more) without
+// privileges; the wall-clock deadline backs it.
 rlimit cpu_limit(double seconds) {
   const auto soft = static_cast<rlim_t>(std::max(1.0, std::floor(seconds)));
-  return {soft, soft + 1};
+  return {soft, RLIM_INFINITY};
 }
 
-// In the child: no core files, `cpu` seconds of processor time (SIGXCPU, then SIGKILL a second
-// later), and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
+// In the child: no core files, `cpu` seconds of processor time, and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
 // memory alone exceeds any such limit).
 void limit_child(double cpu, std::uint64_t space) {
   const rlimit no_core{0, 0};
@@ -134,7 +135,7 @@ void ChildInput::allow_more(double cpu_seconds) {
   deadline_ += 4 * cpu_seconds;
   wall_added_ += 4 * cpu_seconds;
   const rlimit limit = cpu_limit(cpu_);
-  ::prlimit(pid_, RLIMIT_CPU, &limit, nullptr);  // the parent may raise its own child's limits
+  ::prlimit(pid_, RLIMIT_CPU, &limit, nullptr);  // a process may set its own child's soft limits
 }
 
 bool ChildInput::read(void* data, std::size_t bytes) {

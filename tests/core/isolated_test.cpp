@@ -1,6 +1,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <ctime>
 #include <thread>
 #include <vector>
 
@@ -95,6 +96,38 @@ TEST(Isolated, AChildThatSpinsIsStoppedAtItsProcessorTime) {
       read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
+  expect_no_children();
+}
+
+// Work whose size the child's first answer tells (an image's texels) gets more time then, without
+// privileges (the tests also run as a user who is not root).
+TEST(Isolated, TheParentMayGrantMoreProcessorTimeOnTheWay) {
+  IsolationLimits limits;
+  limits.cpu_seconds = 1;
+  const auto spin = [](double seconds) {
+    const std::clock_t start = std::clock();
+    volatile std::uint64_t x = 0;
+    while (static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC < seconds) x = x + 1;
+  };
+  const auto child = [&](ChildOutput& out) {
+    out.write_value(1);
+    spin(2.5);
+    out.write_value(2);
+  };
+  const auto parent = [](bool grant) {
+    return [grant](ChildInput& in) -> Status {
+      int first = 0, second = 0;
+      if (!in.read_value(&first)) return Error{"no first"};
+      if (grant) in.allow_more(3);
+      if (!in.read_value(&second) || second != 2) return Error{"no second"};
+      return {};
+    };
+  };
+  const Status granted = run_isolated("the decoder", limits, child, parent(true));
+  EXPECT_TRUE(granted.ok()) << granted.error().message;
+  const Status refused = run_isolated("the decoder", limits, child, parent(false));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
   expect_no_children();
 }
 
