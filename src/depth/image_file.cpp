@@ -309,13 +309,6 @@ Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& f
   return image;
 }
 
-Result<OpenImage> open_image(const std::string& path,
-                             const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
-  const Result<ImageFile> file = check_image_file(path);
-  if (!file) return file.error();
-  return open_checked_image(path, *file, within_budget);
-}
-
 Result<ImageChannel> read_image_channel(const std::string& path,
                                         const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
                                         const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
@@ -379,20 +372,11 @@ Result<ImageChannel> read_image_channel(const std::string& path,
     result = std::move(image);
     return {};
   };
-  // OpenImageIO's plugins are found and set up here, once: in the child, where the state would be
-  // lost, it took every read about 10 ms. Nothing is opened.
-  static const bool warm = [] {
-    OIIO::attribute("openexr:core", 1);
-    for (const char* format : {"openexr", "tiff", "png", "pnm", "hdr", "zfile"}) (void)OIIO::ImageInput::create(format);
-    return true;
-  }();
-  (void)warm;
   IsolationLimits limits;
   limits.memory = (std::uint64_t{256} << 20) + memory_budget();  // the budget, and room for the libraries' own state
   limits.cpu_seconds = 5;
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
-  const Status run = run_isolated("OpenImageIO's reader", limits, child, parent);
-  if (!run) return Error{run.error().message.rfind(path, 0) == 0 ? run.error().message : path + ": " + run.error().message};
+  if (Status run = run_isolated(path + ": OpenImageIO's reader", limits, child, parent); !run) return run.error();
   return result;
 }
 

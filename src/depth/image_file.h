@@ -1,5 +1,6 @@
 // Opening image files through OpenImageIO for input a user or a script may have forged. Internal
-// to the library (it names OpenImageIO types): read_depth_image and read_image are the entry points.
+// to the library (it names OpenImageIO types): read_depth_image and read_image, through
+// read_image_channel, are the entry points.
 #pragma once
 
 #include <cstdint>
@@ -19,19 +20,15 @@ struct OpenImage {
   OIIO::ImageSpec spec;
 };
 
-// Opens the image at `path` and reads its header, refusing before any pixel is allocated:
-// anything but a regular file; a format other than EXR, TIFF, PNG, PFM/PGM, HDR and ZFile (by
-// magic bytes, else by extension: OpenImageIO's own open() would try every plugin it has, video
-// and camera-raw decoders included, on a file its extension's plugin cannot open); EXR and PNG
-// headers whose sizes run past the file; fewer than 2×2 texels, volumes and deep images; more
-// than 2^30 texels; `within_budget(spec)` failing (the caller's memory check); and a header
-// promising more decoded bytes than the file can hold.
-Result<OpenImage> open_image(const std::string& path,
-                             const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
-
-// open_image in two steps: lightvol's checks of the file before any third-party code reads it
-// (regular file, format by magic bytes or extension, EXR and PNG structure), then OpenImageIO's
-// open and the checks of the header it reads.
+// Opening an image in two steps, refusing before any pixel is allocated. check_image_file is
+// lightvol's own look at the file before any third-party code reads it: anything but a regular
+// file; a format other than EXR, TIFF, PNG, PFM/PGM, HDR and ZFile (by magic bytes, else by
+// extension: OpenImageIO's own open() would try every plugin it has, video and camera-raw
+// decoders included, on a file its extension's plugin cannot open); EXR and PNG headers whose
+// sizes run past the file. open_checked_image is OpenImageIO's open and the checks of the header
+// it reads: fewer than 2×2 texels, volumes and deep images; more than 2^30 texels;
+// `within_budget(spec)` failing (the caller's memory check); a header promising more decoded
+// bytes than the file can hold.
 struct ImageFile {
   std::string format;  // OpenImageIO's plugin name
   std::string magic;   // the file's first bytes
@@ -47,7 +44,7 @@ struct ImageChannel {
   std::vector<float> values;  // width × height
 };
 
-// Opens the image at `path` as open_image does, lets `select(spec)` pick the channel to read (or
+// Opens the image at `path` (check_image_file, then open_checked_image), lets `select(spec)` pick the channel to read (or
 // refuse the image with an Error), and reads it as floats: all of it in a child process
 // (core/isolated.h), since OpenImageIO 2.4's readers and the libraries behind them are not
 // hardened against forged files (OpenImageIO's own fuzzing began in 2026 and found, among

@@ -302,7 +302,7 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
   limits.memory = (std::uint64_t{256} << 20) + memory_budget();
   Result<Mesh> result = Error{""};
   const Status run = run_isolated(
-      "OpenMesh's reader", limits,
+      path + ": OpenMesh's reader", limits,
       [&](ChildOutput& out) {
         const Result<Mesh> mesh = read_with_openmesh_here(path, size);
         out.write_value(static_cast<std::uint8_t>(mesh.ok()));
@@ -325,7 +325,7 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
         result = std::move(mesh);
         return {};
       });
-  if (!run) return Error{run.error().message.rfind(path, 0) == 0 ? run.error().message : path + ": " + run.error().message};
+  if (!run) return run.error();
   return result;
 }
 
