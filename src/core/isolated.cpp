@@ -110,6 +110,18 @@ void ChildOutput::write_mesh(const Mesh& mesh) {
   write(mesh.indices.data(), mesh.indices.size() * sizeof(std::uint32_t));
 }
 
+void ChildOutput::refuse(const Error& error) {
+  write_value(std::uint8_t{0});
+  write_string(error.message);
+}
+
+ChildInput::Verdict ChildInput::read_verdict(Error* refusal) {
+  std::uint8_t flag = 0;
+  if (!read_value(&flag) || flag > 1) return Verdict::broken;
+  if (flag == 1) return Verdict::accepted;
+  return read_string(&refusal->message) ? Verdict::refused : Verdict::broken;
+}
+
 bool ChildInput::read_mesh(Mesh* mesh, const std::string& source, Status* refused) {
   std::uint64_t floats = 0, indices = 0;
   if (!read_value(&floats) || !read_value(&indices)) return false;

@@ -32,6 +32,9 @@ class ChildOutput {
   static constexpr std::size_t kMaxString = 4096;
   // The numbers of position floats and of indices, then both arrays.
   void write_mesh(const Mesh& mesh);
+  // A verdict before what follows it: the work went on (an answer follows), or was refused.
+  void accept() { write_value(std::uint8_t{1}); }
+  void refuse(const Error& error);
 
  private:
   int fd_;
@@ -51,6 +54,9 @@ class ChildInput {
   // vertex, fewer than 2^32 vertices, the arrays within the memory budget (an Error naming
   // `source` if not). False if the answer breaks off or does not hold together.
   bool read_mesh(Mesh* mesh, const std::string& source, Status* refused);
+  // A verdict as ChildOutput::accept or refuse sends it (`*refusal` the refusal's Error).
+  enum class Verdict { accepted, refused, broken };
+  Verdict read_verdict(Error* refusal);
   bool timed_out() const { return timed_out_; }
   // Grants the child `cpu_seconds` more processor time, and four times that more wall-clock time:
   // for work whose size only the child's first answer tells (an image's texel count).

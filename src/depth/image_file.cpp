@@ -15,6 +15,7 @@
 
 namespace lightvol::detail {
 
+
 // OpenImageIO keeps errors in per-thread (global) or per-object queues; fetch and tidy them.
 // OpenImageIO's error queue as one line: OpenEXR's core can queue a dozen lines per file, each
 // prefixed with "EXR Error (path): "; keep the first and the last (the cause and the conclusion).
@@ -316,59 +317,55 @@ Result<ImageChannel> read_image_channel(const std::string& path,
   // lightvol's own checks of the file run here, where fuzzing sees them; OpenImageIO in the child.
   const Result<ImageFile> file = check_image_file(path);
   if (!file) return file.error();
-  // The child's answer: a flag byte, then a message, or the size and a second flag byte, then a
-  // message or the pixels.
+  // The child's answer: a verdict, the size, a second verdict, the pixels.
   const auto child = [&](ChildOutput& out) {
-    const auto refuse = [&](const Error& e) {
-      out.write_value(std::uint8_t{0});
-      out.write_string(e.message);
-    };
     Result<OpenImage> opened = open_checked_image(path, *file, within_budget);
-    if (!opened) return refuse(opened.error());
+    if (!opened) return out.refuse(opened.error());
     const Result<int> channel = select(opened->spec);
-    if (!channel) return refuse(channel.error());
+    if (!channel) return out.refuse(channel.error());
     const OIIO::ImageSpec& spec = opened->spec;
-    out.write_value(std::uint8_t{1});
+    out.accept();
     out.write_value(static_cast<std::int32_t>(spec.width));
     out.write_value(static_cast<std::int32_t>(spec.height));
     std::vector<float> values(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
     OIIO::ImageInput* const in = opened->input.get();
     // A truncated file can come back "read" with the damage reported only in the error queue.
     if (!in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT, values.data()) || in->has_error())
-      return refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
+      return out.refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
     in->close();
-    out.write_value(std::uint8_t{1});
+    out.accept();
     out.write(values.data(), values.size() * sizeof(float));
   };
 
   Result<ImageChannel> result = Error{""};
-  // Reads one flag byte; false (and `result` the message) when it says the child refused.
-  const auto accepted = [&](ChildInput& in, Status* broken) {
-    std::uint8_t ok = 0;
-    std::string message;
-    if (!in.read_value(&ok) || (!ok && !in.read_string(&message))) {
-      *broken = Error{path + ": the image reader broke off its answer"};
-      return false;
+  const Error broken{path + ": the image reader broke off its answer"};
+  // A verdict: true when the child went on; else `*answer` says how this reading ends (the child's
+  // refusal is the result, a broken answer the error).
+  const auto accepted = [&](ChildInput& in, Status* answer) {
+    Error refusal;
+    switch (in.read_verdict(&refusal)) {
+      case ChildInput::Verdict::accepted: return true;
+      case ChildInput::Verdict::refused: result = refusal; *answer = {}; return false;
+      case ChildInput::Verdict::broken: *answer = broken; return false;
     }
-    if (!ok) result = Error{std::move(message)};
-    return ok != 0;
+    return false;
   };
   const auto parent = [&](ChildInput& in) -> Status {
-    Status broken;
-    if (!accepted(in, &broken)) return broken;
+    Status answer;
+    if (!accepted(in, &answer)) return answer;
     std::int32_t width = 0, height = 0;
     if (!in.read_value(&width) || !in.read_value(&height) || width < 2 || height < 2 ||
         static_cast<std::int64_t>(width) * height > (std::int64_t{1} << 30))
-      return Error{path + ": the image reader broke off its answer"};
+      return broken;
     const auto texels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
     if (Status s = check_memory(texels * sizeof(float), path, "its pixels"); !s) return s;
     in.allow_more(2 + 200e-9 * static_cast<double>(texels));
-    if (!accepted(in, &broken)) return broken;
+    if (!accepted(in, &answer)) return answer;
     ImageChannel image;
     image.width = width;
     image.height = height;
     image.values.resize(texels);
-    if (!in.read(image.values.data(), texels * sizeof(float))) return Error{path + ": the image reader broke off its answer"};
+    if (!in.read(image.values.data(), texels * sizeof(float))) return broken;
     result = std::move(image);
     return {};
   };

@@ -102,14 +102,10 @@ Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<s
   return out;
 }
 
-// The child's answer: a flag byte, then either a message or the step, the numbers of position
-// floats and of indices, and both arrays.
+// The child's answer: a verdict, then the step and the mesh.
 void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
-  out.write_value(static_cast<std::uint8_t>(decoded.ok()));
-  if (!decoded) {
-    out.write_string(decoded.error().message);
-    return;
-  }
+  if (!decoded) return out.refuse(decoded.error());
+  out.accept();
   out.write_value(decoded->step);
   out.write_mesh(decoded->mesh);
 }
@@ -118,13 +114,11 @@ void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
 // whole triangles, every index naming a point.
 Status receive(ChildInput& in, Result<DracoMesh>* result) {
   const Error broken{"Draco's decoder broke off its answer"};
-  std::uint8_t ok = 0;
-  if (!in.read_value(&ok)) return broken;
-  if (!ok) {
-    std::string message;
-    if (!in.read_string(&message)) return broken;
-    *result = Error{std::move(message)};
-    return {};
+  Error refusal;
+  switch (in.read_verdict(&refusal)) {
+    case ChildInput::Verdict::broken: return broken;
+    case ChildInput::Verdict::refused: *result = refusal; return {};
+    case ChildInput::Verdict::accepted: break;
   }
   DracoMesh out;
   if (!in.read_value(&out.step) || !std::isfinite(out.step) || out.step < 0) return broken;

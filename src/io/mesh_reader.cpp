@@ -305,19 +305,17 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
       path + ": OpenMesh's reader", limits,
       [&](ChildOutput& out) {
         const Result<Mesh> mesh = read_with_openmesh_here(path, size);
-        out.write_value(static_cast<std::uint8_t>(mesh.ok()));
-        if (mesh) out.write_mesh(*mesh);
-        else out.write_string(mesh.error().message);
+        if (!mesh) return out.refuse(mesh.error());
+        out.accept();
+        out.write_mesh(*mesh);
       },
       [&](ChildInput& in) -> Status {
         const Error broken{path + ": OpenMesh's reader broke off its answer"};
-        std::uint8_t ok = 0;
-        if (!in.read_value(&ok)) return broken;
-        if (!ok) {
-          std::string message;
-          if (!in.read_string(&message)) return broken;
-          result = Error{std::move(message)};
-          return {};
+        Error refusal;
+        switch (in.read_verdict(&refusal)) {
+          case ChildInput::Verdict::broken: return broken;
+          case ChildInput::Verdict::refused: result = refusal; return {};
+          case ChildInput::Verdict::accepted: break;
         }
         Mesh mesh;
         Status refused;
