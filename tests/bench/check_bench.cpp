@@ -4,7 +4,7 @@
 // (--benchmark_filter) to attribute it.
 #include <benchmark/benchmark.h>
 
-#include <lightvol/check/cgal_checks.h>
+#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/check/check.h>
 #include <lightvol/core/stages.h>
 #include <lightvol/volume/static_volume.h>

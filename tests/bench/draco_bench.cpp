@@ -1,4 +1,4 @@
-// What running Draco's decoder in a child process costs (src/core/isolated.h): decoding the Draco
+// What running Draco's decoder in a child process costs (src/lightvol/core/detail/isolated.h): decoding the Draco
 // encoding of static spot volumes, isolated as lightvol reads them, and in this process.
 //   tests/bench/draco_bench [--benchmark_filter=...]
 #include <benchmark/benchmark.h>
@@ -7,7 +7,7 @@
 #include <string>
 
 #include <lightvol/export/export.h>
-#include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/detail/draco_mesh.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "synthetic_scene.h"

@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include <lightvol/check/cgal_checks.h>
+#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/check/check.h>
-#include <lightvol/check/topology.h>
+#include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
 

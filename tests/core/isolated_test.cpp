@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <lightvol/core/isolated.h>
+#include <lightvol/core/detail/isolated.h>
 
 namespace lightvol {
 namespace {

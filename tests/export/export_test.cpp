@@ -9,7 +9,7 @@
 #include <draco/io/gltf_decoder.h>
 #include <gtest/gtest.h>
 
-#include <lightvol/check/topology.h>
+#include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Sanitizer reports that fuzz targets survived: those printed by a decoder's child process
-(src/core/isolated.h), which lightvol turns into an error. A report whose faulting frame is in
+(src/lightvol/core/detail/isolated.h), which lightvol turns into an error. A report whose faulting frame is in
 lightvol's own sources is still a bug of ours and fails; one inside a third-party library
 (Draco, OpenImageIO, OpenMesh and what they call) is contained, and only counted.
   child_reports.py LOG SOURCE_DIR   -> exit 1 if any report is ours

@@ -2,7 +2,7 @@
 # Builds the libFuzzer targets with clang under ASan + UBSan into BUILD_DIR and runs each for
 # SECONDS on a copy of its seed corpus (tests/fuzz/corpus/NAME). Fails on any crash, leak,
 # sanitizer report, timeout or out-of-memory; the crashing input is left in BUILD_DIR/fuzz-artifacts.
-# Third-party decoders run in child processes (src/core/isolated.h): when one of them fails, the
+# Third-party decoders run in child processes (src/lightvol/core/detail/isolated.h): when one of them fails, the
 # child may leave an artifact too (libFuzzer's state is inherited) while lightvol returns an error
 # and the run goes on. Each artifact is replayed after the run: those the target survives are
 # moved to BUILD_DIR/fuzz-artifacts/contained and listed, not counted as failures. A sanitizer

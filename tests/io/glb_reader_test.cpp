@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <lightvol/core/limits.h>
-#include <lightvol/io/glb_reader.h>
+#include <lightvol/io/detail/glb_reader.h>
 
 namespace lightvol::detail {
 namespace {

@@ -1,4 +1,4 @@
-#include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/detail/draco_mesh.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +9,8 @@
 #include <draco/compression/decode.h>
 #include <draco/mesh/mesh.h>
 
-#include <lightvol/check/topology.h>
-#include <lightvol/core/isolated.h>
+#include <lightvol/check/detail/topology.h>
+#include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 
 namespace lightvol::detail {

@@ -1,4 +1,4 @@
-#include <lightvol/core/isolated.h>
+#include <lightvol/core/detail/isolated.h>
 
 #include <algorithm>
 #include <cerrno>

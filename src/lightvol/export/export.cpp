@@ -13,13 +13,13 @@
 #include <draco/mesh/mesh.h>
 
 #include <lightvol/check/check.h>
-#include <lightvol/check/topology.h>
+#include <lightvol/check/detail/topology.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/check.h>
-#include <lightvol/export/flat_exporter.h>
-#include <lightvol/export/ply_writer.h>
-#include <lightvol/io/draco_mesh.h>
-#include <lightvol/io/glb_reader.h>
+#include <lightvol/export/detail/flat_exporter.h>
+#include <lightvol/export/detail/ply_writer.h>
+#include <lightvol/io/detail/draco_mesh.h>
+#include <lightvol/io/detail/glb_reader.h>
 
 namespace lightvol {
 

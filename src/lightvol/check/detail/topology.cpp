@@ -1,4 +1,4 @@
-#include <lightvol/check/topology.h>
+#include <lightvol/check/detail/topology.h>
 
 #include <algorithm>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include <lightvol/depth/image_file.h>
+#include <lightvol/depth/detail/image_file.h>
 
 #include <algorithm>
 #include <cstring>
@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include <lightvol/core/isolated.h>
+#include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 
 namespace lightvol::detail {

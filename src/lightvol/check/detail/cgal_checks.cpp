@@ -1,6 +1,6 @@
 // The only translation unit that includes CGAL (slow to compile): the flat Mesh becomes a
 // CGAL::Surface_mesh here and nowhere else.
-#include <lightvol/check/cgal_checks.h>
+#include <lightvol/check/detail/cgal_checks.h>
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include <lightvol/core/json_keys.h>
+#include <lightvol/core/detail/json_keys.h>
 
 #include <algorithm>
 #include <cerrno>

@@ -10,7 +10,7 @@
 #include <string_view>
 
 #include <lightvol/core/result.h>
-#include <lightvol/io/draco_mesh.h>
+#include <lightvol/io/detail/draco_mesh.h>
 
 namespace lightvol::detail {
 

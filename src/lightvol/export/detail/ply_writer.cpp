@@ -1,4 +1,4 @@
-#include <lightvol/export/ply_writer.h>
+#include <lightvol/export/detail/ply_writer.h>
 
 #include <bit>
 #include <charconv>

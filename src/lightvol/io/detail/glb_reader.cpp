@@ -1,4 +1,4 @@
-#include <lightvol/io/glb_reader.h>
+#include <lightvol/io/detail/glb_reader.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include <lightvol/io/obj_reader.h>
+#include <lightvol/io/detail/obj_reader.h>
 
 #include <algorithm>
 #include <cerrno>

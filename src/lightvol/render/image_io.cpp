@@ -7,7 +7,7 @@
 
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
-#include <lightvol/depth/image_file.h>
+#include <lightvol/depth/detail/image_file.h>
 
 namespace lightvol {
 

@@ -13,7 +13,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
 
-#include <lightvol/check/cgal_checks.h>
+#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/core/check.h>
 #include <lightvol/core/math.h>
 

@@ -1,4 +1,4 @@
-#include <lightvol/io/ply_reader.h>
+#include <lightvol/io/detail/ply_reader.h>
 
 #include <algorithm>
 #include <cerrno>

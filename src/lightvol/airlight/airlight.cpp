@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <lightvol/core/check.h>
-#include <lightvol/core/json_keys.h>
+#include <lightvol/core/detail/json_keys.h>
 
 namespace lightvol {
 
