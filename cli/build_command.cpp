@@ -35,17 +35,18 @@ struct BuildOptions {
   int draco_bits = 16;
   bool quiet = false;
   bool json = false;
-  bool adaptive = false;      // --adaptive
-  double max_error = -1;      // --max-error, world units
+  bool adaptive = false;         // --adaptive
+  double max_error = -1;         // --max-error, world units
   std::string refine = "error";  // --refine error|laplacian
-  double threshold = -1;      // --threshold, for --refine laplacian
+  double threshold = -1;         // --threshold, for --refine laplacian
   bool no_check = false;
 };
 
 nlohmann::json stage_json(const StageLog& log) {
   nlohmann::json stages = nlohmann::json::array();
   for (const StageRecord& s : log.stages())
-    stages.push_back({{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_bytes", s.peak_memory_bytes}});
+    stages.push_back(
+        {{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_bytes", s.peak_memory_bytes}});
   return stages;
 }
 
@@ -87,7 +88,8 @@ int run_build(const BuildOptions& o) {
 
   const std::string& depth_path = o.depth_paths.front();
   if (!omni) progress.begin("reading " + depth_path);
-  Result<DepthImage> depth = omni ? Result<DepthImage>(DepthImage{}) : read_depth_image(depth_path, {o.channel});
+  Result<DepthImage> depth =
+      omni ? Result<DepthImage>(DepthImage{}) : read_depth_image(depth_path, {o.channel});
   if (!depth) return fail(depth.error().message);
   if (!omni) progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
 
@@ -141,7 +143,10 @@ int run_build(const BuildOptions& o) {
   const double volume = signed_volume(*mesh);
   nlohmann::json report = {
       {"inputs", o.depth_paths},
-      {"light", {{"path", o.light_path}, {"type", to_string(light->type)}, {"depth", to_string(light->depth)}}},
+      {"light",
+       {{"path", o.light_path},
+        {"type", to_string(light->type)},
+        {"depth", to_string(light->depth)}}},
       {"output", o.out_path},
       {"space", o.space},
       {"width", omni ? cube->size() : depth->width},
@@ -157,17 +162,21 @@ int run_build(const BuildOptions& o) {
   };
   if (adaptive) {
     const AdaptiveReport& a = adaptive_report;
-    report["adaptive"] = {
-        {"refine", o.refine},
-        {"max_error", o.refine == "laplacian" ? nlohmann::json(nullptr) : nlohmann::json(o.max_error)},
-        {"threshold", o.refine == "laplacian" ? nlohmann::json(o.threshold) : nlohmann::json(nullptr)},
-        {"max_error_reached", a.max_error_reached},
-        {"grid_triangles", a.grid_triangles},
-        {"leaves", a.leaves},
-        {"fixup_rounds", a.fixup_rounds},
-        {"seconds", {{"error_pyramid", a.pyramid_seconds}, {"balance", a.balance_seconds},
-                     {"emit", a.emit_seconds}, {"measure", a.measure_seconds},
-                     {"assemble", a.assemble_seconds}}}};
+    report["adaptive"] = {{"refine", o.refine},
+                          {"max_error", o.refine == "laplacian" ? nlohmann::json(nullptr)
+                                                                : nlohmann::json(o.max_error)},
+                          {"threshold", o.refine == "laplacian" ? nlohmann::json(o.threshold)
+                                                                : nlohmann::json(nullptr)},
+                          {"max_error_reached", a.max_error_reached},
+                          {"grid_triangles", a.grid_triangles},
+                          {"leaves", a.leaves},
+                          {"fixup_rounds", a.fixup_rounds},
+                          {"seconds",
+                           {{"error_pyramid", a.pyramid_seconds},
+                            {"balance", a.balance_seconds},
+                            {"emit", a.emit_seconds},
+                            {"measure", a.measure_seconds},
+                            {"assemble", a.assemble_seconds}}}};
   }
   if (!o.report_path.empty()) {
     if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
@@ -196,15 +205,20 @@ void add_build_command(CLI::App& app, Runner* run) {
       "The volume has one vertex per texel, at the texel centre's ray and depth, closed to the\n"
       "light (spot: a fan to its position; directional: walls and a cap on the near plane; omni:\n"
       "six faces joined by seams along the cube's edges and a triangle at each corner).\n"
-      "An omni light takes six images (+X -X +Y -Y +Z -Z), one path with {face} (px nx py ny pz nz)\n"
+      "An omni light takes six images (+X -X +Y -Y +Z -Z), one path with {face} (px nx py ny pz "
+      "nz)\n"
       "or one W x 6W strip with the faces top to bottom.\n"
-      "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file written.");
-  cmd->add_option("depth", o->depth_paths, "Depth image(s): EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+      "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file "
+      "written.");
+  cmd->add_option("depth", o->depth_paths,
+                  "Depth image(s): EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
-  cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")->required();
+  cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")
+      ->required();
   cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
-  cmd->add_option("--space", o->space, "Frame of the output: world or light (the light's eye space)")
+  cmd->add_option("--space", o->space,
+                  "Frame of the output: world or light (the light's eye space)")
       ->check(CLI::IsMember({"world", "light"}))
       ->capture_default_str();
   cmd->add_flag("--ascii", o->ascii, "Write ASCII PLY or STL instead of binary");
@@ -215,20 +229,24 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_option("--report", o->report_path,
                   "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
-  cmd->add_flag("--adaptive", o->adaptive,
-                "Adaptive tessellation: a quadtree whose cells stay coarse while every texel they cover "
-                "lies within --max-error world units of the surface (no T-junctions)");
-  cmd->add_option("--max-error", o->max_error, "Error bound of --adaptive, in world units along each texel ray")
+  cmd->add_flag(
+      "--adaptive", o->adaptive,
+      "Adaptive tessellation: a quadtree whose cells stay coarse while every texel they cover "
+      "lies within --max-error world units of the surface (no T-junctions)");
+  cmd->add_option("--max-error", o->max_error,
+                  "Error bound of --adaptive, in world units along each texel ray")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--refine", o->refine,
-                  "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
-                  "implies --adaptive)")
+  cmd->add_option(
+         "--refine", o->refine,
+         "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
+         "implies --adaptive)")
       ->check(CLI::IsMember({"error", "laplacian"}));
   cmd->add_option("--threshold", o->threshold,
                   "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_flag("--no-check", o->no_check,
-                "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
+  cmd->add_flag(
+      "--no-check", o->no_check,
+      "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress lines and no summary");
   cmd->callback([o, run] { *run = [o] { return run_build(*o); }; });
 }

@@ -60,7 +60,8 @@ nlohmann::json report_json(const CheckCommandOptions& o, const CheckReport& r) {
   for (const CheckResult& c : r.checks) {
     nlohmann::json offenders = nlohmann::json::array();
     for (const Offender& off : c.offenders)
-      offenders.push_back({{"faces", off.faces}, {"vertices", off.vertices}, {"positions", off.positions}});
+      offenders.push_back(
+          {{"faces", off.faces}, {"vertices", off.vertices}, {"positions", off.positions}});
     checks.push_back({{"name", c.name},
                       {"status", c.status == CheckStatus::passed   ? "passed"
                                  : c.status == CheckStatus::failed ? "failed"
@@ -91,9 +92,9 @@ void print_table(const CheckCommandOptions& o, const CheckReport& r) {
               thousands(r.triangles).c_str(), thousands(r.vertices).c_str());
   std::printf("  %-22s %-7s %9s  %s\n", "check", "result", "count", "first offender / detail");
   for (const CheckResult& c : r.checks) {
-    const std::string note =
-        c.status == CheckStatus::failed && !c.offenders.empty() ? offender_text(c.name, c.offenders.front())
-                                                                : c.detail;
+    const std::string note = c.status == CheckStatus::failed && !c.offenders.empty()
+                                 ? offender_text(c.name, c.offenders.front())
+                                 : c.detail;
     std::printf("  %-22s %-7s %9s  %s\n", c.name.c_str(), std::string(to_string(c.status)).c_str(),
                 thousands(c.count).c_str(), note.c_str());
   }
@@ -105,7 +106,8 @@ void print_table(const CheckCommandOptions& o, const CheckReport& r) {
     std::printf("  positions quantized to a grid of step %.3g (Draco): the checks allow for it\n",
                 r.quantization_step);
   for (const CheckResult& c : r.checks)
-    if (c.status == CheckStatus::failed) std::printf("  %s: %s\n", c.name.c_str(), c.detail.c_str());
+    if (c.status == CheckStatus::failed)
+      std::printf("  %s: %s\n", c.name.c_str(), c.detail.c_str());
   std::printf("%s\n", r.valid() ? "valid" : "INVALID");
 }
 
@@ -137,8 +139,9 @@ int run_check(const CheckCommandOptions& o) {
     print_table(o, report);
   }
   if (!report.valid()) {
-    if (o.quiet) std::fprintf(stderr, "lightvol: %s: invalid: %s\n", printable(o.mesh_path).c_str(),
-                              printable(report.first_failure()).c_str());
+    if (o.quiet)
+      std::fprintf(stderr, "lightvol: %s: invalid: %s\n", printable(o.mesh_path).c_str(),
+                   printable(report.first_failure()).c_str());
     return 1;
   }
   return 0;
@@ -160,7 +163,8 @@ void add_check_command(CLI::App& app, Runner* run) {
       "Exit 0 valid, 1 invalid, 2 unreadable input or bad usage.");
   cmd->add_option("mesh", o->mesh_path, "Mesh to check")->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json): linear-time proof");
-  cmd->add_flag("--cgal", o->cgal, "With --light, also run CGAL's self-intersection and volume tests");
+  cmd->add_flag("--cgal", o->cgal,
+                "With --light, also run CGAL's self-intersection and volume tests");
   cmd->add_option("--offenders", o->offenders, "Offenders kept per check")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

@@ -81,14 +81,16 @@ double exposure_for(const Image& image) {
 // The demo's picture: the surfaces the camera sees, lit by the spot light (Lambert, albedo 0.35,
 // shadowed by the shadow map, plus a little ambient light), seen through the medium, plus the
 // airlight of the volume. Normals come from the camera depth (neighbouring pixels' points).
-Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_window, int sw, int sh,
-                   const Image& airlight) {
+Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_window, int sw,
+                   int sh, const Image& airlight) {
   const Camera& cam = scene.camera;
   const Light& light = scene.light;
   const Mat4d to_clip = light.projection * light.view;
   bool ok = false;
   const Mat4d inv_projection = inverse(light.projection, &ok);
-  const auto eye_depth = [&](double d) { return -inv_projection.transform_point({0, 0, 2 * d - 1}).z; };
+  const auto eye_depth = [&](double d) {
+    return -inv_projection.transform_point({0, 0, 2 * d - 1}).z;
+  };
   const double st = scene.medium.extinction();
   const int w = cam.width, h = cam.height;
   std::vector<Vec3d> points(static_cast<std::size_t>(w) * h);
@@ -137,7 +139,8 @@ Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_wi
         if (here <= eye_depth(stored) * 1.01 + 0.02) lit = 1;
       }
       const double cos_l = std::max(0.0, dot(n, (1.0 / dist) * to_light));
-      const double irradiance = lit * scene.medium.intensity * cos_l / (dist * dist) * std::exp(-st * dist);
+      const double irradiance =
+          lit * scene.medium.intensity * cos_l / (dist * dist) * std::exp(-st * dist);
       const double radiance = 0.35 / 3.14159265358979 * irradiance + 0.003;
       image.values[i] += radiance * std::exp(-st * scene.surface[i]);
     }
@@ -208,8 +211,8 @@ int run_demo(const DemoOptions& o) {
 
   Progress progress(o.quiet);
   std::vector<Row> rows;
-  const auto add_row = [&](const std::string& step, const std::string& file, const std::string& count,
-                           const std::string& result) {
+  const auto add_row = [&](const std::string& step, const std::string& file,
+                           const std::string& count, const std::string& result) {
     progress.end();
     rows.push_back({step, file, count, result, progress.log().stages().back().seconds});
   };
@@ -240,9 +243,11 @@ int run_demo(const DemoOptions& o) {
   Result<std::vector<float>> shadow_window = passes.window(*light, size->width, size->height);
   if (!shadow_window) return fail(shadow_window.error().message);
   const DepthImage shadow = encode_depth(*light, size->width, size->height, *shadow_window);
-  if (Status s = write_depth_image(out("shadow_map.exr"), shadow); !s) return fail(s.error().message);
-  if (Status s = write_depth_image(out("shadow_map.png"),
-                                   depth_preview(*light, size->width, size->height, {*shadow_window}));
+  if (Status s = write_depth_image(out("shadow_map.exr"), shadow); !s)
+    return fail(s.error().message);
+  if (Status s =
+          write_depth_image(out("shadow_map.png"),
+                            depth_preview(*light, size->width, size->height, {*shadow_window}));
       !s)
     return fail(s.error().message);
   add_row("shadow map " + size_text(size->width, size->height), "shadow_map.exr",
@@ -257,9 +262,9 @@ int run_demo(const DemoOptions& o) {
       encode_depth(camera->view, camera->width, camera->height, *camera_window);
   if (Status s = write_depth_image(out("camera_depth.exr"), camera_depth); !s)
     return fail(s.error().message);
-  if (Status s = write_depth_image(out("camera_depth.png"),
-                                   depth_preview(camera->view, camera->width, camera->height,
-                                                 {*camera_window}));
+  if (Status s = write_depth_image(
+          out("camera_depth.png"),
+          depth_preview(camera->view, camera->width, camera->height, {*camera_window}));
       !s)
     return fail(s.error().message);
   add_row("camera depth " + size_text(camera->width, camera->height), "camera_depth.exr", "", "");
@@ -282,7 +287,8 @@ int run_demo(const DemoOptions& o) {
   adaptive.max_error = o.max_error;
   Result<Mesh> coarse = build_adaptive_volume(*light, shadow, {}, adaptive, "shadow_map.exr");
   if (!coarse) return fail(coarse.error().message);
-  if (Status s = write_mesh(out("volume_adaptive.ply"), *coarse); !s) return fail(s.error().message);
+  if (Status s = write_mesh(out("volume_adaptive.ply"), *coarse); !s)
+    return fail(s.error().message);
   char error_text[64];
   std::snprintf(error_text, sizeof error_text, "max error %g", o.max_error);
   add_row("adaptive volume", "volume_adaptive.ply", thousands(coarse->num_triangles()) + " tris",
@@ -310,7 +316,8 @@ int run_demo(const DemoOptions& o) {
     render_scene.surface = std::move(*surface);
 
     std::vector<Image> images;
-    Result<std::unique_ptr<GlVolumeRenderer>> volume_renderer = GlVolumeRenderer::create(render_scene);
+    Result<std::unique_ptr<GlVolumeRenderer>> volume_renderer =
+        GlVolumeRenderer::create(render_scene);
     if (!volume_renderer) return fail(volume_renderer.error().message);
     for (const Volume& v : volumes) {
       progress.begin("render " + v.name + " volume");
@@ -318,7 +325,8 @@ int run_demo(const DemoOptions& o) {
       double seconds = 0;
       images.push_back((*volume_renderer)->render(&seconds));
       const std::string name = "airlight_" + v.name;
-      if (Status s = write_image(out(name + ".exr"), images.back()); !s) return fail(s.error().message);
+      if (Status s = write_image(out(name + ".exr"), images.back()); !s)
+        return fail(s.error().message);
       // One exposure for all pictures (the static volume's), so that they compare by eye.
       if (Status s = write_image(out(name + ".png"), images.back(), exposure_for(images[0])); !s)
         return fail(s.error().message);
@@ -330,8 +338,8 @@ int run_demo(const DemoOptions& o) {
         std::snprintf(text, sizeof text, "; vs static: rel. L2 %.2e", d.relative_l2);
         result += text;
       }
-      add_row("render " + v.name + " (volume)", name + ".png", size_text(camera->width, camera->height),
-              result);
+      add_row("render " + v.name + " (volume)", name + ".png",
+              size_text(camera->width, camera->height), result);
     }
     MarchOptions march;
     march.samples = 128;
@@ -342,17 +350,19 @@ int run_demo(const DemoOptions& o) {
     progress.begin("render raymarch");
     double seconds = 0;
     const Image marched = (*marcher)->render(&seconds);
-    if (Status s = write_image(out("airlight_raymarch.exr"), marched); !s) return fail(s.error().message);
+    if (Status s = write_image(out("airlight_raymarch.exr"), marched); !s)
+      return fail(s.error().message);
     if (Status s = write_image(out("airlight_raymarch.png"), marched, exposure_for(images[0])); !s)
       return fail(s.error().message);
     char text[96];
     std::snprintf(text, sizeof text, "GPU %.1f ms; vs static: rel. L2 %.2e", seconds * 1e3,
                   compare_images(marched, images[0]).relative_l2);
-    add_row("render raymarch 128x2x2", "airlight_raymarch.png", size_text(camera->width, camera->height),
-            text);
+    add_row("render raymarch 128x2x2", "airlight_raymarch.png",
+            size_text(camera->width, camera->height), text);
 
     progress.begin("composite");
-    const Image picture = lit_surfaces(render_scene, *shadow_window, size->width, size->height, images[0]);
+    const Image picture =
+        lit_surfaces(render_scene, *shadow_window, size->width, size->height, images[0]);
     if (Status s = write_image(out("demo.png"), picture, exposure_for(picture)); !s)
       return fail(s.error().message);
     add_row("picture", "demo.png", size_text(camera->width, camera->height),
@@ -370,8 +380,9 @@ int run_demo(const DemoOptions& o) {
     for (const Row& r : rows)
       std::printf("%-26s %-22s %-18s %7.2fs  %s\n", r.step.c_str(), r.file.c_str(), r.count.c_str(),
                   r.seconds, r.result.c_str());
-    std::printf("outputs in %s/ (scene: Sponza atrium by Marko Dabrovic, the middle of the atrium)\n",
-                o.out_dir.c_str());
+    std::printf(
+        "outputs in %s/ (scene: Sponza atrium by Marko Dabrovic, the middle of the atrium)\n",
+        o.out_dir.c_str());
   }
   if (!all_valid) return fail("a demo volume failed its checks (see the table)");
   return 0;
@@ -387,8 +398,10 @@ void add_demo_command(CLI::App& app, Runner* run) {
       "Renders the bundled scene's spot shadow map and camera depth (OpenGL, headless; CPU ray\n"
       "casting without it), builds the static and the adaptive light volume, checks both, renders\n"
       "the airlight, and writes meshes, depth images and PNGs to --out.");
-  cmd->add_option("--out,-o", o->out_dir, "Directory for everything the demo writes")->capture_default_str();
-  cmd->add_option("--size", o->size, "Shadow-map size (sizes below 512 also shrink the camera image)")
+  cmd->add_option("--out,-o", o->out_dir, "Directory for everything the demo writes")
+      ->capture_default_str();
+  cmd->add_option("--size", o->size,
+                  "Shadow-map size (sizes below 512 also shrink the camera image)")
       ->check(CLI::Range(8, 4096))
       ->capture_default_str();
   cmd->add_option("--max-error", o->max_error, "Adaptive volume's error bound, world units")

@@ -37,12 +37,14 @@ int main(int argc, char** argv) {
   using namespace lightvol::cli;
   CLI::App app{
       "lightvol turns shadow-map depth images into closed light volumes: meshes enclosing exactly\n"
-      "the space a light illuminates, for exact volumetric shadows drawn with additive blending.\n"};
+      "the space a light illuminates, for exact volumetric shadows drawn with additive "
+      "blending.\n"};
   app.name("lightvol");
   app.require_subcommand(1);
   app.set_version_flag("--version", "lightvol 0.1.0");
-  app.footer("Run 'lightvol COMMAND --help' for a command's options. Exit codes: 0 success, "
-             "1 invalid volume, 2 bad usage or input.");
+  app.footer(
+      "Run 'lightvol COMMAND --help' for a command's options. Exit codes: 0 success, "
+      "1 invalid volume, 2 bad usage or input.");
 
   // --max-memory belongs to the app; fallthrough lets it follow any command (set before the
   // commands are added: subcommands inherit it).

@@ -48,7 +48,9 @@ struct RenderOptions {
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+  return v.empty()
+             ? 0
+             : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
 int run_render(const RenderOptions& o) {
@@ -57,9 +59,11 @@ int run_render(const RenderOptions& o) {
   if (needs_mesh && o.mesh_path.empty())
     return fail("render: --method " + o.method + " needs the light volume MESH");
   if (o.method == "raymarch" && o.shadow_maps.empty())
-    return fail("render: --method " + o.method + " needs --shadow-map DEPTH (the light's shadow map(s))");
+    return fail("render: --method " + o.method +
+                " needs --shadow-map DEPTH (the light's shadow map(s))");
   if (o.samples < 1) return fail("--samples: must be >= 1, got " + std::to_string(o.samples));
-  if (o.interleave < 1) return fail("--interleave: must be >= 1, got " + std::to_string(o.interleave));
+  if (o.interleave < 1)
+    return fail("--interleave: must be >= 1, got " + std::to_string(o.interleave));
   if (o.frames < 0) return fail("--frames: must be >= 0, got " + std::to_string(o.frames));
   if (o.frames > 0 && o.method == "reference")
     return fail("--frames: times GPU work; --method reference runs on the CPU");
@@ -156,7 +160,8 @@ int run_render(const RenderOptions& o) {
     }
     progress.end();
 #else
-    return fail("--method " + o.method + ": this lightvol was built without OpenGL (LIGHTVOL_WITH_GL=OFF)");
+    return fail("--method " + o.method +
+                ": this lightvol was built without OpenGL (LIGHTVOL_WITH_GL=OFF)");
 #endif
   }
 
@@ -204,7 +209,8 @@ void add_render_command(CLI::App& app, Runner* run) {
   CLI::App* cmd = app.add_subcommand(
       "render",
       "The OpenGL checker: render the single-scattering airlight of a light volume (signed\n"
-      "additive blending, --method volume), its CPU reference, or the ray-marching (from the shadow\n"
+      "additive blending, --method volume), its CPU reference, or the ray-marching (from the "
+      "shadow\n"
       "map) and radial-blur (from the camera depth) alternatives.");
   cmd->add_option("MESH", o->mesh_path, "Light volume (world space), for volume and reference");
   cmd->add_option("--light", o->light_path, "Light description (JSON)")->required();
@@ -215,13 +221,15 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option("--medium", o->medium_path,
                   "Medium: {scattering, absorption, intensity, phase {type, g|k}}")
       ->required();
-  cmd->add_option("--out", o->out_path, "Output image: .exr keeps linear floats, .png is tone-mapped")
+  cmd->add_option("--out", o->out_path,
+                  "Output image: .exr keeps linear floats, .png is tone-mapped")
       ->required();
   cmd->add_option("--method", o->method, "volume | reference | raymarch | radial")
       ->check(CLI::IsMember({"volume", "reference", "raymarch", "radial"}))
       ->capture_default_str();
-  cmd->add_option("--shadow-map", o->shadow_maps,
-                  "raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
+  cmd->add_option(
+      "--shadow-map", o->shadow_maps,
+      "raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
       ->capture_default_str();
@@ -232,8 +240,10 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option("--background", o->background, "Surface radiance for --composite")
       ->capture_default_str();
   cmd->add_option("--exposure", o->exposure, "PNG: scale before tone mapping (default: automatic)");
-  cmd->add_option("--compare", o->compare_path, "Print relative L2, max abs error and PSNR against this .exr");
-  cmd->add_option("--frames", o->frames, "Render K more frames and print the median GPU time per frame");
+  cmd->add_option("--compare", o->compare_path,
+                  "Print relative L2, max abs error and PSNR against this .exr");
+  cmd->add_option("--frames", o->frames,
+                  "Render K more frames and print the median GPU time per frame");
   cmd->add_flag("--quiet", o->quiet, "No progress lines");
   cmd->callback([o, run] { *run = [o] { return run_render(*o); }; });
 }

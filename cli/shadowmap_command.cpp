@@ -44,7 +44,8 @@ int run_shadowmap(const ShadowmapOptions& o) {
   MapSize size;
   std::string what;
   if (!o.light_path.empty()) {
-    if (o.size == 0) return fail("--size: required with --light (the shadow map's width in texels)");
+    if (o.size == 0)
+      return fail("--size: required with --light (the shadow map's width in texels)");
     Result<Light> l = load_light(o.light_path);
     if (!l) return fail(l.error().message);
     light = *l;
@@ -62,10 +63,10 @@ int run_shadowmap(const ShadowmapOptions& o) {
   }
   if (has_face && light.type != LightType::omni)
     return fail(o.out_path + ": {face} applies to omni lights only");
-  if (Status m = check_memory(shadow_map_memory_bytes(size.width, size.height, pass_count(light)),
-                              o.light_path.empty() ? o.camera_path : o.light_path,
-                              "a " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-                                  " shadow map");
+  if (Status m = check_memory(
+          shadow_map_memory_bytes(size.width, size.height, pass_count(light)),
+          o.light_path.empty() ? o.camera_path : o.light_path,
+          "a " + std::to_string(size.width) + "x" + std::to_string(size.height) + " shadow map");
       !m)
     return fail(m.error().message);
 
@@ -78,9 +79,9 @@ int run_shadowmap(const ShadowmapOptions& o) {
   const int passes = pass_count(light);
   std::vector<std::vector<float>> window(static_cast<std::size_t>(passes));
   double gpu_seconds = 0;
-  progress.begin("rendering " + std::to_string(passes) + " depth pass" + (passes > 1 ? "es " : " ") +
-                 std::to_string(size.width) + "x" + std::to_string(size.height) +
-                 (o.cpu ? " (CPU ray casting)" : ""));
+  progress.begin("rendering " + std::to_string(passes) + " depth pass" +
+                 (passes > 1 ? "es " : " ") + std::to_string(size.width) + "x" +
+                 std::to_string(size.height) + (o.cpu ? " (CPU ray casting)" : ""));
   if (o.cpu) {
     const Bvh bvh(*scene);
     for (int face = 0; face < passes; ++face) {
@@ -130,26 +131,30 @@ int run_shadowmap(const ShadowmapOptions& o) {
       written.push_back(o.out_path);
     }
   } else {
-    if (Status s = write_depth_image(o.out_path, encode_depth(light, size.width, size.height, window[0]));
+    if (Status s =
+            write_depth_image(o.out_path, encode_depth(light, size.width, size.height, window[0]));
         !s)
       return fail(s.error().message);
     written.push_back(o.out_path);
   }
   if (!o.preview_path.empty()) {
-    if (Status s = write_depth_image(o.preview_path, depth_preview(light, size.width, size.height, window));
+    if (Status s = write_depth_image(o.preview_path,
+                                     depth_preview(light, size.width, size.height, window));
         !s)
       return fail(s.error().message);
   }
   progress.end();
 
   if (!o.quiet) {
-    std::printf("wrote %s: %s %dx%d%s, %s depth, %.1f%% of texels hit, %s triangles%s\n",
-                written.size() > 1 ? (std::to_string(written.size()) + " files " + o.out_path).c_str()
-                                   : written[0].c_str(),
-                what.c_str(), size.width, size.height, passes > 1 ? " x 6 faces" : "",
-                std::string(to_string(light.depth)).c_str(), 100.0 * static_cast<double>(hit) / static_cast<double>(total),
-                thousands(scene->num_triangles()).c_str(),
-                o.cpu ? "" : (", GPU " + std::to_string(gpu_seconds * 1e3).substr(0, 6) + " ms").c_str());
+    std::printf(
+        "wrote %s: %s %dx%d%s, %s depth, %.1f%% of texels hit, %s triangles%s\n",
+        written.size() > 1 ? (std::to_string(written.size()) + " files " + o.out_path).c_str()
+                           : written[0].c_str(),
+        what.c_str(), size.width, size.height, passes > 1 ? " x 6 faces" : "",
+        std::string(to_string(light.depth)).c_str(),
+        100.0 * static_cast<double>(hit) / static_cast<double>(total),
+        thousands(scene->num_triangles()).c_str(),
+        o.cpu ? "" : (", GPU " + std::to_string(gpu_seconds * 1e3).substr(0, 6) + " ms").c_str());
   }
   return 0;
 }
@@ -175,7 +180,8 @@ void add_shadowmap_command(CLI::App& app, Runner* run) {
   cmd->add_option("--camera", o->camera_path,
                   "Camera description (a spot light's keys plus width, height): render its depth");
   cmd->add_option("--size", o->size, "Shadow-map width in texels (with --light)");
-  cmd->add_option("--out,-o", o->out_path, "Output depth image (EXR, TIFF, PFM, PNG-16)")->required();
+  cmd->add_option("--out,-o", o->out_path, "Output depth image (EXR, TIFF, PFM, PNG-16)")
+      ->required();
   cmd->add_option("--preview", o->preview_path,
                   "Also write a PNG for people: near = white, far = dark, nothing hit = black");
   cmd->add_flag("--cpu", o->cpu, "Ray-cast on the CPU (double precision) instead of OpenGL");

@@ -106,17 +106,18 @@ int run_stats_omni(const StatsOptions& o, const Light& light, const std::vector<
       nlohmann::json faces = nlohmann::json::object();
       for (int f = 0; f < kOmniFaces; ++f)
         faces[std::string(omni_face_tag(f))] = details[i].face_triangles[f];
-      adaptive.push_back({{"max_error", r.max_error},
-                          {"triangles", r.triangles},
-                          {"vertices", r.vertices},
-                          {"max_error_reached", r.reached},
-                          {"leaves", r.leaves},
-                          {"ratio_to_static", double(r.triangles) / double(st.triangles)},
-                          {"face_triangles", faces},
-                          {"seam_triangles", details[i].seam_triangles},
-                          {"corner_triangles", 8},
-                          {"seam_rounds", details[i].seam_rounds},
-                          {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
+      adaptive.push_back(
+          {{"max_error", r.max_error},
+           {"triangles", r.triangles},
+           {"vertices", r.vertices},
+           {"max_error_reached", r.reached},
+           {"leaves", r.leaves},
+           {"ratio_to_static", double(r.triangles) / double(st.triangles)},
+           {"face_triangles", faces},
+           {"seam_triangles", details[i].seam_triangles},
+           {"corner_triangles", 8},
+           {"seam_rounds", details[i].seam_rounds},
+           {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
     }
     const nlohmann::json report = {
         {"inputs", o.depth_paths},
@@ -124,23 +125,29 @@ int run_stats_omni(const StatsOptions& o, const Light& light, const std::vector<
         {"width", w},
         {"height", w},
         {"faces", 6},
-        {"static", {{"triangles", st.triangles}, {"vertices", st.vertices},
-                    {"face_triangles", static_face}, {"seam_triangles", static_seams},
-                    {"corner_triangles", 8}}},
+        {"static",
+         {{"triangles", st.triangles},
+          {"vertices", st.vertices},
+          {"face_triangles", static_face},
+          {"seam_triangles", static_seams},
+          {"corner_triangles", 8}}},
         {"error_pyramid_seconds", refinement->seconds()},
         {"adaptive", adaptive}};
     std::printf("%s\n", report.dump(2).c_str());
     return 0;
   }
   if (o.csv) {
-    std::printf("mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
+    std::printf(
+        "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
     std::printf("static,,%llu,%llu,0", static_cast<unsigned long long>(st.triangles),
                 static_cast<unsigned long long>(st.vertices));
-    for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", static_cast<unsigned long long>(static_face));
+    for (int f = 0; f < kOmniFaces; ++f)
+      std::printf(",%llu", static_cast<unsigned long long>(static_face));
     std::printf(",%llu,8\n", static_cast<unsigned long long>(static_seams));
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
-      std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error, static_cast<unsigned long long>(r.triangles),
+      std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error,
+                  static_cast<unsigned long long>(r.triangles),
                   static_cast<unsigned long long>(r.vertices), r.reached);
       for (int f = 0; f < kOmniFaces; ++f)
         std::printf(",%llu", static_cast<unsigned long long>(details[i].face_triangles[f]));
@@ -154,13 +161,14 @@ int run_stats_omni(const StatsOptions& o, const Light& light, const std::vector<
               thousands(st.triangles).c_str(), thousands(static_face).c_str(),
               thousands(static_seams).c_str(), thousands(st.vertices).c_str());
   std::printf("error pyramids: %.3f s (once for all bounds)\n\n", refinement->seconds());
-  std::printf("%12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s\n", "max error", "triangles", "of static",
-              "reached", "px", "nx", "py", "ny", "pz", "nz", "seams");
+  std::printf("%12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s\n", "max error", "triangles",
+              "of static", "reached", "px", "nx", "py", "ny", "pz", "nz", "seams");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Row& r = rows[i];
     std::printf("%12.6g %12s %8.3f%% %12.6g", r.max_error, thousands(r.triangles).c_str(),
                 100.0 * double(r.triangles) / double(st.triangles), r.reached);
-    for (int f = 0; f < kOmniFaces; ++f) std::printf(" %9s", thousands(details[i].face_triangles[f]).c_str());
+    for (int f = 0; f < kOmniFaces; ++f)
+      std::printf(" %9s", thousands(details[i].face_triangles[f]).c_str());
     std::printf(" %9s\n", thousands(details[i].seam_triangles).c_str());
   }
   return 0;
@@ -192,7 +200,8 @@ int run_stats(const StatsOptions& o) {
   const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
   progress.end();
   const Space space = o.space == "light" ? Space::light : Space::world;
-  const bool standard = Unprojector(*light, depth->width, depth->height, 0, space).standard_winding();
+  const bool standard =
+      Unprojector(*light, depth->width, depth->height, 0, space).standard_winding();
 
   std::vector<Row> rows;
   for (const double e : *bounds) {
@@ -219,17 +228,21 @@ int run_stats(const StatsOptions& o) {
   if (o.json) {
     nlohmann::json adaptive = nlohmann::json::array();
     for (const Row& r : rows)
-      adaptive.push_back({{"max_error", r.max_error},
-                          {"triangles", r.triangles},
-                          {"vertices", r.vertices},
-                          {"max_error_reached", r.reached},
-                          {"leaves", r.leaves},
-                          {"fixup_rounds", r.fixup_rounds},
-                          {"ratio_to_static", double(r.triangles) / double(st.triangles)},
-                          {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
+      adaptive.push_back(
+          {{"max_error", r.max_error},
+           {"triangles", r.triangles},
+           {"vertices", r.vertices},
+           {"max_error_reached", r.reached},
+           {"leaves", r.leaves},
+           {"fixup_rounds", r.fixup_rounds},
+           {"ratio_to_static", double(r.triangles) / double(st.triangles)},
+           {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
     const nlohmann::json report = {
         {"input", depth_path},
-        {"light", {{"path", o.light_path}, {"type", to_string(light->type)}, {"depth", to_string(light->depth)}}},
+        {"light",
+         {{"path", o.light_path},
+          {"type", to_string(light->type)},
+          {"depth", to_string(light->depth)}}},
         {"width", depth->width},
         {"height", depth->height},
         {"static", {{"triangles", st.triangles}, {"vertices", st.vertices}}},
@@ -239,26 +252,30 @@ int run_stats(const StatsOptions& o) {
     return 0;
   }
   if (o.csv) {
-    std::printf("mode,max_error,triangles,vertices,max_error_reached,error_pyramid_seconds,balance_seconds,emit_seconds\n");
+    std::printf(
+        "mode,max_error,triangles,vertices,max_error_reached,error_pyramid_seconds,balance_seconds,"
+        "emit_seconds\n");
     std::printf("static,,%llu,%llu,0,,,\n", static_cast<unsigned long long>(st.triangles),
                 static_cast<unsigned long long>(st.vertices));
     for (const Row& r : rows)
       std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f\n", r.max_error,
-                  static_cast<unsigned long long>(r.triangles), static_cast<unsigned long long>(r.vertices),
-                  r.reached, pyramid.seconds(), r.balance, r.emit);
+                  static_cast<unsigned long long>(r.triangles),
+                  static_cast<unsigned long long>(r.vertices), r.reached, pyramid.seconds(),
+                  r.balance, r.emit);
     return 0;
   }
   std::printf("%s: %dx%d, %s light, %s depth\n", depth_path.c_str(), depth->width, depth->height,
-              std::string(to_string(light->type)).c_str(), std::string(to_string(light->depth)).c_str());
+              std::string(to_string(light->type)).c_str(),
+              std::string(to_string(light->depth)).c_str());
   std::printf("static grid: %s triangles, %s vertices\n", thousands(st.triangles).c_str(),
               thousands(st.vertices).c_str());
   std::printf("error pyramid: %.3f s (once for all bounds)\n\n", pyramid.seconds());
-  std::printf("%12s %14s %14s %9s %14s %10s %10s\n", "max error", "triangles", "vertices", "of static",
-              "reached", "balance s", "emit s");
+  std::printf("%12s %14s %14s %9s %14s %10s %10s\n", "max error", "triangles", "vertices",
+              "of static", "reached", "balance s", "emit s");
   for (const Row& r : rows)
-    std::printf("%12.6g %14s %14s %8.3f%% %14.6g %10.3f %10.3f\n", r.max_error, thousands(r.triangles).c_str(),
-                thousands(r.vertices).c_str(), 100.0 * double(r.triangles) / double(st.triangles), r.reached,
-                r.balance, r.emit);
+    std::printf("%12.6g %14s %14s %8.3f%% %14.6g %10.3f %10.3f\n", r.max_error,
+                thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
+                100.0 * double(r.triangles) / double(st.triangles), r.reached, r.balance, r.emit);
   return 0;
 }
 
@@ -266,14 +283,17 @@ int run_stats(const StatsOptions& o) {
 
 void add_stats_command(CLI::App& app, Runner* run) {
   auto o = std::make_shared<StatsOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "stats", "Triangle-count report: the static grid against adaptive tessellations at several error bounds.");
+  CLI::App* cmd = app.add_subcommand("stats",
+                                     "Triangle-count report: the static grid against adaptive "
+                                     "tessellations at several error bounds.");
   cmd->footer(
       "Example:\n  lightvol stats shadow.exr --light light.json --max-error 0.001,0.01,0.1 --csv\n"
       "For each bound E (world units along the texel rays): the triangles and vertices that\n"
       "'lightvol build --adaptive --max-error E' writes, the largest error actually reached over\n"
       "all texels, and the time of each stage (the error pyramid is built once).");
-  cmd->add_option("depth", o->depth_paths, "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")->required();
+  cmd->add_option("depth", o->depth_paths,
+                  "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+      ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
   cmd->add_option("--max-error", o->max_errors, "Comma-separated error bounds in world units")

@@ -12,9 +12,10 @@ namespace {
 
 lightvol::Light bench_light(int n) {
   const std::string right = std::to_string(n - 1) + ".5";
-  const std::string json = R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1],)"
-                           R"( "up": [0, 1, 0], "ortho": [-0.5, )" + right + ", -" + right +
-                           R"(, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  const std::string json =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1],)"
+      R"( "up": [0, 1, 0], "ortho": [-0.5, )" +
+      right + ", -" + right + R"(, 0.5], "near": 0, "far": 1, "depth": "linear"})";
   return *lightvol::parse_light(json, "bench.json");
 }
 
@@ -56,7 +57,11 @@ void BM_WholeAdaptiveBuild(benchmark::State& state) {
 
 BENCHMARK(BM_Pyramid)->Arg(1025)->Arg(4097)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Tessellate)->Arg(1025)->Arg(4097)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_WholeAdaptiveBuild)->Arg(1025)->Arg(4097)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_WholeAdaptiveBuild)
+    ->Arg(1025)
+    ->Arg(4097)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

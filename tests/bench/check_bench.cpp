@@ -4,8 +4,8 @@
 // (--benchmark_filter) to attribute it.
 #include <benchmark/benchmark.h>
 
-#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/check/check.h>
+#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/core/stages.h>
 #include <lightvol/volume/static_volume.h>
 

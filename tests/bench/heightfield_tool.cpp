@@ -2,11 +2,12 @@
 // the Martini comparison (tests/bench/martini_bench.sh).
 //
 //   heightfield_tool map N OUT.exr OUT.f32
-//       the synthetic scene (synthetic_scene.h) at N×N, as EXR for lightvol and raw float32 for node.
+//       the synthetic scene (synthetic_scene.h) at N×N, as EXR for lightvol and raw float32 for
+//       node.
 //   heightfield_tool error MAP.f32 N MESH
 //       MESH is a lightvol PLY built with the benchmark's directional light (world point of texel
-//       (col, row) at depth z is (col, −row, −z)), or a Martini .mrt dump (uint32 vertex and triangle
-//       counts, uint32 (x, y) pairs, uint32 index triples; heights from the map). Prints
+//       (col, row) at depth z is (col, −row, −z)), or a Martini .mrt dump (uint32 vertex and
+//       triangle counts, uint32 (x, y) pairs, uint32 index triples; heights from the map). Prints
 //       "triangles N max_error E uncovered U": for every texel, the triangle over it is found by
 //       rasterizing each triangle's lattice points, its height interpolated linearly and compared
 //       with the map. The closing of a volume (vertices on the near plane, z = 0) is dropped first.
@@ -63,7 +64,8 @@ bool read_ply(const std::string& path, std::vector<Tri>* out) {
   return true;
 }
 
-bool read_mrt(const std::string& path, const std::vector<float>& map, int n, std::vector<Tri>* out) {
+bool read_mrt(const std::string& path, const std::vector<float>& map, int n,
+              std::vector<Tri>* out) {
   const std::vector<char> bytes = slurp(path);
   if (bytes.size() < 8) return false;
   std::uint32_t nv = 0, nt = 0;
@@ -90,7 +92,8 @@ int measure(const std::string& map_path, int n, const std::string& mesh_path) {
   {
     const std::vector<char> bytes = slurp(map_path);
     if (bytes.size() != 4 * map.size()) {
-      std::fprintf(stderr, "heightfield_tool: %s: expected %zu bytes\n", map_path.c_str(), 4 * map.size());
+      std::fprintf(stderr, "heightfield_tool: %s: expected %zu bytes\n", map_path.c_str(),
+                   4 * map.size());
       return 2;
     }
     std::memcpy(map.data(), bytes.data(), bytes.size());
@@ -105,7 +108,8 @@ int measure(const std::string& map_path, int n, const std::string& mesh_path) {
   }
   std::vector<float> err(map.size(), -1.0f);
   for (const Tri& t : tris) {
-    const double area2 = (t.x[1] - t.x[0]) * (t.y[2] - t.y[0]) - (t.x[2] - t.x[0]) * (t.y[1] - t.y[0]);
+    const double area2 =
+        (t.x[1] - t.x[0]) * (t.y[2] - t.y[0]) - (t.x[2] - t.x[0]) * (t.y[1] - t.y[0]);
     if (area2 == 0) continue;
     const int x0 = std::max(0, static_cast<int>(std::floor(std::min({t.x[0], t.x[1], t.x[2]}))));
     const int x1 = std::min(n - 1, static_cast<int>(std::ceil(std::max({t.x[0], t.x[1], t.x[2]}))));
@@ -148,7 +152,9 @@ int main(int argc, char** argv) {
                static_cast<std::streamsize>(4 * d.values.size()));
     return 0;
   }
-  if (argc == 5 && std::string(argv[1]) == "error") return measure(argv[2], std::atoi(argv[3]), argv[4]);
-  std::fprintf(stderr, "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt}\n");
+  if (argc == 5 && std::string(argv[1]) == "error")
+    return measure(argv[2], std::atoi(argv[3]), argv[4]);
+  std::fprintf(stderr,
+               "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt}\n");
   return 2;
 }

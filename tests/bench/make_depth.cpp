@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "make_depth: sizes must be >= 2\n");
     return 2;
   }
-  const lightvol::Status s = lightvol::write_depth_image(argv[3], lightvol::bench::synthetic_scene(w, h));
+  const lightvol::Status s =
+      lightvol::write_depth_image(argv[3], lightvol::bench::synthetic_scene(w, h));
   if (!s) {
     std::fprintf(stderr, "make_depth: %s\n", s.error().message.c_str());
     return 2;

@@ -8,7 +8,8 @@
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::fprintf(stderr, "usage: make_omni_depth W OUT (OUT with {face} for six files, else a strip)\n");
+    std::fprintf(stderr,
+                 "usage: make_omni_depth W OUT (OUT with {face} for six files, else a strip)\n");
     return 2;
   }
   const int w = std::atoi(argv[1]);
@@ -19,7 +20,8 @@ int main(int argc, char** argv) {
   const std::string out = argv[2];
   const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
   if (out.find("{face}") == std::string::npos) {
-    if (lightvol::Status s = lightvol::write_depth_image(out, lightvol::stack_cube_faces(cube)); !s) {
+    if (lightvol::Status s = lightvol::write_depth_image(out, lightvol::stack_cube_faces(cube));
+        !s) {
       std::fprintf(stderr, "make_omni_depth: %s\n", s.error().message.c_str());
       return 2;
     }

@@ -14,7 +14,8 @@ namespace {
 
 void BM_StaticOmniBuild(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
-  const lightvol::Light light = *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
+  const lightvol::Light light =
+      *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
   const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
   std::size_t triangles = 0;
   for (auto _ : state) {
@@ -36,7 +37,8 @@ BENCHMARK(BM_StaticOmniBuild)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond
 // Arguments: W, and the max error in thousandths of a world unit.
 void BM_AdaptiveOmniBuild(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
-  const lightvol::Light light = *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
+  const lightvol::Light light =
+      *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
   const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
   lightvol::AdaptiveOptions options;
   options.max_error = static_cast<double>(state.range(1)) / 1000;
@@ -58,8 +60,12 @@ void BM_AdaptiveOmniBuild(benchmark::State& state) {
   state.counters["peak_MiB"] = static_cast<double>(lightvol::peak_memory_bytes()) / (1 << 20);
 }
 BENCHMARK(BM_AdaptiveOmniBuild)
-    ->Args({512, 10})->Args({512, 1})->Args({1024, 10})->Args({1024, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Args({512, 10})
+    ->Args({512, 1})
+    ->Args({1024, 10})
+    ->Args({1024, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

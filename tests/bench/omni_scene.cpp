@@ -15,7 +15,8 @@ const Vec3d kLight{0.3, 1.6, -0.4};
 
 // Ray p + t·d against an axis-aligned box; the exit (inside == true) or entry distance, or ∞.
 double box_hit(Vec3d p, Vec3d d, Vec3d lo, Vec3d hi, bool inside) {
-  double t0 = -std::numeric_limits<double>::infinity(), t1 = std::numeric_limits<double>::infinity();
+  double t0 = -std::numeric_limits<double>::infinity(),
+         t1 = std::numeric_limits<double>::infinity();
   for (int a = 0; a < 3; ++a) {
     if (d[a] == 0) {
       if (p[a] < lo[a] || p[a] > hi[a]) return std::numeric_limits<double>::infinity();
@@ -68,10 +69,11 @@ CubeFaces omni_scene(int width) {
           t = std::numeric_limits<double>::infinity();
         t = std::min(t, box_hit(kLight, d, {-2.5, 0, 1}, {-1.9, 4, 1.6}, false));
         t = std::min(t, sphere_hit(kLight, d, {2, 1, 1.5}, 0.9));
-        double value = 1;  // nothing hit (or beyond far): the far plane
+        double value = 1;                        // nothing hit (or beyond far): the far plane
         const double z = t * std::abs(d[axis]);  // eye-space distance along the face's axis
         if (std::isfinite(t) && z < kFar) {
-          const double z_ndc = (kFar + kNear) / (kFar - kNear) - 2 * kFar * kNear / ((kFar - kNear) * z);
+          const double z_ndc =
+              (kFar + kNear) / (kFar - kNear) - 2 * kFar * kNear / ((kFar - kNear) * z);
           value = 0.5 * (z_ndc + 1);
         }
         face.values[static_cast<std::size_t>(r) * width + c] = static_cast<float>(value);

@@ -3,8 +3,8 @@
 // 1024×768 by default: time per frame of the `volume` method (static and adaptive volumes) and of
 // `raymarch` at growing step counts, each with its relative L2 error against the CPU reference of
 // the static volume. The camera looks at the lit floor and the box with the light just above the
-// view (rays near the light are where a uniform marcher needs the most steps). Prints a table and the ratio at the first step count whose error reaches the
-// target.
+// view (rays near the light are where a uniform marcher needs the most steps). Prints a table and
+// the ratio at the first step count whose error reaches the target.
 //
 //   render_bench [WIDTH HEIGHT MAP FRAMES TARGET MAX_STEPS]   (defaults 1024 768 1024 5 0.02 1024)
 //
@@ -57,7 +57,8 @@ double exposure = 0;
 void picture(const std::string& name, const Image& image, bool own_exposure = false) {
   if (picture_dir == nullptr) return;
   const std::string path = std::string(picture_dir) + "/" + name + ".png";
-  if (Status s = write_image(path, image, own_exposure ? 0.0 : exposure); !s) std::fprintf(stderr, "%s\n", s.error().message.c_str());
+  if (Status s = write_image(path, image, own_exposure ? 0.0 : exposure); !s)
+    std::fprintf(stderr, "%s\n", s.error().message.c_str());
 }
 
 }  // namespace
@@ -99,7 +100,8 @@ int main(int argc, char** argv) {
 
   const auto t0 = std::chrono::steady_clock::now();
   const Image ref = render_reference(*stat, scene);
-  const double ref_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double ref_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   {
     std::vector<double> sorted = ref.values;
     std::sort(sorted.begin(), sorted.end());
@@ -107,9 +109,10 @@ int main(int argc, char** argv) {
     exposure = p > 0 ? 4.0 / p : 1.0;
   }
   picture("reference", ref);
-  std::printf("scene: spot light, %dx%d shadow map, camera %dx%d; CPU reference %.1f s\n\n", map_size,
-              map_size, width, height, ref_seconds);
-  std::printf("%-34s %12s %10s %8s %14s\n", "method", "triangles", "ms/frame", "FPS", "rel. L2 error");
+  std::printf("scene: spot light, %dx%d shadow map, camera %dx%d; CPU reference %.1f s\n\n",
+              map_size, map_size, width, height, ref_seconds);
+  std::printf("%-34s %12s %10s %8s %14s\n", "method", "triangles", "ms/frame", "FPS",
+              "rel. L2 error");
 
   double volume_ms = 0;
   for (auto [name, mesh] : {std::pair<const char*, const Mesh*>{"volume (static)", &*stat},
@@ -167,10 +170,12 @@ int main(int argc, char** argv) {
   }
   std::printf("\n");
   if (match_n > 0)
-    std::printf("ray marching first reaches %.2g%% relative L2 at N = %d: %.2f ms vs %.2f ms for the "
-                "static volume, %.1fx slower (paper: 96 FPS vs 10 FPS, 9.6x)\n",
-                100 * target, match_n, match_ms, volume_ms, match_ms / volume_ms);
+    std::printf(
+        "ray marching first reaches %.2g%% relative L2 at N = %d: %.2f ms vs %.2f ms for the "
+        "static volume, %.1fx slower (paper: 96 FPS vs 10 FPS, 9.6x)\n",
+        100 * target, match_n, match_ms, volume_ms, match_ms / volume_ms);
   else
-    std::printf("ray marching did not reach %.2g%% relative L2 within %d steps\n", 100 * target, max_steps);
+    std::printf("ray marching did not reach %.2g%% relative L2 within %d steps\n", 100 * target,
+                max_steps);
   return 0;
 }

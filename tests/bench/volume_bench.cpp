@@ -20,12 +20,18 @@ void BM_StaticSpotVolume(benchmark::State& state) {
   const lightvol::DepthImage depth = lightvol::bench::synthetic_scene(n, n);
   const lightvol::Light light = spot();
   for (auto _ : state) {
-    lightvol::Result<lightvol::Mesh> mesh = lightvol::build_static_volume(light, depth, {}, "bench");
+    lightvol::Result<lightvol::Mesh> mesh =
+        lightvol::build_static_volume(light, depth, {}, "bench");
     benchmark::DoNotOptimize(mesh->indices.data());
   }
   state.counters["triangles"] = static_cast<double>(2.0 * n * n - 2);
 }
-BENCHMARK(BM_StaticSpotVolume)->Arg(1024)->Arg(2048)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_StaticSpotVolume)
+    ->Arg(1024)
+    ->Arg(2048)
+    ->Arg(4096)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/check/check.h>
+#include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
@@ -21,9 +21,8 @@ using test::TempDir;
 // A 9×7 spot map: floor at window depth 0.98 (≈ 4.3 below the light) with a 3×3 occluder at
 // 0.95 (≈ 1.9 below it).
 DepthImage occluded_depth() {
-  return test::make_depth(9, 7, [](int c, int r) {
-    return (c >= 3 && c <= 5 && r >= 2 && r <= 4) ? 0.95f : 0.98f;
-  });
+  return test::make_depth(
+      9, 7, [](int c, int r) { return (c >= 3 && c <= 5 && r >= 2 && r <= 4) ? 0.95f : 0.98f; });
 }
 
 Light spot_light() { return test::light_from_json(test::spot_json()); }
@@ -163,8 +162,10 @@ TEST(CheckVolume, OmniLightInsideAndOutsideABox) {
   const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& q : quads) {
-    box.indices.insert(box.indices.end(), {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
-    box.indices.insert(box.indices.end(), {std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
+    box.indices.insert(box.indices.end(),
+                       {std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
+    box.indices.insert(box.indices.end(),
+                       {std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
   }
   Light inside = test::light_from_json(
       R"({"type": "omni", "position": [0.2, -0.3, 0.1], "near": 0.1, "far": 30, "depth": "radial"})");
@@ -237,7 +238,8 @@ TEST_F(BrokenVolume, TJunction) {
   // Split face 0 = (a, b, c) at the midpoint m of its edge a-b, but not its neighbour across a-b.
   const auto [a, b, c] = mesh.triangle(0);
   const auto pa = mesh.vertex(a), pb = mesh.vertex(b);
-  const std::uint32_t m = add_vertex(mesh, {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2});
+  const std::uint32_t m =
+      add_vertex(mesh, {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2});
   set_triangle(mesh, 0, a, m, c);
   mesh.indices.insert(mesh.indices.end(), {m, b, c});
   expect_rejected(kCheckTJunctions);
@@ -318,7 +320,8 @@ TEST_F(BrokenVolume, ZeroAreaFace) {
     const CheckResult* d = with_light.find(kCheckDegenerate);
     EXPECT_EQ(d->count, 1u);
     ASSERT_EQ(d->offenders.size(), 1u);
-    EXPECT_EQ(d->offenders[0].faces, std::vector<std::int64_t>{std::int64_t(mesh.num_triangles() - 1)});
+    EXPECT_EQ(d->offenders[0].faces,
+              std::vector<std::int64_t>{std::int64_t(mesh.num_triangles() - 1)});
     for (std::string_view name : {kCheckClosed, kCheckManifold, kCheckOriented, kCheckOutward})
       EXPECT_EQ(status_of(with_light, name), CheckStatus::passed) << name;
     return;
@@ -377,7 +380,9 @@ TEST_F(BrokenVolume, ApexWithinTheQuantizationStepOfTheLight) {
   EXPECT_TRUE(r.valid()) << r.first_failure();
   EXPECT_EQ(r.quantization_step, 1e-4);
   EXPECT_NE(r.find(kCheckNesting)->detail.find("the light at vertex"), std::string::npos);
-  EXPECT_NE(r.find(kCheckNesting)->detail.find("from it, within the positions' quantization step 0.0001"), std::string::npos)
+  EXPECT_NE(
+      r.find(kCheckNesting)->detail.find("from it, within the positions' quantization step 0.0001"),
+      std::string::npos)
       << r.find(kCheckNesting)->detail;
   // Beyond the step it is a light outside the volume again.
   light.position = {0, 4 + 5e-4, 0};
@@ -497,8 +502,13 @@ TEST(CgalHubs, TwoShellsSharingOneVertexAreNotASurfaceMesh) {
   // Two tetrahedra touching at vertex 0: closed, edge-manifold and oriented, but vertex 0 joins
   // two separate fans, which CGAL's Surface_mesh cannot hold. The CGAL checks say so, naming it.
   Mesh m;
-  for (const std::array<float, 3> p : {std::array<float, 3>{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-                                       {0, 0, 1}, {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}})
+  for (const std::array<float, 3> p : {std::array<float, 3>{0, 0, 0},
+                                       {1, 0, 0},
+                                       {0, 1, 0},
+                                       {0, 0, 1},
+                                       {-1, 0, 0},
+                                       {0, -1, 0},
+                                       {0, 0, -1}})
     add_vertex(m, p);
   m.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3,   // x, y, z ≥ 0
                0, 4, 5, 0, 6, 4, 0, 5, 6, 4, 6, 5};  // x, y, z ≤ 0
@@ -551,7 +561,8 @@ TEST(CheckCommand, ExitCodesAndReports) {
   r = test::run_lightvol("check '" + dir.file("missing.ply") + "'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("missing.ply: no such file"), std::string::npos) << r.err;
-  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" + dir.file("nolight.json") + "'");
+  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" +
+                         dir.file("nolight.json") + "'");
   EXPECT_EQ(r.exit_code, 2);
   r = test::run_lightvol("check");
   EXPECT_EQ(r.exit_code, 2);

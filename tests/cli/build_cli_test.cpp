@@ -26,7 +26,8 @@ struct Workspace {
   std::string depth, light;
   Workspace() {
     depth = dir.file("depth.exr");
-    const DepthImage d = test::make_depth(9, 7, [](int c, int r) { return (c > 2 && c < 6 && r > 1 && r < 5) ? 0.95f : 0.99f; });
+    const DepthImage d = test::make_depth(
+        9, 7, [](int c, int r) { return (c > 2 && c < 6 && r > 1 && r < 5) ? 0.95f : 0.99f; });
     EXPECT_TRUE(write_depth_image(depth, d).ok());
     light = dir.write("light.json", test::spot_json());
   }
@@ -80,9 +81,11 @@ TEST(BuildCli, BadInputsExitTwoWithOneLineAndNoFile) {
   const int before = w.dir.entries();
 
   const std::string bad_light = w.dir.write("bad.json", R"({"type": "spot", "fov": 60})");
-  expect_input_error(test::run_lightvol("build " + q(w.depth) + " --light " + q(bad_light) + " --out " + q(out)),
-                     "bad.json: key 'fov': unknown key");
-  expect_input_error(test::run_lightvol("build " + q(w.dir.file("missing.exr")) + " --light " + q(w.light) + " --out " + q(out)),
+  expect_input_error(
+      test::run_lightvol("build " + q(w.depth) + " --light " + q(bad_light) + " --out " + q(out)),
+      "bad.json: key 'fov': unknown key");
+  expect_input_error(test::run_lightvol("build " + q(w.dir.file("missing.exr")) + " --light " +
+                                        q(w.light) + " --out " + q(out)),
                      "missing.exr: no such file");
   expect_input_error(w.build("--out " + q(w.dir.file("v.fbx"))), "unknown mesh format");
   expect_input_error(w.build("--out " + q(w.dir.file("no/such/dir/v.ply"))), "does not exist");
@@ -92,8 +95,9 @@ TEST(BuildCli, BadInputsExitTwoWithOneLineAndNoFile) {
   nan.values[6] = std::numeric_limits<float>::quiet_NaN();
   const std::string nan_path = w.dir.file("nan.exr");
   ASSERT_TRUE(write_depth_image(nan_path, nan).ok());
-  expect_input_error(test::run_lightvol("build " + q(nan_path) + " --light " + q(w.light) + " --out " + q(out)),
-                     "nan.exr: pixel (2, 1): depth is NaN");
+  expect_input_error(
+      test::run_lightvol("build " + q(nan_path) + " --light " + q(w.light) + " --out " + q(out)),
+      "nan.exr: pixel (2, 1): depth is NaN");
 
   EXPECT_EQ(w.dir.entries(), before + 2);  // bad.json and nan.exr, nothing else
 }
@@ -112,14 +116,17 @@ TEST(BuildCli, FailureNeverClobbersAnExistingOutput) {
 TEST(BuildCli, DracoVolumesPassCheckWithTheLight) {
   Workspace w;
   const std::string light = w.dir.write(
-      "off_grid.json", R"({"type": "spot", "position": [0.37, 4.13, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1],)"
-                       R"( "fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})");
+      "off_grid.json",
+      R"({"type": "spot", "position": [0.37, 4.13, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1],)"
+      R"( "fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})");
   for (const std::string name : {"v.drc", "v.glb"}) {
     const std::string out = w.dir.file(name);
-    const test::CommandResult r = test::run_lightvol("build " + q(w.depth) + " --light " + q(light) + " --quiet --out " +
-                                                     q(out) + (name == "v.glb" ? " --draco" : ""));
+    const test::CommandResult r =
+        test::run_lightvol("build " + q(w.depth) + " --light " + q(light) + " --quiet --out " +
+                           q(out) + (name == "v.glb" ? " --draco" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const test::CommandResult check = test::run_lightvol("check " + q(out) + " --light " + q(light) + " --json");
+    const test::CommandResult check =
+        test::run_lightvol("check " + q(out) + " --light " + q(light) + " --json");
     EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
     const nlohmann::json j = nlohmann::json::parse(check.out);
     EXPECT_GT(j["quantization_step"].get<double>(), 0) << name;

@@ -1,5 +1,6 @@
 // lightvol build with an omni light: the three input forms give byte-identical volumes that pass
-// check --light, static and adaptive; stats splits the counts by face and seams; a missing face is exit 2 naming the file and the face, with nothing written.
+// check --light, static and adaptive; stats splits the counts by face and seams; a missing face is
+// exit 2 naming the file and the face, with nothing written.
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -45,7 +46,9 @@ class OmniBuildCli : public ::testing::Test {
                         R"({"type": "omni", "position": [0, 1, 0], "near": 0.1, "far": 10})");
     const CubeFaces cube = room(kW);
     for (int f = 0; f < kOmniFaces; ++f)
-      ASSERT_TRUE(write_depth_image(expand_face_pattern(dir_.file("room_{face}.exr"), f), cube.faces[f]).ok());
+      ASSERT_TRUE(
+          write_depth_image(expand_face_pattern(dir_.file("room_{face}.exr"), f), cube.faces[f])
+              .ok());
     ASSERT_TRUE(write_depth_image(dir_.file("strip.exr"), stack_cube_faces(cube)).ok());
   }
   static constexpr int kW = 12;
@@ -58,10 +61,12 @@ TEST_F(OmniBuildCli, ThreeInputFormsGiveIdenticalVolumes) {
   for (int f = 0; f < kOmniFaces; ++f)
     six += q(dir_.file("room_" + std::string(omni_face_tag(f)) + ".exr")) + " ";
   const std::string common = " --light " + q(light_) + " --quiet --out ";
-  const test::CommandResult a = run_lightvol("build " + q(dir_.file("room_{face}.exr")) + common +
-                                             q(dir_.file("a.ply")) + " --report " + q(dir_.file("a.json")));
+  const test::CommandResult a =
+      run_lightvol("build " + q(dir_.file("room_{face}.exr")) + common + q(dir_.file("a.ply")) +
+                   " --report " + q(dir_.file("a.json")));
   const test::CommandResult b = run_lightvol("build " + six + common + q(dir_.file("b.ply")));
-  const test::CommandResult c = run_lightvol("build " + q(dir_.file("strip.exr")) + common + q(dir_.file("c.ply")));
+  const test::CommandResult c =
+      run_lightvol("build " + q(dir_.file("strip.exr")) + common + q(dir_.file("c.ply")));
   ASSERT_EQ(a.exit_code, 0) << a.err;
   ASSERT_EQ(b.exit_code, 0) << b.err;
   ASSERT_EQ(c.exit_code, 0) << c.err;
@@ -70,22 +75,27 @@ TEST_F(OmniBuildCli, ThreeInputFormsGiveIdenticalVolumes) {
   EXPECT_EQ(bytes, slurp(dir_.file("b.ply")));
   EXPECT_EQ(bytes, slurp(dir_.file("c.ply")));
   const std::string report = slurp(dir_.file("a.json"));
-  EXPECT_NE(report.find("\"triangles\": " + std::to_string(12 * kW * kW - 4)), std::string::npos) << report;
-  EXPECT_NE(report.find("\"vertices\": " + std::to_string(6 * kW * kW)), std::string::npos) << report;
+  EXPECT_NE(report.find("\"triangles\": " + std::to_string(12 * kW * kW - 4)), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("\"vertices\": " + std::to_string(6 * kW * kW)), std::string::npos)
+      << report;
 
-  const test::CommandResult check = run_lightvol("check " + q(dir_.file("a.ply")) + " --light " + q(light_));
+  const test::CommandResult check =
+      run_lightvol("check " + q(dir_.file("a.ply")) + " --light " + q(light_));
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
 }
 
 TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
-  const test::CommandResult r = run_lightvol(
-      "build " + q(dir_.file("strip.exr")) + " --light " + q(light_) + " --quiet --adaptive --max-error 0.05" +
-      " --out " + q(dir_.file("ad.ply")) + " --report " + q(dir_.file("ad.json")));
+  const test::CommandResult r =
+      run_lightvol("build " + q(dir_.file("strip.exr")) + " --light " + q(light_) +
+                   " --quiet --adaptive --max-error 0.05" + " --out " + q(dir_.file("ad.ply")) +
+                   " --report " + q(dir_.file("ad.json")));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string report = slurp(dir_.file("ad.json"));
   EXPECT_NE(report.find("\"mode\": \"adaptive\""), std::string::npos) << report;
   EXPECT_NE(report.find("\"max_error_reached\""), std::string::npos) << report;
-  const test::CommandResult check = run_lightvol("check " + q(dir_.file("ad.ply")) + " --light " + q(light_));
+  const test::CommandResult check =
+      run_lightvol("check " + q(dir_.file("ad.ply")) + " --light " + q(light_));
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
 }
 
@@ -93,18 +103,21 @@ TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
 // light, and check --light agrees.
 TEST_F(OmniBuildCli, DracoBuildPassesCheckWithTheLight) {
   for (const std::string out : {"v.drc", "v.glb"}) {
-    const test::CommandResult r = run_lightvol("build " + q(dir_.file("strip.exr")) + " --light " + q(light_) +
-                                               " --quiet --adaptive --max-error 0.05 --out " + q(dir_.file(out)) +
-                                               (out == "v.glb" ? " --draco" : ""));
+    const test::CommandResult r =
+        run_lightvol("build " + q(dir_.file("strip.exr")) + " --light " + q(light_) +
+                     " --quiet --adaptive --max-error 0.05 --out " + q(dir_.file(out)) +
+                     (out == "v.glb" ? " --draco" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const test::CommandResult check = run_lightvol("check " + q(dir_.file(out)) + " --light " + q(light_));
+    const test::CommandResult check =
+        run_lightvol("check " + q(dir_.file(out)) + " --light " + q(light_));
     EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
   }
 }
 
 TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
-  const test::CommandResult r = run_lightvol("stats " + q(dir_.file("room_{face}.exr")) + " --light " +
-                                             q(light_) + " --max-error 0.01,0.1 --csv");
+  const test::CommandResult r =
+      run_lightvol("stats " + q(dir_.file("room_{face}.exr")) + " --light " + q(light_) +
+                   " --max-error 0.01,0.1 --csv");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::istringstream lines(r.out);
   std::string header, static_row, fine, coarse;
@@ -112,10 +125,12 @@ TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
   std::getline(lines, static_row);
   std::getline(lines, fine);
   std::getline(lines, coarse);
-  EXPECT_EQ(header, "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners");
+  EXPECT_EQ(header,
+            "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners");
   // Static: 12W² − 4 triangles, 2(W − 1)² per face, 24(W − 1) in the seams, 8 corners.
   const int w = kW;
-  std::string expected = "static,," + std::to_string(12 * w * w - 4) + "," + std::to_string(6 * w * w) + ",0";
+  std::string expected =
+      "static,," + std::to_string(12 * w * w - 4) + "," + std::to_string(6 * w * w) + ",0";
   for (int f = 0; f < kOmniFaces; ++f) expected += "," + std::to_string(2 * (w - 1) * (w - 1));
   EXPECT_EQ(static_row, expected + "," + std::to_string(24 * (w - 1)) + ",8");
   EXPECT_EQ(fine.rfind("adaptive,0.01,", 0), 0u) << fine;
@@ -124,8 +139,9 @@ TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
 
 TEST_F(OmniBuildCli, MissingFaceIsExit2NamingFileAndFace) {
   std::remove(dir_.file("room_pz.exr").c_str());
-  const test::CommandResult r = run_lightvol("build " + q(dir_.file("room_{face}.exr")) + " --light " +
-                                             q(light_) + " --out " + q(dir_.file("v.ply")));
+  const test::CommandResult r =
+      run_lightvol("build " + q(dir_.file("room_{face}.exr")) + " --light " + q(light_) +
+                   " --out " + q(dir_.file("v.ply")));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: " + dir_.file("room_pz.exr") + ": face +Z (pz): no such file\n");
   std::ifstream written(dir_.file("v.ply"));

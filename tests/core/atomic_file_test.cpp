@@ -1,9 +1,10 @@
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 
 #include <lightvol/core/atomic_file.h>
 
@@ -75,7 +76,8 @@ TEST(AtomicFile, DeviceOrPipeTargetIsRefusedAndKept) {
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   const Status s = write_bytes_atomically(fifo, "x");
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("is not a regular file"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("is not a regular file"), std::string::npos)
+      << s.error().message;
   EXPECT_TRUE(std::filesystem::is_fifo(fifo));
 }
 

@@ -1,3 +1,5 @@
+#include <sys/wait.h>
+
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
@@ -6,13 +8,11 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <lightvol/core/detail/isolated.h>
 
 namespace lightvol {
 namespace {
-
 
 // No child is left behind: every run_isolated reaps its process.
 void expect_no_children() {
@@ -61,16 +61,18 @@ TEST(Isolated, ALargeAnswerPassesThePipeWhole) {
         for (std::size_t i = 0; i < n; ++i) values[i] = static_cast<std::uint32_t>(i * 2654435761u);
         out.write(values.data(), n * 4);
       },
-      [&](ChildInput& in) -> Status { return in.read(got.data(), n * 4) ? Status{} : Error{"short"}; });
+      [&](ChildInput& in) -> Status {
+        return in.read(got.data(), n * 4) ? Status{} : Error{"short"};
+      });
   ASSERT_TRUE(s.ok()) << s.error().message;
-  for (std::size_t i = 0; i < n; i += 9973) ASSERT_EQ(got[i], static_cast<std::uint32_t>(i * 2654435761u));
+  for (std::size_t i = 0; i < n; i += 9973)
+    ASSERT_EQ(got[i], static_cast<std::uint32_t>(i * 2654435761u));
   EXPECT_EQ(got[n - 1], static_cast<std::uint32_t>((n - 1) * 2654435761u));
 }
 
 TEST(Isolated, AChildThatCrashesIsAnErrorNamingTheSignal) {
   const Status s = run_isolated(
-      "the decoder", {}, [](ChildOutput&) { std::abort(); },
-      read_an_int);
+      "the decoder", {}, [](ChildOutput&) { std::abort(); }, read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder crashed on this input (signal 6: Aborted)");
   expect_no_children();
@@ -95,11 +97,10 @@ TEST(Isolated, AChildThatSpinsIsStoppedAtItsProcessorTime) {
   IsolationLimits limits;
   limits.cpu_seconds = 1;
   const Status s = run_isolated(
-      "the decoder", limits,
-      [](ChildOutput&) { spin(1e9); },
-      read_an_int);
+      "the decoder", limits, [](ChildOutput&) { spin(1e9); }, read_an_int);
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
+  EXPECT_EQ(s.error().message,
+            "the decoder used more than 1 s of processor time on this input and was stopped");
   expect_no_children();
 }
 
@@ -126,7 +127,8 @@ TEST(Isolated, TheParentMayGrantMoreProcessorTimeOnTheWay) {
   EXPECT_TRUE(granted.ok()) << granted.error().message;
   const Status refused = run_isolated("the decoder", limits, child, parent(false));
   ASSERT_FALSE(refused.ok());
-  EXPECT_EQ(refused.error().message, "the decoder used more than 1 s of processor time on this input and was stopped");
+  EXPECT_EQ(refused.error().message,
+            "the decoder used more than 1 s of processor time on this input and was stopped");
   expect_no_children();
 }
 
@@ -140,7 +142,8 @@ TEST(Isolated, AChildThatWaitsIsStoppedAtTheDeadline) {
         for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
       },
       read_an_int);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder took longer than 0.5 s on this input and was stopped");
   EXPECT_GE(seconds, 0.5);
@@ -165,7 +168,8 @@ TEST(Isolated, AChildThatExceedsItsMemoryIsAnError) {
         return in.read_value(&x) ? Status{} : Error{"short"};
       });
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.error().message, "the decoder ran out of memory (its limit is 64.0 MiB; raise it with --max-memory)");
+  EXPECT_EQ(s.error().message,
+            "the decoder ran out of memory (its limit is 64.0 MiB; raise it with --max-memory)");
 }
 
 TEST(Isolated, TheParentsOwnRefusalIsTheAnswerAndTheChildIsEnded) {
@@ -186,8 +190,7 @@ TEST(Isolated, TheParentsOwnRefusalIsTheAnswerAndTheChildIsEnded) {
 
 TEST(Isolated, AChildThatExitsEarlyIsAnError) {
   const Status s = run_isolated(
-      "the decoder", {}, [](ChildOutput&) { _exit(3); },
-      read_an_int);
+      "the decoder", {}, [](ChildOutput&) { _exit(3); }, read_an_int);
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "the decoder failed (exit status 3)");
 }

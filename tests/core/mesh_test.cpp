@@ -14,13 +14,12 @@ Mesh box(float a, float b, float c) {
   return m;
 }
 
-TEST(Mesh, SignedVolumeOfBoxIsItsVolume) {
-  EXPECT_DOUBLE_EQ(signed_volume(box(2, 3, 4)), 24.0);
-}
+TEST(Mesh, SignedVolumeOfBoxIsItsVolume) { EXPECT_DOUBLE_EQ(signed_volume(box(2, 3, 4)), 24.0); }
 
 TEST(Mesh, InvertedBoxHasNegativeVolume) {
   Mesh m = box(1, 2, 3);
-  for (std::size_t t = 0; t < m.num_triangles(); ++t) std::swap(m.indices[3 * t], m.indices[3 * t + 1]);
+  for (std::size_t t = 0; t < m.num_triangles(); ++t)
+    std::swap(m.indices[3 * t], m.indices[3 * t + 1]);
   EXPECT_DOUBLE_EQ(signed_volume(m), -6.0);
 }
 

@@ -63,7 +63,8 @@ TEST(CubeFaces, TheThreeInputFormsGiveIdenticalMeshes) {
   ASSERT_TRUE(write_depth_image(dir.file("strip.exr"), stack_cube_faces(cube)).ok());
 
   std::vector<std::string> six;
-  for (int f = 0; f < kOmniFaces; ++f) six.push_back(dir.file("room_" + std::string(omni_face_tag(f)) + ".exr"));
+  for (int f = 0; f < kOmniFaces; ++f)
+    six.push_back(dir.file("room_" + std::string(omni_face_tag(f)) + ".exr"));
   const Result<CubeFaces> from_six = read_cube_faces(six);
   const Result<CubeFaces> from_pattern = read_cube_faces({dir.file("room_{face}.exr")});
   const Result<CubeFaces> from_strip = read_cube_faces({dir.file("strip.exr")});
@@ -116,21 +117,27 @@ TEST(CubeFaces, MismatchedFaceSizeIsNamed) {
   cube.faces[5] = make_depth(8, 8, [](int, int) { return 1.0f; });
   write_faces(cube, dir.file("room_{face}.exr"));
   std::vector<std::string> six;
-  for (int f = 0; f < kOmniFaces; ++f) six.push_back(expand_face_pattern(dir.file("room_{face}.exr"), f));
+  for (int f = 0; f < kOmniFaces; ++f)
+    six.push_back(expand_face_pattern(dir.file("room_{face}.exr"), f));
   const Result<CubeFaces> r = read_cube_faces(six);
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().message, dir.file("room_nz.exr") + ": face -Z (nz): is 8x8, but face +X (px) (" +
-                                   dir.file("room_px.exr") +
-                                   ") is 4x4; all six faces must be the same size");
+  EXPECT_EQ(r.error().message,
+            dir.file("room_nz.exr") + ": face -Z (nz): is 8x8, but face +X (px) (" +
+                dir.file("room_px.exr") + ") is 4x4; all six faces must be the same size");
 }
 
 TEST(CubeFaces, StripOfTheWrongShapeIsRejected) {
   TempDir dir;
-  ASSERT_TRUE(write_depth_image(dir.file("strip.exr"), make_depth(8, 40, [](int, int) { return 1.0f; })).ok());
+  ASSERT_TRUE(
+      write_depth_image(dir.file("strip.exr"), make_depth(8, 40, [](int, int) { return 1.0f; }))
+          .ok());
   const Result<CubeFaces> r = read_cube_faces({dir.file("strip.exr")});
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().message.rfind(dir.file("strip.exr") + ": is 8x40; a single omni depth image must "
-                                                             "be a vertical strip W x 6W", 0), 0u)
+  EXPECT_EQ(
+      r.error().message.rfind(dir.file("strip.exr") + ": is 8x40; a single omni depth image must "
+                                                      "be a vertical strip W x 6W",
+                              0),
+      0u)
       << r.error().message;
 }
 
@@ -141,7 +148,9 @@ TEST(CubeFaces, WrongNumberOfPathsIsRejected) {
   EXPECT_NE(three.error().message.find("got 3 paths"), std::string::npos);
   const Result<CubeFaces> mixed = read_cube_faces({"a_{face}.exr", "b.exr"});
   ASSERT_FALSE(mixed.ok());
-  EXPECT_EQ(mixed.error().message.rfind("a_{face}.exr: a path with {face} stands for all six faces", 0), 0u)
+  EXPECT_EQ(
+      mixed.error().message.rfind("a_{face}.exr: a path with {face} stands for all six faces", 0),
+      0u)
       << mixed.error().message;
 }
 
@@ -152,7 +161,9 @@ TEST(CubeFaces, BadDepthInAFaceNamesFileFaceAndPixel) {
   write_faces(cube, dir.file("room_{face}.exr"));
   const Result<CubeFaces> r = read_cube_faces({dir.file("room_{face}.exr")});
   ASSERT_FALSE(r.ok());
-  EXPECT_EQ(r.error().message.rfind(dir.file("room_py.exr") + ": face +Y (py): pixel (3, 1): depth is negative", 0), 0u)
+  EXPECT_EQ(r.error().message.rfind(
+                dir.file("room_py.exr") + ": face +Y (py): pixel (3, 1): depth is negative", 0),
+            0u)
       << r.error().message;
 }
 

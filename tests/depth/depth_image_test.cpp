@@ -14,7 +14,8 @@ namespace lightvol {
 namespace {
 
 DepthImage ramp(int w, int h) {
-  return test::make_depth(w, h, [](int c, int r) { return 0.01f * static_cast<float>(c + 10 * r); });
+  return test::make_depth(w, h,
+                          [](int c, int r) { return 0.01f * static_cast<float>(c + 10 * r); });
 }
 
 // Writes an image with the given channels through OpenImageIO directly.
@@ -49,11 +50,13 @@ TEST(DepthImage, FloatFormatsRoundTripExactly) {
 
 TEST(DepthImage, Png16IsNormalizedWindowDepth) {
   test::TempDir dir;
-  const DepthImage in = test::make_depth(4, 3, [](int c, int r) { return static_cast<float>(c * 3 + r) / 65535.0f * 1000; });
+  const DepthImage in = test::make_depth(
+      4, 3, [](int c, int r) { return static_cast<float>(c * 3 + r) / 65535.0f * 1000; });
   ASSERT_TRUE(write_depth_image(dir.file("d.png"), in).ok());
   Result<DepthImage> out = read_depth_image(dir.file("d.png"));
   ASSERT_TRUE(out.ok()) << out.error().message;
-  for (std::size_t i = 0; i < in.values.size(); ++i) EXPECT_NEAR(out->values[i], in.values[i], 0.5 / 65535);
+  for (std::size_t i = 0; i < in.values.size(); ++i)
+    EXPECT_NEAR(out->values[i], in.values[i], 0.5 / 65535);
 }
 
 TEST(DepthImage, ChannelSelection) {
@@ -76,7 +79,8 @@ TEST(DepthImage, ChannelSelection) {
 
 TEST(DepthImage, BadPixelsNameTheFirstOne) {
   test::TempDir dir;
-  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.5f}) {
+  for (float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -0.5f}) {
     DepthImage in = ramp(6, 4);
     in.values[2 * 6 + 3] = bad;
     in.values[3 * 6 + 5] = bad;
@@ -93,14 +97,16 @@ TEST(DepthImage, RejectsMissingTruncatedJunkTinyAnd8Bit) {
   expect_error(read_depth_image(dir.write("junk.exr", "this is not an image")), "junk.exr");
   expect_error(read_depth_image(dir.path()), "is a directory");
 
-  const DepthImage big = test::make_depth(256, 256, [](int c, int r) { return 0.001f * static_cast<float>(c * r % 997); });
+  const DepthImage big = test::make_depth(
+      256, 256, [](int c, int r) { return 0.001f * static_cast<float>(c * r % 997); });
   ASSERT_TRUE(write_depth_image(dir.file("full.exr"), big).ok());
   std::string bytes;
   {
     std::ifstream in(dir.file("full.exr"), std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), {});
   }
-  std::ofstream(dir.file("cut.exr"), std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  std::ofstream(dir.file("cut.exr"), std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
   expect_error(read_depth_image(dir.file("cut.exr")), "cut.exr");
 
   ASSERT_TRUE(write_depth_image(dir.file("tiny.exr"), test::constant_depth(1, 5, 0.5f)).ok());
@@ -124,10 +130,13 @@ TEST(DepthImage, FormatByContentThenByExtensionAmongTheVettedOnes) {
     ASSERT_TRUE(back.ok()) << back.error().message;
     EXPECT_EQ(back->values, in.values) << name;
   }
-  write_raw(dir.file("eight.bmp"), 3, 3, {"R", "G", "B"}, OIIO::TypeDesc::UINT8, std::vector<float>(27, 0.5f));
-  const std::string refused = ": not an image lightvol reads depths from (EXR, TIFF, PNG, PFM, PGM, HDR or "
-                              "ZFile, by its first bytes or its extension)";
-  for (const std::string name : {"eight.bmp", "clip.mp4", "scan.dcm", "any.null", "noextension", "film.dpx"}) {
+  write_raw(dir.file("eight.bmp"), 3, 3, {"R", "G", "B"}, OIIO::TypeDesc::UINT8,
+            std::vector<float>(27, 0.5f));
+  const std::string refused =
+      ": not an image lightvol reads depths from (EXR, TIFF, PNG, PFM, PGM, HDR or "
+      "ZFile, by its first bytes or its extension)";
+  for (const std::string name :
+       {"eight.bmp", "clip.mp4", "scan.dcm", "any.null", "noextension", "film.dpx"}) {
     if (!std::filesystem::exists(dir.file(name))) dir.write(name, std::string(64, '\x01'));
     const Result<DepthImage> r = read_depth_image(dir.file(name));
     ASSERT_FALSE(r.ok()) << name;

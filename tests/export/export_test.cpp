@@ -48,7 +48,8 @@ Mesh from_draco_mesh(const draco::Mesh& dm) {
   Mesh m;
   const auto* pos = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
   m.positions.resize(3 * dm.num_points());
-  for (draco::PointIndex p(0); p < dm.num_points(); ++p) pos->GetMappedValue(p, &m.positions[3 * p.value()]);
+  for (draco::PointIndex p(0); p < dm.num_points(); ++p)
+    pos->GetMappedValue(p, &m.positions[3 * p.value()]);
   for (draco::FaceIndex f(0); f < dm.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) m.indices.push_back(dm.face(f)[k].value());
   return m;

@@ -12,7 +12,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   // The formats read_depth_image reads, then three it refuses without opening.
-  static const char* const kExtensions[] = {".exr", ".png", ".tif", ".pfm", ".hdr",
+  static const char* const kExtensions[] = {".exr",   ".png", ".tif", ".pfm", ".hdr",
                                             ".zfile", ".pgm", ".dpx", ".jpg", ".bmp"};
   constexpr std::size_t kCount = sizeof kExtensions / sizeof kExtensions[0];
   const lightvol::fuzz::TempInput file(data + 1, size - 1, kExtensions[data[0] % kCount]);

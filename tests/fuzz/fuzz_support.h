@@ -2,13 +2,13 @@
 // readers under test take paths, as the CLI does).
 #pragma once
 
+#include <unistd.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <unistd.h>
 
 namespace lightvol::fuzz {
 

@@ -57,12 +57,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   static constexpr double kOrthoScale[4] = {1, 0.01, 100, 1};
   static constexpr double kNear[4] = {0.1, 1e-3, 1, 0.1}, kFar[4] = {30, 1e3, 1.5, 30};
   static constexpr double kDirNear[4] = {0, 0, 2, 0}, kDirFar[4] = {10, 1e3, 2.5, 10};
-  static constexpr const char* kDirection[4] = {"[0, -1, 0]", "[0.3, -1, 0.2]", "[1, 0, 0]", "[0, -1, 0]"};
+  static constexpr const char* kDirection[4] = {"[0, -1, 0]", "[0.3, -1, 0.2]", "[1, 0, 0]",
+                                                "[0, -1, 0]"};
   static constexpr const char* kUp[4] = {"[0, 0, -1]", "[0, 0, -1]", "[0, 1, 0]", "[0, 0, -1]"};
   const auto num = [](double x) { return std::to_string(x); };
   const std::string encoding = radial ? "radial" : linear ? "linear" : "window";
   const std::string flip = flip_y ? ", \"flip_y\": true" : "";
-  const std::string frame = std::string(R"("direction": )") + kDirection[tilt] + R"(, "up": )" + kUp[tilt];
+  const std::string frame =
+      std::string(R"("direction": )") + kDirection[tilt] + R"(, "up": )" + kUp[tilt];
   std::string json;
   if (type == 0)
     json = R"({"type": "spot", "position": [0, 4, 0], )" + frame + R"(, "fov_y_deg": )" +

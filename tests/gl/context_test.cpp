@@ -1,8 +1,8 @@
 // The headless GL context: a context can be had here (llvmpipe), float targets take additive
 // negative contributions, programs report compile errors, and read() returns top row first.
-#include <lightvol/gl/context.h>
-
 #include <gtest/gtest.h>
+
+#include <lightvol/gl/context.h>
 
 namespace lightvol::gl {
 namespace {
@@ -13,9 +13,9 @@ Context* shared_context() {
   return ctx ? ctx->get() : nullptr;
 }
 
-#define REQUIRE_GL()                                                                      \
-  if (shared_context() == nullptr)                                                        \
-    GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << Context::create().error().message
+#define REQUIRE_GL()               \
+  if (shared_context() == nullptr) \
+  GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << Context::create().error().message
 
 const char* kTriangleVs = R"(#version 450 core
 void main() {
@@ -38,7 +38,8 @@ TEST(GlContext, AdditiveFloatBlendingTakesNegativeValues) {
   Result<Program> program = Program::compile(kTriangleVs, R"(#version 450 core
 uniform float value;
 layout(location = 0) out float result;
-void main() { result = value * (gl_FragCoord.y < 2.0 ? 1.0 : 2.0); })", "test");
+void main() { result = value * (gl_FragCoord.y < 2.0 ? 1.0 : 2.0); })",
+                                             "test");
   ASSERT_TRUE(program) << program.error().message;
   Result<Framebuffer> fb = Framebuffer::create(3, 4, {GL_R32F}, false);
   ASSERT_TRUE(fb) << fb.error().message;
@@ -69,8 +70,8 @@ void main() { result = value * (gl_FragCoord.y < 2.0 ? 1.0 : 2.0); })", "test");
 
 TEST(GlContext, CompileErrorsCarryTheLog) {
   REQUIRE_GL();
-  Result<Program> program = Program::compile(kTriangleVs, "#version 450 core\nvoid main() { nope; }",
-                                             "broken");
+  Result<Program> program =
+      Program::compile(kTriangleVs, "#version 450 core\nvoid main() { nope; }", "broken");
   ASSERT_FALSE(program);
   EXPECT_NE(program.error().message.find("broken: fragment shader does not compile"),
             std::string::npos)

@@ -13,11 +13,13 @@ int main() {
   lightvol::DepthImage depth;
   depth.width = depth.height = 3;
   depth.values.assign(9, 2.0f);
-  const lightvol::Result<lightvol::Mesh> mesh = lightvol::build_static_volume(*light, depth, {}, "3x3");
+  const lightvol::Result<lightvol::Mesh> mesh =
+      lightvol::build_static_volume(*light, depth, {}, "3x3");
   if (!mesh || mesh->num_triangles() != 16 || mesh->num_vertices() != 10) {
     std::fprintf(stderr, "consumer: unexpected volume\n");
     return 1;
   }
-  std::printf("consumer: %zu triangles, volume %.4f\n", mesh->num_triangles(), lightvol::signed_volume(*mesh));
+  std::printf("consumer: %zu triangles, volume %.4f\n", mesh->num_triangles(),
+              lightvol::signed_volume(*mesh));
   return 0;
 }

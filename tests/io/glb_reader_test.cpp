@@ -54,12 +54,15 @@ Json tetra_doc() {
           {"accessors",
            {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
             {{"bufferView", 1}, {"componentType", 5123}, {"count", 12}, {"type", "SCALAR"}}}},
-          {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
-                           {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 24}}}}};
+          {"bufferViews",
+           {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
+            {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 24}}}}};
 }
 std::string tetra_bin() { return bytes_of(kTetra) + bytes_of(kTetraFaces); }
 
-Result<DracoMesh> read(const Json& doc, const std::string& bin = tetra_bin()) { return read_glb(glb(doc, bin), "t.glb"); }
+Result<DracoMesh> read(const Json& doc, const std::string& bin = tetra_bin()) {
+  return read_glb(glb(doc, bin), "t.glb");
+}
 
 TEST(GlbReader, ReadsATriangleListAsStored) {
   const Result<DracoMesh> m = read(tetra_doc());
@@ -75,7 +78,9 @@ TEST(GlbReader, ReadsATriangleListAsStored) {
 TEST(GlbReader, NodeTransformsMoveAndMirrorsFlip) {
   Json doc = tetra_doc();
   doc["nodes"] = {{{"children", {1}}, {"translation", {10, 0, 0}}},
-                  {{"mesh", 0}, {"scale", {2, 2, 2}}, {"rotation", {0, 0, 0.7071067811865476, 0.7071067811865476}}}};
+                  {{"mesh", 0},
+                   {"scale", {2, 2, 2}},
+                   {"rotation", {0, 0, 0.7071067811865476, 0.7071067811865476}}}};
   Result<DracoMesh> m = read(doc);
   ASSERT_TRUE(m.ok()) << m.error().message;
   // Vertex 1 (1, 0, 0): scaled to (2, 0, 0), turned 90° about z to (0, 2, 0), moved to (10, 2, 0).
@@ -84,7 +89,8 @@ TEST(GlbReader, NodeTransformsMoveAndMirrorsFlip) {
   EXPECT_NEAR(m->mesh.positions[5], 0, 1e-6);
   EXPECT_NEAR(signed_volume(m->mesh), 8.0 / 6, 1e-6);
 
-  doc["nodes"] = {{{"mesh", 0}, {"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 6, 7, 1}}}};  // column-major
+  doc["nodes"] = {{{"mesh", 0},
+                   {"matrix", {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 5, 6, 7, 1}}}};  // column-major
   m = read(doc);
   ASSERT_TRUE(m.ok()) << m.error().message;
   EXPECT_EQ(m->mesh.vertex(1), (std::array<float, 3>{4, 6, 7}));
@@ -134,19 +140,36 @@ TEST(GlbReader, BadDocumentsAreErrorsNamingTheObject) {
     std::function<void(Json&)> edit;
     std::string message;
   } cases[] = {
-      {[](Json& d) { d["nodes"][0]["children"] = {0}; }, "node 0 is reached twice from scene 0: the nodes do not form trees"},
-      {[](Json& d) { d["scenes"][0]["nodes"] = {0, 0}; }, "node 0 is reached twice from scene 0: the nodes do not form trees"},
+      {[](Json& d) { d["nodes"][0]["children"] = {0}; },
+       "node 0 is reached twice from scene 0: the nodes do not form trees"},
+      {[](Json& d) {
+         d["scenes"][0]["nodes"] = {0, 0};
+       },
+       "node 0 is reached twice from scene 0: the nodes do not form trees"},
       {[](Json& d) { d["nodes"][0]["mesh"] = 3; }, "nodes 0: 'mesh' names no element of 'meshes'"},
       {[](Json& d) { d["scene"] = 2; }, "the document: 'scene' names no element of 'scenes'"},
-      {[](Json& d) { d["meshes"][0]["primitives"][0]["mode"] = 1; }, "mesh 0 primitive 0: mode 1 is not triangles (4), a strip (5) or a fan (6)"},
-      {[](Json& d) { d["accessors"][1]["count"] = 11; }, "mesh 0 primitive 0: 11 vertices do not make whole triangles"},
-      {[](Json& d) { d["accessors"][1]["count"] = 13; }, "accessor 1 runs past the end of its buffer view"},
-      {[](Json& d) { d["accessors"][1]["componentType"] = 5122; }, "mesh 0 primitive 0: indices are not unsigned integer scalars"},
-      {[](Json& d) { d["accessors"][0]["componentType"] = 5123; }, "mesh 0 primitive 0: POSITION is not a float VEC3 accessor"},
-      {[](Json& d) { d["bufferViews"][1]["byteLength"] = 28; }, "bufferViews 1 lies outside buffer 0"},
-      {[](Json& d) { d["nodes"][0]["matrix"] = {1, 2, 3}; }, "node 0: 'matrix' is not 16 numbers"},
-      {[](Json& d) { d["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "node 0: 'rotation' is not a rotation"},
-      {[](Json& d) { d["meshes"][0]["primitives"][0].erase("attributes"); }, "mesh 0 primitive 0 has no attributes"},
+      {[](Json& d) { d["meshes"][0]["primitives"][0]["mode"] = 1; },
+       "mesh 0 primitive 0: mode 1 is not triangles (4), a strip (5) or a fan (6)"},
+      {[](Json& d) { d["accessors"][1]["count"] = 11; },
+       "mesh 0 primitive 0: 11 vertices do not make whole triangles"},
+      {[](Json& d) { d["accessors"][1]["count"] = 13; },
+       "accessor 1 runs past the end of its buffer view"},
+      {[](Json& d) { d["accessors"][1]["componentType"] = 5122; },
+       "mesh 0 primitive 0: indices are not unsigned integer scalars"},
+      {[](Json& d) { d["accessors"][0]["componentType"] = 5123; },
+       "mesh 0 primitive 0: POSITION is not a float VEC3 accessor"},
+      {[](Json& d) { d["bufferViews"][1]["byteLength"] = 28; },
+       "bufferViews 1 lies outside buffer 0"},
+      {[](Json& d) {
+         d["nodes"][0]["matrix"] = {1, 2, 3};
+       },
+       "node 0: 'matrix' is not 16 numbers"},
+      {[](Json& d) {
+         d["nodes"][0]["rotation"] = {0, 0, 0, 0};
+       },
+       "node 0: 'rotation' is not a rotation"},
+      {[](Json& d) { d["meshes"][0]["primitives"][0].erase("attributes"); },
+       "mesh 0 primitive 0 has no attributes"},
   };
   for (const auto& c : cases) {
     Json doc = tetra_doc();
@@ -160,7 +183,9 @@ TEST(GlbReader, BadDocumentsAreErrorsNamingTheObject) {
   faces[7] = 4;
   const Result<DracoMesh> m = read(tetra_doc(), bytes_of(kTetra) + bytes_of(faces));
   ASSERT_FALSE(m.ok());
-  EXPECT_EQ(m.error().message, "t.glb: glTF binary: mesh 0 primitive 0: index 7 is 4, but its attributes have 4 elements");
+  EXPECT_EQ(
+      m.error().message,
+      "t.glb: glTF binary: mesh 0 primitive 0: index 7 is 4, but its attributes have 4 elements");
 }
 
 // Nodes cost bytes, instances of a mesh do not: 10,000 nodes naming a 10,000-triangle strip
@@ -183,7 +208,9 @@ TEST(GlbReader, InstancingIsBoundedByTheFileSize) {
   instances(10000);
   const Result<DracoMesh> m = read(doc, bytes_of(kTetra) + bytes_of(strip));
   ASSERT_FALSE(m.ok());
-  EXPECT_NE(m.error().message.find("10000 mesh instances add up to 100000000 triangles and 40000 vertices, more than 256 per byte"), std::string::npos)
+  EXPECT_NE(m.error().message.find("10000 mesh instances add up to 100000000 triangles and 40000 "
+                                   "vertices, more than 256 per byte"),
+            std::string::npos)
       << m.error().message;
   // A hundred instances are fine.
   instances(100);
@@ -196,7 +223,10 @@ TEST(GlbReader, InstancingIsBoundedByTheFileSize) {
   const Result<DracoMesh> over = read(doc, bytes_of(kTetra) + bytes_of(strip));
   set_memory_budget(budget);
   ASSERT_FALSE(over.ok());
-  EXPECT_EQ(over.error().message.rfind("t.glb: assembling 1000000 triangles needs about 22.9 MiB of memory", 0), 0u) << over.error().message;
+  EXPECT_EQ(over.error().message.rfind(
+                "t.glb: assembling 1000000 triangles needs about 22.9 MiB of memory", 0),
+            0u)
+      << over.error().message;
 }
 
 }  // namespace

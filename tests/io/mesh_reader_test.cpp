@@ -23,8 +23,9 @@ using test::TempDir;
 
 Mesh sample_volume() {
   const Light light = test::light_from_json(test::spot_json());
-  const DepthImage depth = test::make_depth(
-      6, 5, [](int c, int r) { return (c == 2 && r >= 1 && r <= 3) ? 0.95f : 0.98f - 0.001f * static_cast<float>(c); });
+  const DepthImage depth = test::make_depth(6, 5, [](int c, int r) {
+    return (c == 2 && r >= 1 && r <= 3) ? 0.95f : 0.98f - 0.001f * static_cast<float>(c);
+  });
   Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
   EXPECT_TRUE(mesh.ok());
   return *mesh;
@@ -34,9 +35,11 @@ Mesh sample_volume() {
 // differ: STL stores corners, and welding numbers vertices in order of first use).
 ::testing::AssertionResult same_triangles(const Mesh& a, const Mesh& b) {
   if (a.num_vertices() != b.num_vertices())
-    return ::testing::AssertionFailure() << a.num_vertices() << " vs " << b.num_vertices() << " vertices";
+    return ::testing::AssertionFailure()
+           << a.num_vertices() << " vs " << b.num_vertices() << " vertices";
   if (a.num_triangles() != b.num_triangles())
-    return ::testing::AssertionFailure() << a.num_triangles() << " vs " << b.num_triangles() << " triangles";
+    return ::testing::AssertionFailure()
+           << a.num_triangles() << " vs " << b.num_triangles() << " triangles";
   for (std::size_t t = 0; t < a.num_triangles(); ++t)
     for (int k = 0; k < 3; ++k)
       if (a.vertex(a.triangle(t)[k]) != b.vertex(b.triangle(t)[k]))
@@ -73,7 +76,8 @@ INSTANTIATE_TEST_SUITE_P(Formats, RoundTrip,
                                            Case{"v.glb", false}, Case{"V.PLY", false}),
                          [](const auto& param_info) {
                            std::string n = param_info.param.name;
-                           for (char& c : n) c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+                           for (char& c : n)
+                             c = std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
                            return n;
                          });
 
@@ -112,13 +116,17 @@ TEST(ReadMesh, DracoFormatsKeepCountsAndStaySound) {
 // the same files fail).
 TEST(ReadMesh, DracoFilesReportTheirQuantizationStepAndStaySoundSeenFromTheLight) {
   TempDir dir;
-  const DepthImage depth = test::make_depth(
-      40, 30, [](int c, int r) { return (c > 10 && c < 20 && r > 5) ? 0.9f : 0.97f + 0.0005f * static_cast<float>(r); });
+  const DepthImage depth = test::make_depth(40, 30, [](int c, int r) {
+    return (c > 10 && c < 20 && r > 5) ? 0.9f : 0.97f + 0.0005f * static_cast<float>(r);
+  });
   // Lights off the origin, whose coordinates are no multiples of the grid's step.
-  const std::string at = R"("position": [0.37, 4.17, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1], )";
+  const std::string at =
+      R"("position": [0.37, 4.17, -0.21], "direction": [0, -1, 0], "up": [0, 0, -1], )";
   for (const std::string& json :
-       {R"({"type": "spot", )" + at + R"("fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})",
-        R"({"type": "directional", )" + at + R"("ortho": [-5, 5, -4, 4], "near": 0, "far": 6, "depth": "window"})"}) {
+       {R"({"type": "spot", )" + at +
+            R"("fov_y_deg": 60, "near": 0.1, "far": 30, "depth": "window"})",
+        R"({"type": "directional", )" + at +
+            R"("ortho": [-5, 5, -4, 4], "near": 0, "far": 6, "depth": "window"})"}) {
     const Light light = test::light_from_json(json);
     Result<Mesh> mesh = build_static_volume(light, depth, {}, "test.exr");
     ASSERT_TRUE(mesh.ok()) << mesh.error().message;
@@ -199,17 +207,27 @@ TEST(ReadMesh, DracoGlbReferencesAreChecked) {
   std::ifstream in(dir.file("d.glb"), std::ios::binary);
   const std::string glb((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_TRUE(read_mesh(dir.file("d.glb")).ok());
-  const auto primitive = [](nlohmann::json& doc) -> nlohmann::json& { return doc["meshes"][0]["primitives"][0]; };
+  const auto primitive = [](nlohmann::json& doc) -> nlohmann::json& {
+    return doc["meshes"][0]["primitives"][0];
+  };
   const struct {
     std::function<void(nlohmann::json&)> edit;
     std::string message;
   } cases[] = {
-      {[&](nlohmann::json& d) { primitive(d)["indices"] = 77; }, "mesh 0 primitive 0: 'indices' names no element of 'accessors'"},
-      {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5; },
+      {[&](nlohmann::json& d) { primitive(d)["indices"] = 77; },
+       "mesh 0 primitive 0: 'indices' names no element of 'accessors'"},
+      {[&](nlohmann::json& d) {
+         primitive(d)["extensions"]["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5;
+       },
        "mesh 0 primitive 0: KHR_draco_mesh_compression data: no attribute has the POSITION id 5"},
-      {[&](nlohmann::json& d) { primitive(d)["extensions"]["KHR_draco_mesh_compression"]["bufferView"] = 99; },
-       "mesh 0 primitive 0 KHR_draco_mesh_compression: 'bufferView' names no element of 'bufferViews'"},
-      {[&](nlohmann::json& d) { d["accessors"][primitive(d)["attributes"]["POSITION"].get<int>()]["type"] = "VEC2"; },
+      {[&](nlohmann::json& d) {
+         primitive(d)["extensions"]["KHR_draco_mesh_compression"]["bufferView"] = 99;
+       },
+       "mesh 0 primitive 0 KHR_draco_mesh_compression: 'bufferView' names no element of "
+       "'bufferViews'"},
+      {[&](nlohmann::json& d) {
+         d["accessors"][primitive(d)["attributes"]["POSITION"].get<int>()]["type"] = "VEC2";
+       },
        "mesh 0 primitive 0: POSITION is not a float VEC3 accessor"},
   };
   for (const auto& c : cases) {
@@ -250,13 +268,16 @@ TEST(ReadMesh, ManyDracoGlbPrimitivesAreDecodedInOrder) {
   EXPECT_EQ(mesh->num_triangles(), 2 * kMeshes * volume.num_triangles());
   EXPECT_EQ(mesh->num_vertices(), kMeshes * volume.num_vertices());  // each pair welds to one
   const std::string bad = dir.write("bad.glb", edit_glb(glb, [&](nlohmann::json& d) {
-    many(d);
-    d["meshes"][97]["primitives"][1]["extensions"]["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5;
-  }));
+                                      many(d);
+                                      d["meshes"][97]["primitives"][1]["extensions"]
+                                       ["KHR_draco_mesh_compression"]["attributes"]["POSITION"] = 5;
+                                    }));
   const Result<Mesh> broken = read_mesh(bad);
   ASSERT_FALSE(broken.ok());
   EXPECT_EQ(broken.error().message,
-            bad + ": glTF binary: mesh 97 primitive 1: KHR_draco_mesh_compression data: no attribute has the POSITION id 5");
+            bad +
+                ": glTF binary: mesh 97 primitive 1: KHR_draco_mesh_compression data: no attribute "
+                "has the POSITION id 5");
 }
 
 // Draco's decoders trust their data (fuzzing an instrumented Draco 1.5.5 found dozens of inputs
@@ -267,7 +288,8 @@ TEST(ReadMesh, DracoRunsWithinLimitsOfItsOwn) {
   TempDir dir;
   for (const auto& [name, bytes] : {std::pair{"regression_drc_52_bytes_allocate_gigabytes", 52},
                                     std::pair{"regression_drc_edgebreaker_reserve", 87}}) {
-    const std::string path = dir.write(std::string(name) + ".drc", test::fuzz_regression_file("mesh", name));
+    const std::string path =
+        dir.write(std::string(name) + ".drc", test::fuzz_regression_file("mesh", name));
     const Result<Mesh> mesh = read_mesh(path);
     ASSERT_FALSE(mesh.ok());
 #if defined(__SANITIZE_ADDRESS__)
@@ -276,8 +298,8 @@ TEST(ReadMesh, DracoRunsWithinLimitsOfItsOwn) {
     EXPECT_EQ(mesh.error().message.rfind(path + ": ", 0), 0u) << mesh.error().message;
 #else
     const std::string limit = bytes == 52 ? "256.2 MiB" : "256.3 MiB";
-    EXPECT_EQ(mesh.error().message, path + ": Draco's decoder ran out of memory (its limit is " + limit +
-                                        "; no Draco mesh of " + std::to_string(bytes) +
+    EXPECT_EQ(mesh.error().message, path + ": Draco's decoder ran out of memory (its limit is " +
+                                        limit + "; no Draco mesh of " + std::to_string(bytes) +
                                         " bytes needs that much: the data is corrupt)");
 #endif
   }
@@ -286,10 +308,11 @@ TEST(ReadMesh, DracoRunsWithinLimitsOfItsOwn) {
 TEST(ReadMesh, PolygonsAreFanTriangulated) {
   TempDir dir;
   // A cube of six quads, and one pentagon-free OBJ with negative (relative) indices.
-  const std::string off = dir.write("cube.off",
-                                    "OFF\n8 6 0\n"
-                                    "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                    "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
+  const std::string off =
+      dir.write("cube.off",
+                "OFF\n8 6 0\n"
+                "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+                "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n");
   Result<Mesh> cube = read_mesh(off);
   ASSERT_TRUE(cube.ok()) << cube.error().message;
   EXPECT_EQ(cube->num_triangles(), 12u);
@@ -330,13 +353,14 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
                          test::fuzz_regression_file("mesh", "regression_drc_position_components")),
                "seven.drc: POSITION has 7 components, not 3");
   // Found by fuzz_mesh: a Draco file with a bool POSITION was read as bools holding other bytes.
-  expect_error(dir.write("bool.drc", test::fuzz_regression_file("mesh", "regression_drc_bool_position")),
-               "bool.drc: POSITION is not of a number type");
+  expect_error(
+      dir.write("bool.drc", test::fuzz_regression_file("mesh", "regression_drc_bool_position")),
+      "bool.drc: POSITION is not of a number type");
   // Found by fuzz_mesh: a buffer view inside the BIN chunk but past buffer 0's byteLength made
   // Draco's glTF decoder read freed memory.
-  expect_error(dir.write("view.glb",
-                         test::fuzz_regression_file("mesh", "regression_glb_view_past_buffer")),
-               "glTF binary: bufferViews 1 lies outside buffer 0");
+  expect_error(
+      dir.write("view.glb", test::fuzz_regression_file("mesh", "regression_glb_view_past_buffer")),
+      "glTF binary: bufferViews 1 lies outside buffer 0");
   expect_error(dir.write("node.glb",
                          test::fuzz_regression_file("mesh", "regression_glb_node_names_no_mesh")),
                "glTF binary: scenes 0: 'nodes' names no element of 'nodes'");
@@ -345,14 +369,17 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
                "OBJ line 4: face vertex '/1' is not v, v/t, v//n or v/t/n");
   expect_error(dir.write("mesh.xyz", "1 2 3\n"), "unknown mesh format");
   expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\n"), "no triangles");
-  expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "bad_index.off");
+  expect_error(dir.write("bad_index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
+               "bad_index.off");
   expect_error(dir.write("huge.off", "OFF\n2000000000 1 0\n0 0 0\n"), "huge.off");
-  expect_error(dir.write("huge.ply", "ply\nformat ascii 1.0\nelement vertex 4000000000\n"
-                                     "property float x\nproperty float y\nproperty float z\n"
-                                     "element face 1\nproperty list uchar int vertex_indices\n"
-                                     "end_header\n0 0 0\n"),
+  expect_error(dir.write("huge.ply",
+                         "ply\nformat ascii 1.0\nelement vertex 4000000000\n"
+                         "property float x\nproperty float y\nproperty float z\n"
+                         "element face 1\nproperty list uchar int vertex_indices\n"
+                         "end_header\n0 0 0\n"),
                "huge.ply");
-  expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "non-finite coordinate");
+  expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"),
+               "non-finite coordinate");
 
   // A binary PLY cut short: the header promises more than the body holds.
   const Mesh mesh = sample_volume();

@@ -18,7 +18,8 @@ TEST(ReadObj, FaceVertexFormsRelativeAndForwardIndices) {
   // A quad (v//n and negative indices) and a triangle naming a vertex defined after it (v/t/n).
   const std::string path = dir.write(
       "q.obj",
-      "# a comment\nmtllib scene.mtl\no quad\nv 0 0 0\nv +1 0 0 1\nvt 0 0\nvn 0 0 1\nv 1 1 0 0.5 0.5 0.5\n"
+      "# a comment\nmtllib scene.mtl\no quad\nv 0 0 0\nv +1 0 0 1\nvt 0 0\nvn 0 0 1\nv 1 1 0 0.5 "
+      "0.5 0.5\n"
       "v 0 1 0 # trailing comment\nusemtl stone\ns off\nf -4//1 -3//1 -2//1 -1//1\ng tri\n"
       "f 1/1/1 3/1 5\nl 1 2\nv 0.5 0.25 -2.5\n");
   const Result<Mesh> mesh = read_mesh(path);
@@ -37,7 +38,8 @@ TEST(ReadObj, MaterialLibrariesAreNeverOpened) {
   TempDir dir;
   std::string up;
   for (int i = 0; i < 32; ++i) up += "../";
-  const std::string path = dir.write("zero.obj", "mtllib " + up + "dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string path =
+      dir.write("zero.obj", "mtllib " + up + "dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   const Result<Mesh> mesh = read_mesh(path);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   EXPECT_EQ(mesh->num_triangles(), 1u);
@@ -58,7 +60,8 @@ TEST(ReadObj, MalformedLinesAreRefusedNamingTheLine) {
       {tri + "f 1 2 3\nf 1 2 9\n", "OBJ line 5: face 1 names vertex 9, but there are 3"},
       {"v 0 0\n", "OBJ line 1: expected a vertex 'v x y z', got 'v 0 0'"},
       {"v 0 zero 0\n", "OBJ line 1: expected a vertex 'v x y z', got 'v 0 zero 0'"},
-      {tri + "f 1 2 3\nv 0 0 1\n" + std::string("f 1\0 2 3\n", 9), "not an OBJ file (binary data in a text format)"},
+      {tri + "f 1 2 3\nv 0 0 1\n" + std::string("f 1\0 2 3\n", 9),
+       "not an OBJ file (binary data in a text format)"},
       {"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "has a vertex with a non-finite coordinate"},
   };
   for (const auto& c : cases) {

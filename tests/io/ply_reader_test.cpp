@@ -32,7 +32,8 @@ void put(std::string* out, double v, bool big) {
 const float kSquare[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0.25f, -2.5f}};
 
 std::string binary_square(bool big) {
-  std::string ply = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+  std::string ply = std::string("ply\nformat ") +
+                    (big ? "binary_big_endian" : "binary_little_endian") +
                     " 1.0\ncomment extra element first\nelement material 2\nproperty uchar red\n"
                     "property list ushort float weights\n"
                     "element vertex 5\nproperty double x\nproperty short flag\nproperty double y\n"
@@ -67,7 +68,8 @@ void expect_square(const Result<Mesh>& mesh) {
   ASSERT_EQ(mesh->num_vertices(), 5u);
   ASSERT_EQ(mesh->num_triangles(), 3u);
   for (std::size_t v = 0; v < 5; ++v)
-    EXPECT_EQ(mesh->vertex(v), (std::array<float, 3>{kSquare[v][0], kSquare[v][1], kSquare[v][2]})) << v;
+    EXPECT_EQ(mesh->vertex(v), (std::array<float, 3>{kSquare[v][0], kSquare[v][1], kSquare[v][2]}))
+        << v;
   EXPECT_EQ(mesh->triangle(0), (std::array<std::uint32_t, 3>{0, 1, 2}));
   EXPECT_EQ(mesh->triangle(1), (std::array<std::uint32_t, 3>{0, 2, 3}));
   EXPECT_EQ(mesh->triangle(2), (std::array<std::uint32_t, 3>{0, 2, 4}));
@@ -94,11 +96,12 @@ TEST(ReadPly, AsciiAsShortAsTheFormatAllowsWithoutAFinalNewline) {
   // Every value one character and one separator, the last newline missing: exactly at the bound
   // the header's counts are checked against.
   TempDir dir;
-  const Result<Mesh> tet = read_mesh(dir.write(
-      "tet.ply",
-      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
-      "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
-      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3"));
+  const Result<Mesh> tet =
+      read_mesh(dir.write("tet.ply",
+                          "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty "
+                          "float y\nproperty float z\n"
+                          "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3"));
   ASSERT_TRUE(tet.ok()) << tet.error().message;
   EXPECT_EQ(tet->num_triangles(), 4u);
   EXPECT_DOUBLE_EQ(signed_volume(*tet), 1.0 / 6.0);
@@ -106,8 +109,9 @@ TEST(ReadPly, AsciiAsShortAsTheFormatAllowsWithoutAFinalNewline) {
 
 TEST(ReadPly, MalformedFilesAreRefusedNamingWhere) {
   TempDir dir;
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                           "property float z\nelement face 1\nproperty list uchar int vertex_indices\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n";
   const std::string body = "end_header\n0 0 0\n1 0 0\n0 1 0\n";
   // Blank lines after the last element are ignored; they keep the body as long as the header's
   // counts need (two characters a value), so that the body's own checks are reached.
@@ -119,28 +123,38 @@ TEST(ReadPly, MalformedFilesAreRefusedNamingWhere) {
        "PLY header line 3: expected 'element NAME COUNT' with a whole-number COUNT"},
       {"ply\nformat ascii 1.0\nelement vertex -3\nend_header\n",
        "PLY header line 3: expected 'element NAME COUNT' with a whole-number COUNT"},
-      {"ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nproperty float x\nproperty float y\n"
+      {"ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nproperty float x\nproperty "
+       "float y\n"
        "property float z\nend_header\n",
        "PLY header: 18446744073709551615 vertex elements cannot fit in"},
-      {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "PLY header line 3: a property before any element"},
-      {"ply\nformat ascii 1.0\nformat ascii 1.0\nend_header\n", "PLY header line 3: a second 'format' line"},
-      {"ply\nelement vertex 1\nproperty float x\nend_header\n0\n", "PLY header has no 'format' line"},
+      {"ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+       "PLY header line 3: a property before any element"},
+      {"ply\nformat ascii 1.0\nformat ascii 1.0\nend_header\n",
+       "PLY header line 3: a second 'format' line"},
+      {"ply\nelement vertex 1\nproperty float x\nend_header\n0\n",
+       "PLY header has no 'format' line"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nelement vertex 1\nend_header\n",
        "PLY header line 4: a second element 'vertex'"},
       {"ply\nformat ascii 1.0\nelement v 1\nproperty list float int vertex_indices\nend_header\n",
        "PLY header line 4: a list's count must be of an integer type, not 'float'"},
-      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header extra\n",
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header "
+       "extra\n",
        "PLY header line 6: expected 'end_header' alone"},
-      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n",
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n0 "
+       "0\n",
        "PLY header: element 'vertex' has no property 'z'"},
-      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty "
+       "float z\n"
        "element face 1\nproperty list uchar int corners\nend_header\n0 0 0\n3 0 0 0\n",
        "PLY header: element 'face' has no list property 'vertex_indices'"},
-      {"ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n3 0 1 2\n",
+      {"ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int "
+       "vertex_indices\nend_header\n3 0 1 2\n",
        "PLY header declares no 'element vertex'"},
       {head + body + "3 0 1 3\n" + pad, "PLY body line 4: face 0 names vertex 3, but there are 3"},
-      {head + body + "3 0 1 -1\n" + pad, "PLY body line 4: face 0 names vertex -1, but there are 3"},
-      {head + body + "3 0 1 1.5\n" + pad, "PLY body line 4: face 0 names vertex 1.5, but there are 3"},
+      {head + body + "3 0 1 -1\n" + pad,
+       "PLY body line 4: face 0 names vertex -1, but there are 3"},
+      {head + body + "3 0 1 1.5\n" + pad,
+       "PLY body line 4: face 0 names vertex 1.5, but there are 3"},
       {head + body + "2 0 1\n" + pad, "PLY body line 4: face 0 has 2 vertices"},
       {head + body + "3 0 1 2 7\n" + pad,
        "PLY body line 4: 5 values, more than the properties of element 'face' take (4)"},
@@ -148,8 +162,7 @@ TEST(ReadPly, MalformedFilesAreRefusedNamingWhere) {
       {head + body + "3 0 one 2\n" + pad, "PLY body line 4: 'one' is not a number"},
       {head + "end_header\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n" + pad,
        "PLY body line 2: 2 values, too few for the properties of element 'vertex'"},
-      {head + body + pad + pad,
-       "PLY file ends after 0 of 1 face elements (truncated?)"},
+      {head + body + pad + pad, "PLY file ends after 0 of 1 face elements (truncated?)"},
       {head + body, "PLY header: 1 face elements cannot fit in"},
   };
   for (const auto& c : cases) {
@@ -167,7 +180,9 @@ TEST(ReadPly, BinaryCutShortOrListingBeyondItsEnd) {
   const std::string cut = dir.write("cut.ply", whole.substr(0, whole.size() - 3));
   const Result<Mesh> short_mesh = read_mesh(cut);
   ASSERT_FALSE(short_mesh.ok());
-  EXPECT_EQ(short_mesh.error().message, cut + ": PLY body: face element 1: a list of 3 items, more than the rest of the file holds");
+  EXPECT_EQ(
+      short_mesh.error().message,
+      cut + ": PLY body: face element 1: a list of 3 items, more than the rest of the file holds");
   const std::string skipped = dir.write("skip.ply", whole.substr(0, whole.size() - 15));
   const Result<Mesh> truncated = read_mesh(skipped);
   ASSERT_FALSE(truncated.ok());

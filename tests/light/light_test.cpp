@@ -48,7 +48,8 @@ TEST(LightParse, DirectionalDefaultsToWindowDepth) {
 }
 
 TEST(LightParse, OmniKnowsItsKeys) {
-  const Light l = test::light_from_json(R"({"type": "omni", "position": [1, 2, 3], "near": 0.05, "far": 20, "depth": "radial"})");
+  const Light l = test::light_from_json(
+      R"({"type": "omni", "position": [1, 2, 3], "near": 0.05, "far": 20, "depth": "radial"})");
   EXPECT_EQ(l.type, LightType::omni);
   EXPECT_EQ(l.depth, DepthEncoding::radial);
 }
@@ -61,7 +62,8 @@ TEST(LightParse, MatrixFormMatchesParametricForm) {
     proj += std::to_string(p.projection.m[i]) + (i < 15 ? "," : "]");
   }
   // std::to_string has 6 decimals: enough to recover near and far closely.
-  const Light m = test::light_from_json(R"({"type": "spot", "view": )" + view + R"(, "projection": )" + proj + "}");
+  const Light m = test::light_from_json(R"({"type": "spot", "view": )" + view +
+                                        R"(, "projection": )" + proj + "}");
   EXPECT_NEAR(m.near, 0.1, 1e-4);
   EXPECT_NEAR(m.far, 30, 0.1);
   EXPECT_NEAR(m.position.y, 4, 1e-9);
@@ -81,37 +83,50 @@ TEST(LightParse, RejectsEachBadInputNamingFileAndKey) {
   expect_rejected(obj(std::string(kSpot) + R"(, "fov": 60)"), "fov", "unknown key");
   expect_rejected(R"({"position": [0,0,0]})", "type", "missing");
   expect_rejected(R"({"type": "laser"})", "type", "expected");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "near": 0.1, "far": 30)"),
-                  "fov_y_deg", "missing");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 180, "near": 0.1, "far": 30)"),
-                  "fov_y_deg", "(0, 180)");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 0, "near": 0.1, "far": 30)"),
-                  "fov_y_deg", "(0, 180)");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 60, "near": 5, "far": 5)"),
-                  "far", "greater than near");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, 0], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
-                  "up", "zero vector");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 2, 0], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
-                  "up", "parallel");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, 0, 0], "up": [0, 0, 1], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
-                  "direction", "zero vector");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
-                  "position", "3 finite numbers");
-  expect_rejected(obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": "60", "near": 0.1, "far": 5)"),
-                  "fov_y_deg", "expected a number");
-  expect_rejected(obj(R"("type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "ortho": [5, 5, -4, 4], "near": 0, "far": 10)"),
-                  "ortho", "left < right");
-  expect_rejected(obj(R"("type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "ortho": [-5, 5, 4, 4], "near": 0, "far": 10)"),
-                  "ortho", "bottom < top");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "near": 0.1, "far": 30)"),
+      "fov_y_deg", "missing");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 180, "near": 0.1, "far": 30)"),
+      "fov_y_deg", "(0, 180)");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 0, "near": 0.1, "far": 30)"),
+      "fov_y_deg", "(0, 180)");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 60, "near": 5, "far": 5)"),
+      "far", "greater than near");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, 0], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
+      "up", "zero vector");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 2, 0], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
+      "up", "parallel");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, 0, 0], "up": [0, 0, 1], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
+      "direction", "zero vector");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": 60, "near": 0.1, "far": 5)"),
+      "position", "3 finite numbers");
+  expect_rejected(
+      obj(R"("type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": "60", "near": 0.1, "far": 5)"),
+      "fov_y_deg", "expected a number");
+  expect_rejected(
+      obj(R"("type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "ortho": [5, 5, -4, 4], "near": 0, "far": 10)"),
+      "ortho", "left < right");
+  expect_rejected(
+      obj(R"("type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "ortho": [-5, 5, 4, 4], "near": 0, "far": 10)"),
+      "ortho", "bottom < top");
   expect_rejected(obj(std::string(kDir) + R"(, "fov_y_deg": 60)"), "fov_y_deg", "does not apply");
   expect_rejected(obj(std::string(kSpot) + R"(, "depth": "log")"), "depth", "expected");
   expect_rejected(obj(std::string(kSpot) + R"(, "flip_y": 1)"), "flip_y", "true or false");
   expect_rejected(obj(std::string(kSpot) + R"(, "view": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1])"),
                   "direction", "does not go with");
-  expect_rejected(R"({"type": "spot", "view": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1], "projection": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]})",
-                  "projection", "perspective");
-  expect_rejected(R"({"type": "spot", "view": [0,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1], "projection": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,-1,0]})",
-                  "view", "singular");
+  expect_rejected(
+      R"({"type": "spot", "view": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1], "projection": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]})",
+      "projection", "perspective");
+  expect_rejected(
+      R"({"type": "spot", "view": [0,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1], "projection": [1,0,0,0,0,1,0,0,0,0,1,0,0,0,-1,0]})",
+      "view", "singular");
   expect_rejected(R"({"type": "omni", "position": [0,0,0], "near": 0, "far": 1})", "near", "> 0");
 }
 

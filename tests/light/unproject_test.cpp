@@ -87,13 +87,16 @@ TEST(Unproject, DirectionalEncodings) {
     return Vec3d{xe, 4 - z, -ye};
   };
   Vec3d p;
-  const Unprojector lin(test::light_from_json(test::directional_json("linear")), w, h, 0, Space::world);
+  const Unprojector lin(test::light_from_json(test::directional_json("linear")), w, h, 0,
+                        Space::world);
   ASSERT_TRUE(lin.point(3, 5, 6.5, &p));
   expect_near(p, expected(3, 5, 6.5), 1e-12);
-  const Unprojector win(test::light_from_json(test::directional_json("window")), w, h, 0, Space::world);
+  const Unprojector win(test::light_from_json(test::directional_json("window")), w, h, 0,
+                        Space::world);
   ASSERT_TRUE(win.point(3, 5, 0.65, &p));  // window depth is linear for ortho
   expect_near(p, expected(3, 5, 6.5), 1e-12);
-  const Unprojector rad(test::light_from_json(test::directional_json("radial")), w, h, 0, Space::world);
+  const Unprojector rad(test::light_from_json(test::directional_json("radial")), w, h, 0,
+                        Space::world);
   const Vec3d lateral = expected(3, 5, 0) - Vec3d{0, 4, 0};
   ASSERT_TRUE(rad.point(3, 5, std::sqrt(dot(lateral, lateral) + 6.5 * 6.5), &p));
   expect_near(p, expected(3, 5, 6.5), 1e-9);

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <new>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -61,7 +61,9 @@ std::size_t largest_allocation(F&& f) {
 
 constexpr std::uint64_t kSmall = std::uint64_t{100} << 20;  // 100 MB of peak growth allowed
 
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
 
 std::string pfm(int width, int height, std::size_t float_count) {
   std::string bytes = "Pf\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
@@ -112,7 +114,8 @@ TEST(ForgedHeaders, HugeImageIsRefusedBeforeAllocating) {
   const Result<DepthImage> image = read_depth_image(path);
   ASSERT_FALSE(image.ok());
   EXPECT_LT(peak_memory_bytes() - before, kSmall);
-  EXPECT_TRUE(contains(image.error().message, path + ": a volume from 100000x100000 texels needs about"))
+  EXPECT_TRUE(
+      contains(image.error().message, path + ": a volume from 100000x100000 texels needs about"))
       << image.error().message;
   EXPECT_TRUE(contains(image.error().message, "--max-memory")) << image.error().message;
 }
@@ -129,7 +132,8 @@ TEST(ForgedHeaders, HugeReferenceImageIsRefusedBeforeAllocating) {
       << image.error().message;
   const Result<Image> device = read_image("/dev/zero");
   ASSERT_FALSE(device.ok());
-  EXPECT_EQ(device.error().message, "/dev/zero: is not a regular file (a device or a pipe); images are read from files");
+  EXPECT_EQ(device.error().message,
+            "/dev/zero: is not a regular file (a device or a pipe); images are read from files");
 }
 
 TEST(ForgedHeaders, TruncatedPfmWithinBudgetIsRefusedBeforeAllocating) {
@@ -148,27 +152,31 @@ TEST(ForgedHeaders, TruncatedPfmWithinBudgetIsRefusedBeforeAllocating) {
 TEST(ForgedHeaders, ExrAttributeClaimingTwoGigabytes) {
   // Found by fuzz_depth_image: OpenEXR allocated the 1.9 GB a string attribute claimed.
   TempDir dir;
-  const std::string path = dir.write("bad.exr", test::fuzz_regression_file("depth_image", "regression_exr_attribute_2gb"));
+  const std::string path = dir.write(
+      "bad.exr", test::fuzz_regression_file("depth_image", "regression_exr_attribute_2gb"));
   const std::uint64_t before = peak_memory_bytes();
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());
   EXPECT_LT(peak_memory_bytes() - before, kSmall);
-  EXPECT_EQ(image.error().message, path + ": EXR header: attribute 'Software' claims 1912602678 "
-                                          "bytes, but the file has 516 (truncated or corrupt)");
+  EXPECT_EQ(image.error().message, path +
+                                       ": EXR header: attribute 'Software' claims 1912602678 "
+                                       "bytes, but the file has 516 (truncated or corrupt)");
 }
 
 TEST(ForgedHeaders, ExrWithARepeatedAttribute) {
   // Found by fuzz_depth_image, twice: on a header that repeats an attribute, OpenEXR's C++ reader
   // (after reading a channel list past its stated size) and its C core (resuming inside the
   // repeated value) both read text as an attribute size and reserved 1.7 GB. Refused first.
-  for (const char* name : {"regression_exr_opaque_attribute", "regression_exr_repeated_attribute"}) {
+  for (const char* name :
+       {"regression_exr_opaque_attribute", "regression_exr_repeated_attribute"}) {
     TempDir dir;
     const std::string path = dir.write("bad.exr", test::fuzz_regression_file("depth_image", name));
     Result<DepthImage> image = DepthImage{};
     EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
     ASSERT_FALSE(image.ok());
-    EXPECT_EQ(image.error().message, path + ": EXR header: attribute 'Software' appears twice (corrupt)");
+    EXPECT_EQ(image.error().message,
+              path + ": EXR header: attribute 'Software' appears twice (corrupt)");
   }
 }
 
@@ -176,25 +184,30 @@ TEST(ForgedHeaders, ExrChannelListRunningPastItsSize) {
   // Found by fuzz_depth_image: OpenEXR's core read a channel list past its stated 19 bytes, then
   // text as a 1.9 GB attribute size. Attribute values are checked against their types first.
   TempDir dir;
-  const std::string path = dir.write("chlist.exr", test::fuzz_regression_file("depth_image", "regression_exr_channel_list_overrun"));
+  const std::string path =
+      dir.write("chlist.exr",
+                test::fuzz_regression_file("depth_image", "regression_exr_channel_list_overrun"));
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());
-  EXPECT_EQ(image.error().message, path + ": EXR header: attribute 'channels' (chlist): the channel "
-                                          "list has no end (corrupt)");
+  EXPECT_EQ(image.error().message, path +
+                                       ": EXR header: attribute 'channels' (chlist): the channel "
+                                       "list has no end (corrupt)");
 }
 
 TEST(ForgedHeaders, ExrWithFarFewerBytesThanChunks) {
   // Found by fuzz_depth_image: a 440-byte EXR whose header says 4x6907652 made OpenEXR walk (and
   // allocate for) 431,729 missing chunks. The chunk offset table alone would need 8 bytes each.
   TempDir dir;
-  const std::string path = dir.write("cut.exr", test::fuzz_regression_file("depth_image", "regression_exr_missing_chunks"));
+  const std::string path = dir.write(
+      "cut.exr", test::fuzz_regression_file("depth_image", "regression_exr_missing_chunks"));
   Result<DepthImage> image = DepthImage{};
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());
   EXPECT_EQ(image.error().message,
-            path + ": EXR of 4x6907652 has 431729 chunks, needing at least 6907664 bytes, but the "
-                   "file has 440 (truncated file?)");
+            path +
+                ": EXR of 4x6907652 has 431729 chunks, needing at least 6907664 bytes, but the "
+                "file has 440 (truncated file?)");
 }
 
 TEST(ForgedHeaders, ImageLargerThanAnyCompressionOfItsFile) {
@@ -207,8 +220,9 @@ TEST(ForgedHeaders, ImageLargerThanAnyCompressionOfItsFile) {
   EXPECT_LT(largest_allocation([&] { image = read_depth_image(path); }), kSmall);
   ASSERT_FALSE(image.ok());
   EXPECT_EQ(image.error().message,
-            path + ": is 6894084x17 with 1 channels, 468797712 bytes, in a file of 445: more than "
-                   "any compression holds (truncated or forged)");
+            path +
+                ": is 6894084x17 with 1 channels, 468797712 bytes, in a file of 445: more than "
+                "any compression holds (truncated or forged)");
 }
 
 TEST(ForgedHeaders, BudgetRefusesAnImageTheMachineCouldHold) {
@@ -218,7 +232,8 @@ TEST(ForgedHeaders, BudgetRefusesAnImageTheMachineCouldHold) {
   const Result<DepthImage> refused = read_depth_image(path);
   set_memory_budget(0);
   ASSERT_FALSE(refused.ok());
-  EXPECT_TRUE(contains(refused.error().message, "6.0 MiB of memory, more than the budget of 1.0 MiB"))
+  EXPECT_TRUE(
+      contains(refused.error().message, "6.0 MiB of memory, more than the budget of 1.0 MiB"))
       << refused.error().message;
   EXPECT_TRUE(read_depth_image(path).ok());
 }
@@ -235,8 +250,9 @@ TEST(ForgedHeaders, PlyAnnouncingTwoToThe31FacesIn1KB) {
   const Result<Mesh> mesh = read_mesh(path);
   ASSERT_FALSE(mesh.ok());
   EXPECT_LT(peak_memory_bytes() - before, kSmall);
-  EXPECT_EQ(mesh.error().message, path + ": PLY header: 2147483648 face elements cannot fit in 1024 "
-                                         "bytes (truncated file?)");
+  EXPECT_EQ(mesh.error().message, path +
+                                      ": PLY header: 2147483648 face elements cannot fit in 1024 "
+                                      "bytes (truncated file?)");
 }
 
 TEST(ForgedHeaders, PlyWithAHugeListCount) {
@@ -247,7 +263,8 @@ TEST(ForgedHeaders, PlyWithAHugeListCount) {
     std::string ply =
         "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
         "property float y\nproperty float z\nelement face 1\n"
-        "property list " + std::string(wide ? "uint" : "uchar") + " int vertex_indices\nend_header\n";
+        "property list " +
+        std::string(wide ? "uint" : "uchar") + " int vertex_indices\nend_header\n";
     const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
     if (wide) {
@@ -286,7 +303,8 @@ TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
   // Found by fuzz_mesh: OpenMesh's PLY reader looped forever on "end_header;".
   TempDir dir;
   const std::string path = dir.write(
-      "noend.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header;\n0\n1\n2\n");
+      "noend.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header;\n0\n1\n2\n");
   const Result<Mesh> mesh = read_mesh(path);
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().message, path + ": PLY header line 5: unknown keyword 'end_header;'");
@@ -310,14 +328,17 @@ TEST(ForgedHeaders, PlyWhoseHeaderNeverEnds) {
                          property + "\nend_header\n0 0\n1 1\n2 2\n");
     const Result<Mesh> r = read_mesh(typed);
     ASSERT_FALSE(r.ok()) << property;
-    EXPECT_EQ(r.error().message.rfind(typed + ": PLY header line 5: expected 'property TYPE NAME'", 0), 0u)
+    EXPECT_EQ(
+        r.error().message.rfind(typed + ": PLY header line 5: expected 'property TYPE NAME'", 0),
+        0u)
         << r.error().message;
   }
 }
 
 TEST(ForgedHeaders, OffAnnouncingBillionsOfVertices) {
   TempDir dir;
-  const std::string path = dir.write("forged.off", "OFF\n3000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const std::string path =
+      dir.write("forged.off", "OFF\n3000000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   const Result<Mesh> mesh = read_mesh(path);
   ASSERT_FALSE(mesh.ok());
   EXPECT_TRUE(contains(mesh.error().message, path + ": OFF header: 3000000000 vertices"))
@@ -334,8 +355,9 @@ TEST(ForgedHeaders, OffFaceClaimingHalfABillionVertices) {
   EXPECT_LT(largest_allocation([&] { mesh = read_mesh(path); }), kSmall);
   ASSERT_FALSE(mesh.ok());
   EXPECT_EQ(mesh.error().message,
-            path + ": OFF line 6: expected a face: a vertex count of at least 3, then that many "
-                   "vertices");
+            path +
+                ": OFF line 6: expected a face: a vertex count of at least 3, then that many "
+                "vertices");
 }
 
 TEST(ForgedHeaders, JsonNested100000Deep) {
@@ -404,10 +426,12 @@ TEST(Adversarial, AllFacesShareOneVertex) {
 TEST(Cli, BytesQuotedFromAFileCannotSteerTheTerminal) {
   // An escape sequence, a NUL and a line break quoted from a header come out as \xNN, on one line.
   TempDir dir;
-  const std::string path = dir.write("esc.ply", std::string("ply\nformat ascii 1.0\n\x1b[31mRED\0x\rmore\nend_header\n", 48));
+  const std::string path = dir.write(
+      "esc.ply", std::string("ply\nformat ascii 1.0\n\x1b[31mRED\0x\rmore\nend_header\n", 48));
   const test::CommandResult r = test::run_lightvol("check " + path);
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_EQ(r.err, "lightvol: " + path + ": PLY header line 3: unknown keyword '\\x1b[31mRED\\x00x'\n");
+  EXPECT_EQ(r.err,
+            "lightvol: " + path + ": PLY header line 3: unknown keyword '\\x1b[31mRED\\x00x'\n");
 }
 
 TEST(Cli, ForgedInputsExitTwoWithOneLineAndNoOutput) {

@@ -1,12 +1,12 @@
 // The airlight maths of DESIGN §6 against direct numerical integration, and the medium and camera
 // descriptions' parsing.
-#include <lightvol/airlight/airlight.h>
-
 #include <cmath>
 #include <limits>
 #include <numbers>
 
 #include <gtest/gtest.h>
+
+#include <lightvol/airlight/airlight.h>
 
 #include "support/test_support.h"
 
@@ -35,7 +35,8 @@ TEST(SunF, MatchesItsDefinition) {
 TEST(Phase, IsNormalizedOverTheSphere) {
   for (Phase p : {Phase{PhaseType::isotropic}, Phase{PhaseType::hg, 0.7, 0},
                   Phase{PhaseType::hg, -0.4, 0}, Phase{PhaseType::schlick, 0, 0.6}}) {
-    const double total = 2 * std::numbers::pi * midpoint([&](double c) { return p(c); }, -1, 1, 200000);
+    const double total =
+        2 * std::numbers::pi * midpoint([&](double c) { return p(c); }, -1, 1, 200000);
     EXPECT_NEAR(total, 1.0, 1e-6) << to_string(p.type);
   }
 }
@@ -87,8 +88,8 @@ TEST(RayAirlight, SpotProfileMatchesDirectIntegration) {
   m.intensity = 30;
   m.phase = {PhaseType::hg, 0.5, 0};
   m.profile = {10, 25};
-  for (auto [origin, target] : {std::pair<Vec3d, Vec3d>{{5, 1, 3}, {-3, 1.5, -1}},
-                                {{0.5, 0.5, 0.5}, {2, 1, 3}}}) {
+  for (auto [origin, target] :
+       {std::pair<Vec3d, Vec3d>{{5, 1, 3}, {-3, 1.5, -1}}, {{0.5, 0.5, 0.5}, {2, 1, 3}}}) {
     Ray ray{origin, normalize(target - origin)};
     const RayAirlight la(light, m, ray);
     for (double t : {2.0, 7.5, 20.0}) {
@@ -150,7 +151,8 @@ TEST(Medium, ParsesAllKeys) {
   EXPECT_EQ(m->phase.g, 0.3);
   EXPECT_DOUBLE_EQ(m->extinction(), 0.06);
   EXPECT_FALSE(m->profile.enabled());
-  Result<Medium> p = parse_medium(R"({"scattering": 0.05, "profile": {"inner_deg": 15, "outer_deg": 25}})", "p.json");
+  Result<Medium> p = parse_medium(
+      R"({"scattering": 0.05, "profile": {"inner_deg": 15, "outer_deg": 25}})", "p.json");
   ASSERT_TRUE(p) << p.error().message;
   EXPECT_TRUE(p->profile.enabled());
   EXPECT_EQ(p->profile.inner_deg, 15);
@@ -162,13 +164,20 @@ TEST(Medium, RejectsBadInputNamingFileAndKey) {
       {R"({"scattering": 0.1, "density": 2})", "m.json: key 'density': unknown key"},
       {R"({"absorption": 0.1})", "m.json: key 'scattering': missing"},
       {R"({"scattering": -1})", "m.json: key 'scattering': must be >= 0"},
-      {R"({"scattering": 0.1, "phase": {"type": "hg", "g": 1.2}})", "m.json: key 'phase.g': must lie in (-1, 1)"},
-      {R"({"scattering": 0.1, "phase": {"type": "hg", "k": 0.2}})", "m.json: key 'phase.k': does not apply"},
-      {R"({"scattering": 0.1, "phase": {"type": "rayleigh"}})", "m.json: key 'phase.type': expected"},
-      {R"({"scattering": 0.1, "phase": {"type": "hg", "gg": 0.1}})", "m.json: key 'phase.gg': unknown key"},
-      {R"({"scattering": 0.1, "profile": {"inner_deg": 30, "outer_deg": 20}})", "m.json: key 'profile': needs 0 <= inner_deg < outer_deg <= 90"},
-      {R"({"scattering": 0.1, "profile": {"outer_deg": 20}})", "m.json: key 'profile.inner_deg': missing"},
-      {R"({"scattering": 0.1, "profile": {"inner_deg": 1, "outer_deg": 20, "x": 1}})", "m.json: key 'profile.x': unknown key"},
+      {R"({"scattering": 0.1, "phase": {"type": "hg", "g": 1.2}})",
+       "m.json: key 'phase.g': must lie in (-1, 1)"},
+      {R"({"scattering": 0.1, "phase": {"type": "hg", "k": 0.2}})",
+       "m.json: key 'phase.k': does not apply"},
+      {R"({"scattering": 0.1, "phase": {"type": "rayleigh"}})",
+       "m.json: key 'phase.type': expected"},
+      {R"({"scattering": 0.1, "phase": {"type": "hg", "gg": 0.1}})",
+       "m.json: key 'phase.gg': unknown key"},
+      {R"({"scattering": 0.1, "profile": {"inner_deg": 30, "outer_deg": 20}})",
+       "m.json: key 'profile': needs 0 <= inner_deg < outer_deg <= 90"},
+      {R"({"scattering": 0.1, "profile": {"outer_deg": 20}})",
+       "m.json: key 'profile.inner_deg': missing"},
+      {R"({"scattering": 0.1, "profile": {"inner_deg": 1, "outer_deg": 20, "x": 1}})",
+       "m.json: key 'profile.x': unknown key"},
       {R"([1, 2])", "m.json: expected a JSON object"},
       {R"({"scattering": )", "m.json: not valid JSON"},
       {R"({"scattering": 1e99999})", "m.json: not valid JSON"},  // beyond double: out_of_range
@@ -203,11 +212,13 @@ TEST(Camera, ParsesALightPlusImageSize) {
 }
 
 TEST(Camera, RejectsBadInputNamingFileAndKey) {
-  const std::string base = R"("position": [0, 1, 5], "direction": [0, 0, -1], "up": [0, 1, 0], "fov_y_deg": 45, "near": 0.1, "far": 50)";
+  const std::string base =
+      R"("position": [0, 1, 5], "direction": [0, 0, -1], "up": [0, 1, 0], "fov_y_deg": 45, "near": 0.1, "far": 50)";
   const std::pair<std::string, const char*> cases[] = {
       {"{" + base + R"(, "height": 64})", "cam.json: key 'width': missing"},
       {"{" + base + R"(, "width": 0, "height": 64})", "cam.json: key 'width': expected an integer"},
-      {"{" + base + R"(, "width": 2.5, "height": 64})", "cam.json: key 'width': expected an integer"},
+      {"{" + base + R"(, "width": 2.5, "height": 64})",
+       "cam.json: key 'width': expected an integer"},
       {"{" + base + R"(, "width": 8, "height": 8, "fov": 3})", "cam.json: key 'fov': unknown key"},
       {"{" + base + R"(, "width": 8, "height": 8, "near": 1e99999})", "cam.json: not valid JSON"},
       {R"({"type": "omni", "position": [0, 0, 0], "near": 1, "far": 2, "width": 8, "height": 8})",

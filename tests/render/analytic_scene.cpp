@@ -107,7 +107,8 @@ RenderScene make_render_scene(const Camera& camera, const Light& light, const Me
 double brute_force_airlight(const RenderScene& scene, int width, int height, int col, int row,
                             int steps, double max_t, const Box& box) {
   const Ray ray = pixel_ray(scene.camera, col, row);
-  const double end = std::min(max_t, scene.surface[static_cast<std::size_t>(row) * scene.camera.width + col]);
+  const double end =
+      std::min(max_t, scene.surface[static_cast<std::size_t>(row) * scene.camera.width + col]);
   const Medium& m = scene.medium;
   const double st = m.extinction();
   const double ds = end / steps;
@@ -125,7 +126,8 @@ double brute_force_airlight(const RenderScene& scene, int width, int height, int
                  m.profile(dot(to_x, scene.light.direction) / d);
     } else {
       const double z = dot(x - scene.light.position, scene.light.direction) - scene.light.near;
-      radiance = m.intensity * std::exp(-st * z) * m.phase(dot(scene.light.direction, -1.0 * ray.direction));
+      radiance = m.intensity * std::exp(-st * z) *
+                 m.phase(dot(scene.light.direction, -1.0 * ray.direction));
     }
     sum += m.scattering * radiance * std::exp(-st * s) * ds;
   }

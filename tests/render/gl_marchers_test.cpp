@@ -1,14 +1,13 @@
 // Ray marching converges to the volume's exact airlight as the step count grows; interleaved
 // sampling with the gather helps at a fixed count; omni maps work; the radial blur is finite.
-#include <lightvol/render/gl_marchers.h>
-
 #include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
 
-#include <lightvol/render/reference.h>
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/render/gl_marchers.h>
+#include <lightvol/render/reference.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -30,7 +29,8 @@ Medium medium() {
   return m;
 }
 
-// The gather of the marcher on the CPU: an M-wide box, horizontal then vertical, clamped at borders.
+// The gather of the marcher on the CPU: an M-wide box, horizontal then vertical, clamped at
+// borders.
 Image box_gather(const Image& in, int m) {
   Image out = in;
   for (int pass = 0; pass < 2; ++pass) {
@@ -60,8 +60,8 @@ Image march(const RenderScene& scene, const DepthImage& map, MarchOptions o) {
 TEST(GlRaymarch, ConvergesToTheReferenceAsStepsGrow) {
   REQUIRE_GL_CONTEXT();
   for (const char* json : {"spot", "directional"}) {
-    const Light light = test::light_from_json(std::string(json) == "spot" ? test::spot_json("linear")
-                                                                         : test::directional_json("linear"));
+    const Light light = test::light_from_json(
+        std::string(json) == "spot" ? test::spot_json("linear") : test::directional_json("linear"));
     const DepthImage map = test::scene_shadow_map(light, kMap, kMap);
     Result<Mesh> volume = build_static_volume(light, map, {}, "shadow");
     ASSERT_TRUE(volume);

@@ -17,7 +17,7 @@ inline Result<std::unique_ptr<gl::Context>>& gl_test_context() {
 
 }  // namespace lightvol::test
 
-#define REQUIRE_GL_CONTEXT()                                                             \
-  if (!::lightvol::test::gl_test_context())                                              \
-  GTEST_SKIP() << "no headless OpenGL 4.5 context: "                                     \
+#define REQUIRE_GL_CONTEXT()                         \
+  if (!::lightvol::test::gl_test_context())          \
+  GTEST_SKIP() << "no headless OpenGL 4.5 context: " \
                << ::lightvol::test::gl_test_context().error().message

@@ -1,14 +1,13 @@
 // The GPU `volume` method against the CPU reference on the same meshes: spot and directional
 // lights, camera outside and inside the volume, lit floor and box surfaces in view, all phases.
-#include <lightvol/render/gl_volume.h>
-
 #include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
 
-#include <lightvol/render/reference.h>
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/render/gl_volume.h>
+#include <lightvol/render/reference.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -29,7 +28,8 @@ struct Case {
 
 constexpr int kMap = 96, kW = 64, kH = 48;
 
-ImageDifference volume_vs_reference(const Case& c, const GlVolumeOptions& options, Image* gl_image = nullptr) {
+ImageDifference volume_vs_reference(const Case& c, const GlVolumeOptions& options,
+                                    Image* gl_image = nullptr) {
   const Light light = test::light_from_json(c.light_json);
   const DepthImage shadow = test::scene_shadow_map(light, kMap, kMap);
   Result<Mesh> volume = build_static_volume(light, shadow, {}, "shadow");
@@ -57,13 +57,43 @@ ImageDifference volume_vs_reference(const Case& c, const GlVolumeOptions& option
 
 const Case kCases[] = {
     {"spot outside hg", test::spot_json("linear"), {6, 3, 6}, {0, 1, 0}, {PhaseType::hg, 0.4, 0}},
-    {"spot outside isotropic", test::spot_json("linear"), {-5, 2, 4}, {0, 0.5, 0}, {PhaseType::isotropic}},
-    {"spot inside isotropic", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}},
-    {"spot inside schlick", test::spot_json("linear"), {0.8, 2.5, 0.3}, {-1, 0, -1}, {PhaseType::schlick, 0, -0.3}},
-    {"soft spot outside hg", test::spot_json("linear"), {6, 3, 6}, {0, 1, 0}, {PhaseType::hg, 0.4, 0}, {12, 24}},
-    {"soft spot inside isotropic", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}, {5, 28}},
-    {"directional outside hg", test::directional_json("linear"), {7, 4, 5}, {0, 0.5, 0}, {PhaseType::hg, 0.2, 0}},
-    {"directional inside isotropic", test::directional_json("linear"), {2, 1, 2}, {-1, 0.5, -2}, {PhaseType::isotropic}},
+    {"spot outside isotropic",
+     test::spot_json("linear"),
+     {-5, 2, 4},
+     {0, 0.5, 0},
+     {PhaseType::isotropic}},
+    {"spot inside isotropic",
+     test::spot_json("linear"),
+     {1.5, 0.6, 1.5},
+     {-1, 0.3, -1},
+     {PhaseType::isotropic}},
+    {"spot inside schlick",
+     test::spot_json("linear"),
+     {0.8, 2.5, 0.3},
+     {-1, 0, -1},
+     {PhaseType::schlick, 0, -0.3}},
+    {"soft spot outside hg",
+     test::spot_json("linear"),
+     {6, 3, 6},
+     {0, 1, 0},
+     {PhaseType::hg, 0.4, 0},
+     {12, 24}},
+    {"soft spot inside isotropic",
+     test::spot_json("linear"),
+     {1.5, 0.6, 1.5},
+     {-1, 0.3, -1},
+     {PhaseType::isotropic},
+     {5, 28}},
+    {"directional outside hg",
+     test::directional_json("linear"),
+     {7, 4, 5},
+     {0, 0.5, 0},
+     {PhaseType::hg, 0.2, 0}},
+    {"directional inside isotropic",
+     test::directional_json("linear"),
+     {2, 1, 2},
+     {-1, 0.5, -2},
+     {PhaseType::isotropic}},
 };
 
 TEST(GlVolume, MatchesTheReferenceWithinTwoTenthsOfAPercent) {
@@ -106,9 +136,10 @@ TEST(GlVolume, OmniMatchesTheReferenceInsideAndOutside) {
   m.intensity = 10;
   m.phase = {PhaseType::hg, 0.3, 0};
   // Lit space around the camera; then the camera in the box's shadow, looking out of it.
-  for (auto [eye, target] : {std::pair<Vec3d, Vec3d>{{5, 3, 5}, {0, 1, 0}},
-                             {{0.3, 0.5, 0.2}, {3, 0.9, 1}}}) {
-    const RenderScene scene = test::make_render_scene(test::make_camera(eye, target, kW, kH), light, m);
+  for (auto [eye, target] :
+       {std::pair<Vec3d, Vec3d>{{5, 3, 5}, {0, 1, 0}}, {{0.3, 0.5, 0.2}, {3, 0.9, 1}}}) {
+    const RenderScene scene =
+        test::make_render_scene(test::make_camera(eye, target, kW, kH), light, m);
     const Image ref = render_reference(*volume, scene);
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     ASSERT_TRUE(renderer) << renderer.error().message;
@@ -116,8 +147,9 @@ TEST(GlVolume, OmniMatchesTheReferenceInsideAndOutside) {
     const ImageDifference d = compare_images((*renderer)->render(), ref);
     double total = 0;
     for (double v : ref.values) total += v;
-    std::printf("  omni eye (%g, %g, %g): relative L2 %.2e  max abs %.2e  mean %.3g\n", eye.x, eye.y,
-                eye.z, d.relative_l2, d.max_abs, total / static_cast<double>(ref.values.size()));
+    std::printf("  omni eye (%g, %g, %g): relative L2 %.2e  max abs %.2e  mean %.3g\n", eye.x,
+                eye.y, eye.z, d.relative_l2, d.max_abs,
+                total / static_cast<double>(ref.values.size()));
     EXPECT_GT(total, 0);
     EXPECT_LT(d.relative_l2, 0.002);
   }

@@ -1,11 +1,10 @@
 // The CPU reference against brute-force integration with analytic visibility, on a floor and a box
 // lit by a spot and a directional light.
-#include <lightvol/render/reference.h>
-
 #include <cmath>
 
 #include <gtest/gtest.h>
 
+#include <lightvol/render/reference.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "render/analytic_scene.h"
@@ -40,8 +39,8 @@ void expect_reference_matches_brute_force(const Case& c) {
   ASSERT_TRUE(volume) << volume.error().message;
   Medium medium = test_medium(c.phase);
   medium.profile = c.profile;
-  const RenderScene scene = test::make_render_scene(test::make_camera(c.eye, c.target, kW, kH),
-                                                    light, medium);
+  const RenderScene scene =
+      test::make_render_scene(test::make_camera(c.eye, c.target, kW, kH), light, medium);
   const Image ref = render_reference(*volume, scene);
   Image brute = ref;
   for (int row = 0; row < kH; ++row)
@@ -61,18 +60,28 @@ TEST(Reference, SpotLightMatchesBruteForceFromOutside) {
 }
 
 TEST(Reference, SpotLightMatchesBruteForceFromInside) {
-  expect_reference_matches_brute_force(
-      {"spot inside", test::spot_json("linear"), {1.5, 0.6, 1.5}, {-1, 0.3, -1}, {PhaseType::isotropic}});
+  expect_reference_matches_brute_force({"spot inside",
+                                        test::spot_json("linear"),
+                                        {1.5, 0.6, 1.5},
+                                        {-1, 0.3, -1},
+                                        {PhaseType::isotropic}});
 }
 
 TEST(Reference, SoftEdgedSpotMatchesBruteForce) {
-  expect_reference_matches_brute_force({"spot profile", test::spot_json("linear"), {6, 3, 6},
-                                        {0, 1, 0}, {PhaseType::hg, 0.4, 0}, {12, 24}});
+  expect_reference_matches_brute_force({"spot profile",
+                                        test::spot_json("linear"),
+                                        {6, 3, 6},
+                                        {0, 1, 0},
+                                        {PhaseType::hg, 0.4, 0},
+                                        {12, 24}});
 }
 
 TEST(Reference, DirectionalLightMatchesBruteForce) {
-  expect_reference_matches_brute_force({"directional", test::directional_json("linear"),
-                                        {7, 4, 5}, {0, 0.5, 0}, {PhaseType::schlick, 0, 0.3}});
+  expect_reference_matches_brute_force({"directional",
+                                        test::directional_json("linear"),
+                                        {7, 4, 5},
+                                        {0, 0.5, 0},
+                                        {PhaseType::schlick, 0, 0.3}});
 }
 
 TEST(Reference, EmptyVolumeGivesZero) {

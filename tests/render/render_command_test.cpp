@@ -81,12 +81,13 @@ TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
   const std::string dir = picture_dir(tmp);
   write_scene(dir, {6, 3, 6}, {0, 1, 0});
   const std::string args = common_args(dir);
-  test::CommandResult ref = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
-                                               " --method reference --out '" + dir + "/reference.exr'");
+  test::CommandResult ref =
+      test::run_lightvol("render '" + dir + "/volume.ply' " + args + " --method reference --out '" +
+                         dir + "/reference.exr'");
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
-  test::CommandResult vol = test::run_lightvol(
-      "render '" + dir + "/volume.ply' " + args + " --out '" + dir + "/volume.exr' --compare '" +
-      dir + "/reference.exr' --frames 2");
+  test::CommandResult vol =
+      test::run_lightvol("render '" + dir + "/volume.ply' " + args + " --out '" + dir +
+                         "/volume.exr' --compare '" + dir + "/reference.exr' --frames 2");
   ASSERT_EQ(vol.exit_code, 0) << vol.err;
   EXPECT_LT(number_after(vol.out, "relative L2 "), 0.002) << vol.out;
   EXPECT_GT(number_after(vol.out, "PSNR "), 60) << vol.out;
@@ -96,16 +97,17 @@ TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
   EXPECT_EQ(exr->width, kW);
   EXPECT_EQ(exr->height, kH);
   // The raymarcher against the same reference, and the radial blur runs.
-  test::CommandResult march = test::run_lightvol(
-      "render " + args + " --method raymarch --shadow-map '" + dir + "/shadow.exr' --samples 1024 --out '" +
-      dir + "/raymarch.png' --compare '" + dir + "/reference.exr'");
+  test::CommandResult march =
+      test::run_lightvol("render " + args + " --method raymarch --shadow-map '" + dir +
+                         "/shadow.exr' --samples 1024 --out '" + dir +
+                         "/raymarch.png' --compare '" + dir + "/reference.exr'");
   ASSERT_EQ(march.exit_code, 0) << march.err;
   EXPECT_LT(number_after(march.out, "relative L2 "), 0.03) << march.out;
-  test::CommandResult radial = test::run_lightvol(
-      "render " + args + " --method radial --out '" + dir + "/radial.png'");
+  test::CommandResult radial =
+      test::run_lightvol("render " + args + " --method radial --out '" + dir + "/radial.png'");
   ASSERT_EQ(radial.exit_code, 0) << radial.err;
-  test::CommandResult composite = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
-                                                     " --composite --out '" + dir + "/composite.png'");
+  test::CommandResult composite = test::run_lightvol(
+      "render '" + dir + "/volume.ply' " + args + " --composite --out '" + dir + "/composite.png'");
   ASSERT_EQ(composite.exit_code, 0) << composite.err;
 }
 
@@ -119,14 +121,18 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
       "/camera.json' --depth '" + dir + "/camdepth.exr' --medium '" + dir +
       "/bad_medium.json' --out '" + dir + "/x.exr' --method reference");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err, "lightvol: " + dir + "/bad_medium.json: key 'sigma': unknown key (known: "
-                   "scattering, absorption, intensity, phase, profile)\n");
+  EXPECT_EQ(r.err, "lightvol: " + dir +
+                       "/bad_medium.json: key 'sigma': unknown key (known: "
+                       "scattering, absorption, intensity, phase, profile)\n");
   r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: render: --method volume needs the light volume MESH\n");
-  r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr' --method raymarch");
+  r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir +
+                         "/x.exr' --method raymarch");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(r.err, "lightvol: render: --method raymarch needs --shadow-map DEPTH (the light's shadow map(s))\n");
+  EXPECT_EQ(
+      r.err,
+      "lightvol: render: --method raymarch needs --shadow-map DEPTH (the light's shadow map(s))\n");
   r = test::run_lightvol("render '" + dir + "/volume.ply' " + common_args(dir) + " --out '" + dir +
                          "/x.exr' --method reference --compare '" + dir + "/shadow.exr'");
   EXPECT_EQ(r.exit_code, 2);

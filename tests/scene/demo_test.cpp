@@ -20,8 +20,8 @@ TEST(Demo, RunsOnTheBundledSceneAtSize64) {
   const test::CommandResult r = test::run_lightvol("demo --out " + dir.path() + " --size 64");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The summary names every step.
-  for (const char* step : {"shadow map 64x64", "static volume", "adaptive volume", "check static",
-                           "check adaptive"})
+  for (const char* step :
+       {"shadow map 64x64", "static volume", "adaptive volume", "check static", "check adaptive"})
     EXPECT_NE(r.out.find(step), std::string::npos) << step << "\n" << r.out;
   EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
 

@@ -24,9 +24,11 @@ class ShadowmapCli : public ::testing::Test {
  protected:
   void SetUp() override {
     scene_ = dir_.write("scene.obj", kSceneObj);
-    spot_ = dir_.write("spot.json", R"({"type": "spot", "position": [0, 6, 0], "direction": [0, -1, 0],
+    spot_ =
+        dir_.write("spot.json", R"({"type": "spot", "position": [0, 6, 0], "direction": [0, -1, 0],
         "up": [0, 0, -1], "fov_y_deg": 60, "aspect": 2, "near": 0.5, "far": 20})");
-    omni_ = dir_.write("omni.json", R"({"type": "omni", "position": [0, 4, 0], "near": 0.1, "far": 30})");
+    omni_ = dir_.write("omni.json",
+                       R"({"type": "omni", "position": [0, 4, 0], "near": 0.1, "far": 30})");
   }
   test::TempDir dir_;
   std::string scene_, spot_, omni_;
@@ -35,9 +37,9 @@ class ShadowmapCli : public ::testing::Test {
 TEST_F(ShadowmapCli, SpotMapIsNWideAndNOverAspectHigh) {
   REQUIRE_GL_CONTEXT();
   const std::string out = dir_.file("d.exr");
-  const test::CommandResult r = test::run_lightvol("shadowmap " + scene_ + " --light " + spot_ +
-                                                   " --size 64 --out " + out + " --preview " +
-                                                   dir_.file("p.png"));
+  const test::CommandResult r =
+      test::run_lightvol("shadowmap " + scene_ + " --light " + spot_ + " --size 64 --out " + out +
+                         " --preview " + dir_.file("p.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   Result<DepthImage> d = read_depth_image(out);
   ASSERT_TRUE(d) << d.error().message;
@@ -80,7 +82,8 @@ TEST_F(ShadowmapCli, OmniFacesAsFilesOrAStrip) {
 
 TEST_F(ShadowmapCli, CameraDepthTakesTheCameraSize) {
   REQUIRE_GL_CONTEXT();
-  const std::string camera = dir_.write("camera.json", R"({"position": [0, 3, 8], "direction": [0, -0.3, -1],
+  const std::string camera =
+      dir_.write("camera.json", R"({"position": [0, 3, 8], "direction": [0, -0.3, -1],
       "up": [0, 1, 0], "fov_y_deg": 50, "aspect": 1.5, "near": 0.1, "far": 40, "depth": "linear",
       "width": 48, "height": 32})");
   const test::CommandResult r = test::run_lightvol("shadowmap " + scene_ + " --camera " + camera +
@@ -100,7 +103,8 @@ TEST_F(ShadowmapCli, BadUsageExitsTwoWithTheReasonAndWritesNothing) {
     std::string args, message;
   } cases[] = {
       {"shadowmap " + scene_ + " --light " + spot_ + " --out " + out, "--size: required"},
-      {"shadowmap " + scene_ + " --light " + spot_ + " --camera " + spot_ + " --size 8 --out " + out,
+      {"shadowmap " + scene_ + " --light " + spot_ + " --camera " + spot_ + " --size 8 --out " +
+           out,
        "exactly one of --light"},
       {"shadowmap " + scene_ + " --light " + spot_ + " --size 1 --out " + out, "--size: must lie"},
       {"shadowmap " + scene_ + " --light " + spot_ + " --size 8 --out " + dir_.file("x_{face}.exr"),

@@ -51,10 +51,10 @@ void add_box(Mesh* m, Vec3d lo, Vec3d hi) {
 
 Mesh small_scene() {
   Mesh m;
-  add_box(&m, {-6, 0, -6}, {6, 6, 6});                 // the room (seen from inside)
-  add_box(&m, {-3, 0, -2.5}, {-1.5, 2.5, -1});         // a tall box
-  add_box(&m, {1, 0, 0.5}, {3.2, 1.2, 2.9});           // a low box
-  add_box(&m, {-0.4, 0, 2}, {0.4, 3.5, 2.8});          // a column
+  add_box(&m, {-6, 0, -6}, {6, 6, 6});          // the room (seen from inside)
+  add_box(&m, {-3, 0, -2.5}, {-1.5, 2.5, -1});  // a tall box
+  add_box(&m, {1, 0, 0.5}, {3.2, 1.2, 2.9});    // a low box
+  add_box(&m, {-0.4, 0, 2}, {0.4, 3.5, 2.8});   // a column
   add_quad(&m, {0.5, 0.3, -4}, {4.5, 2.1, -4}, {4.5, 3.4, -1.5}, {0.5, 1.6, -1.5});  // tilted
   return m;
 }
@@ -87,8 +87,9 @@ struct Agreement {
 // A texel agrees when both passes miss, or both hit and their eye depths differ by at most
 // `tolerance` relatively or their window depths by at most kWindowTolerance (which is what float
 // storage can resolve near the light, where the relative bound becomes tighter than an ulp).
-// A disagreeing texel is a silhouette texel when a ray through a point within 0.02 texel of its centre sees what OpenGL stored: a triangle edge passes that close,
-// and which side of it the centre lies on is down to rounding.
+// A disagreeing texel is a silhouette texel when a ray through a point within 0.02 texel of its
+// centre sees what OpenGL stored: a triangle edge passes that close, and which side of it the
+// centre lies on is down to rounding.
 Agreement compare(const Bvh& bvh, const Light& light, int w, int h, int face,
                   const std::vector<float>& gl, const std::vector<double>& ray, double tolerance) {
   Agreement a;
@@ -128,7 +129,6 @@ Agreement compare(const Bvh& bvh, const Light& light, int w, int h, int face,
   return a;
 }
 
-
 void expect_agreement(const Light& light, int w, int h) {
   const Mesh scene = small_scene();
   const Bvh bvh(scene);
@@ -144,8 +144,9 @@ void expect_agreement(const Light& light, int w, int h) {
     SCOPED_TRACE("face " + std::to_string(face));
     EXPECT_EQ(a.unexplained, 0) << a.first_unexplained;
     EXPECT_LE(a.silhouettes, kSilhouetteFraction * a.texels);
-    std::printf("[ depth    ] face %d: %d texels, %d agree (max rel. %.2e, window %.2e), %d silhouette\n",
-                face, a.texels, a.agree, a.max_relative, a.max_window, a.silhouettes);
+    std::printf(
+        "[ depth    ] face %d: %d texels, %d agree (max rel. %.2e, window %.2e), %d silhouette\n",
+        face, a.texels, a.agree, a.max_relative, a.max_window, a.silhouettes);
     for (const float d : *gl) hits += d < 1.0f ? 1 : 0;
   }
   EXPECT_GT(hits, 0);  // the pass saw the scene
@@ -189,7 +190,8 @@ TEST(ShadowMap, FlipYStoresTheBottomRowFirst) {
   const Mesh scene = small_scene();
   Result<ShadowMapRenderer> renderer = ShadowMapRenderer::create(scene);
   ASSERT_TRUE(renderer);
-  const std::string json = R"({"type": "spot", "position": [0.3, 5.5, 0.2], "direction": [0.1, -1, 0.25],
+  const std::string json =
+      R"({"type": "spot", "position": [0.3, 5.5, 0.2], "direction": [0.1, -1, 0.25],
       "up": [0, 0, -1], "fov_y_deg": 75, "near": 0.2, "far": 20, "flip_y": )";
   const Light up = test::light_from_json(json + "false}");
   const Light down = test::light_from_json(json + "true}");
@@ -199,8 +201,10 @@ TEST(ShadowMap, FlipYStoresTheBottomRowFirst) {
   ASSERT_TRUE(a && b);
   int differing_rows = 0;
   for (int row = 0; row < h; ++row) {
-    differing_rows += std::equal(a->begin() + row * w, a->begin() + (row + 1) * w,
-                                 a->begin() + (h - 1 - row) * w) ? 0 : 1;
+    differing_rows +=
+        std::equal(a->begin() + row * w, a->begin() + (row + 1) * w, a->begin() + (h - 1 - row) * w)
+            ? 0
+            : 1;
     for (int col = 0; col < w; ++col)
       ASSERT_EQ((*a)[row * w + col], (*b)[(h - 1 - row) * w + col]) << col << ", " << row;
   }
@@ -234,7 +238,8 @@ TEST(ShadowMap, LinearAndRadialDepthOfAFloor) {
         const double x = (2.0 * (col + 0.5) / n - 1) * t, y = (1 - 2.0 * (row + 0.5) / n) * t;
         const double linear = 4.0, radial = 4.0 * std::sqrt(1 + x * x + y * y);
         const double window = 0.5 + 0.5 * (30.1 / 29.9 - 2 * 30 * 0.1 / (29.9 * 4.0));
-        const double expected = encoding[0] == 'w' ? window : (encoding[0] == 'l' ? linear : radial);
+        const double expected =
+            encoding[0] == 'w' ? window : (encoding[0] == 'l' ? linear : radial);
         ASSERT_NEAR(d.at(col, row), expected, encoding[0] == 'w' ? 2e-7 : 4e-5 * expected)
             << col << ", " << row;
       }
@@ -279,7 +284,8 @@ TEST(ShadowMapSize, SpotAspectDirectionalAndOmni) {
   EXPECT_EQ(s->width, 64);
   EXPECT_EQ(s->height, 64);
   s = shadow_map_size(test::light_from_json(R"({"type": "omni", "position": [0, 1, 0], "near": 0.1,
-      "far": 10})"), 32, "omni.json");
+      "far": 10})"),
+                      32, "omni.json");
   ASSERT_TRUE(s);
   EXPECT_EQ(s->width, 32);
   EXPECT_EQ(s->height, 32);
@@ -293,13 +299,15 @@ TEST(ShadowMapSize, RejectsTooSmallOrTooLarge) {
   EXPECT_FALSE(shadow_map_size(spot, 20000, "spot.json"));
   s = shadow_map_size(test::light_from_json(test::spot_json("window", 10.0)), 8, "wide.json");
   ASSERT_FALSE(s);
-  EXPECT_NE(s.error().message.find("wide.json: key 'aspect'"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("wide.json: key 'aspect'"), std::string::npos)
+      << s.error().message;
 }
 
 TEST(Scene, LoadErrorsNameTheFile) {
   Result<Mesh> m = load_scene("/nonexistent/scene.obj");
   ASSERT_FALSE(m);
-  EXPECT_NE(m.error().message.find("/nonexistent/scene.obj"), std::string::npos) << m.error().message;
+  EXPECT_NE(m.error().message.find("/nonexistent/scene.obj"), std::string::npos)
+      << m.error().message;
   test::TempDir dir;
   const std::string path = dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 1\nf 1 2 3\n");
   m = load_scene(path);
@@ -309,11 +317,13 @@ TEST(Scene, LoadErrorsNameTheFile) {
 
 // ---- a real scene: Sponza -----------------------------------------------------------------------
 
-std::string sponza_path() { return std::string(LIGHTVOL_SOURCE_DIR) + "/../shared/scenes/sponza/sponza.obj"; }
+std::string sponza_path() {
+  return std::string(LIGHTVOL_SOURCE_DIR) + "/../shared/scenes/sponza/sponza.obj";
+}
 
-#define REQUIRE_SPONZA()                                                                      \
-  if (!std::filesystem::exists(sponza_path()))                                                \
-  GTEST_SKIP() << "Sponza is not at " << sponza_path()                                        \
+#define REQUIRE_SPONZA()                               \
+  if (!std::filesystem::exists(sponza_path()))         \
+  GTEST_SKIP() << "Sponza is not at " << sponza_path() \
                << " (the Dabrovic Sponza OBJ; see ../shared/scenes/sponza/PROVENANCE.md)"
 
 const Mesh& sponza() {
@@ -354,7 +364,8 @@ TEST(Sponza, SpotAndDirectionalVolumesPassCheck) {
     Result<std::vector<DepthImage>> depth = renderer->render(light, *size);
     ASSERT_TRUE(depth);
     int hits = 0, misses = 0;
-    for (const float d : (*depth)[0].values) (d < (light.depth == DepthEncoding::window ? 1.0f : 39.9f) ? hits : misses)++;
+    for (const float d : (*depth)[0].values)
+      (d < (light.depth == DepthEncoding::window ? 1.0f : 39.9f) ? hits : misses)++;
     EXPECT_GT(hits, 0);
     Result<Mesh> volume = build_static_volume(light, (*depth)[0], {}, "sponza");
     ASSERT_TRUE(volume) << volume.error().message;
@@ -400,8 +411,9 @@ TEST(Sponza, GlAgreesWithRayCastingOnTheRealScene) {
       compare(bvh, light, n, n, 0, *gl, raycast_window_depth(bvh, light, n, n, 0), kTolerance);
   EXPECT_EQ(a.unexplained, 0) << a.first_unexplained;
   EXPECT_LE(a.silhouettes, kSilhouetteFraction * a.texels);
-  std::printf("[ depth    ] sponza: %d texels, %d agree (max rel. %.2e, window %.2e), %d silhouette\n",
-              a.texels, a.agree, a.max_relative, a.max_window, a.silhouettes);
+  std::printf(
+      "[ depth    ] sponza: %d texels, %d agree (max rel. %.2e, window %.2e), %d silhouette\n",
+      a.texels, a.agree, a.max_relative, a.max_window, a.silhouettes);
 }
 
 }  // namespace

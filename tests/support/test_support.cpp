@@ -1,5 +1,8 @@
 #include "support/test_support.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -8,9 +11,6 @@
 #include <iterator>
 #include <map>
 #include <sstream>
-
-#include <sys/wait.h>
-#include <unistd.h>
 
 namespace lightvol::test {
 namespace fs = std::filesystem;
@@ -45,7 +45,8 @@ DepthImage make_depth(int width, int height, const std::function<float(int, int)
   image.height = height;
   image.values.resize(static_cast<std::size_t>(width) * height);
   for (int r = 0; r < height; ++r)
-    for (int c = 0; c < width; ++c) image.values[static_cast<std::size_t>(r) * width + c] = value(c, r);
+    for (int c = 0; c < width; ++c)
+      image.values[static_cast<std::size_t>(r) * width + c] = value(c, r);
   return image;
 }
 
@@ -72,7 +73,8 @@ std::string spot_json(const std::string& depth, double aspect) {
 
 std::string directional_json(const std::string& depth) {
   return R"({"type": "directional", "position": [0, 4, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
-         R"( "ortho": [-5, 5, -4, 4], "near": 0, "far": 10, "depth": ")" + depth + "\"}";
+         R"( "ortho": [-5, 5, -4, 4], "near": 0, "far": 10, "depth": ")" +
+         depth + "\"}";
 }
 
 ::testing::AssertionResult is_closed_and_oriented(const Mesh& mesh) {
@@ -91,8 +93,8 @@ std::string directional_json(const std::string& depth) {
                                            << " used " << count << " times";
     const auto rev = directed.find({edge.second, edge.first});
     if (rev == directed.end() || rev->second != 1)
-      return ::testing::AssertionFailure() << "edge " << edge.first << "->" << edge.second
-                                           << " has no opposite half";
+      return ::testing::AssertionFailure()
+             << "edge " << edge.first << "->" << edge.second << " has no opposite half";
   }
   return ::testing::AssertionSuccess();
 }
@@ -100,11 +102,13 @@ std::string directional_json(const std::string& depth) {
 ::testing::AssertionResult has_no_degenerate_triangles(const Mesh& mesh) {
   for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
     const auto [a, b, c] = mesh.triangle(t);
-    if (a == b || b == c || a == c) return ::testing::AssertionFailure() << "face " << t << " collapsed";
+    if (a == b || b == c || a == c)
+      return ::testing::AssertionFailure() << "face " << t << " collapsed";
     const auto pa = mesh.vertex(a), pb = mesh.vertex(b), pc = mesh.vertex(c);
     const double u[3] = {double(pb[0]) - pa[0], double(pb[1]) - pa[1], double(pb[2]) - pa[2]};
     const double v[3] = {double(pc[0]) - pa[0], double(pc[1]) - pa[1], double(pc[2]) - pa[2]};
-    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                         u[0] * v[1] - u[1] * v[0]};
     if (n[0] == 0 && n[1] == 0 && n[2] == 0)
       return ::testing::AssertionFailure() << "face " << t << " has zero area";
   }
@@ -134,7 +138,8 @@ CommandResult run_lightvol(const std::string& args) {
 }
 
 std::string fuzz_regression_file(const std::string& target, const std::string& name) {
-  const std::string path = std::string(LIGHTVOL_SOURCE_DIR) + "/tests/fuzz/corpus/" + target + "/" + name;
+  const std::string path =
+      std::string(LIGHTVOL_SOURCE_DIR) + "/tests/fuzz/corpus/" + target + "/" + name;
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_GT(bytes.size(), 1u) << path;

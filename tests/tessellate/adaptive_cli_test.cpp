@@ -1,5 +1,5 @@
-// `lightvol build --adaptive` and `lightvol stats` as a user runs them: the counts stats reports are
-// the counts build writes, the bound is met, bad flag combinations are one-line errors.
+// `lightvol build --adaptive` and `lightvol stats` as a user runs them: the counts stats reports
+// are the counts build writes, the bound is met, bad flag combinations are one-line errors.
 #include <algorithm>
 #include <fstream>
 #include <iterator>
@@ -57,12 +57,12 @@ long ply_faces(const std::string& path) {
 TEST(AdaptiveCli, StatsCountsAreWhatBuildWrites) {
   Workspace w;
   for (const std::string& light : {w.spot, w.directional}) {
-    const test::CommandResult s = test::run_lightvol("stats " + q(w.depth) + " --light " + q(light) +
-                                                     " --max-error 0.001,0.05,1 --json");
+    const test::CommandResult s = test::run_lightvol("stats " + q(w.depth) + " --light " +
+                                                     q(light) + " --max-error 0.001,0.05,1 --json");
     ASSERT_EQ(s.exit_code, 0) << s.err;
     const nlohmann::json stats = nlohmann::json::parse(s.out);
     EXPECT_EQ(stats["static"]["triangles"], light == w.spot ? 2 * 64 * 48 + 2 * 64 + 2 * 48
-                                                             : 2 * 64 * 48 + 3 * (2 * 64 + 2 * 48));
+                                                            : 2 * 64 * 48 + 3 * (2 * 64 + 2 * 48));
     ASSERT_EQ(stats["adaptive"].size(), 3u);
     std::uint64_t previous = ~std::uint64_t{0};
     for (const auto& row : stats["adaptive"]) {
@@ -88,15 +88,16 @@ TEST(AdaptiveCli, StatsCountsAreWhatBuildWrites) {
 
 TEST(AdaptiveCli, CsvAndTableFormats) {
   Workspace w;
-  const test::CommandResult csv =
-      test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.directional) + " --max-error 0.01 --csv");
+  const test::CommandResult csv = test::run_lightvol("stats " + q(w.depth) + " --light " +
+                                                     q(w.directional) + " --max-error 0.01 --csv");
   ASSERT_EQ(csv.exit_code, 0) << csv.err;
-  EXPECT_EQ(csv.out.rfind("mode,max_error,triangles,vertices,max_error_reached,", 0), 0u) << csv.out;
+  EXPECT_EQ(csv.out.rfind("mode,max_error,triangles,vertices,max_error_reached,", 0), 0u)
+      << csv.out;
   EXPECT_EQ(std::count(csv.out.begin(), csv.out.end(), '\n'), 3) << csv.out;
   EXPECT_NE(csv.out.find("\nstatic,,"), std::string::npos);
   EXPECT_NE(csv.out.find("\nadaptive,0.01,"), std::string::npos);
-  const test::CommandResult table =
-      test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.directional) + " --max-error 0.01 --quiet");
+  const test::CommandResult table = test::run_lightvol(
+      "stats " + q(w.depth) + " --light " + q(w.directional) + " --max-error 0.01 --quiet");
   ASSERT_EQ(table.exit_code, 0) << table.err;
   EXPECT_NE(table.out.find("static grid: 6,816 triangles"), std::string::npos) << table.out;
 }
@@ -105,8 +106,8 @@ TEST(AdaptiveCli, LaplacianBuildIsValid) {
   Workspace w;
   const std::string out = w.dir.file("l.ply"), report = w.dir.file("l.json");
   const test::CommandResult b = test::run_lightvol("build " + q(w.depth) + " --light " + q(w.spot) +
-                                                   " --refine laplacian --threshold 0.001 --out " + q(out) +
-                                                   " --report " + q(report) + " --quiet");
+                                                   " --refine laplacian --threshold 0.001 --out " +
+                                                   q(out) + " --report " + q(report) + " --quiet");
   ASSERT_EQ(b.exit_code, 0) << b.err;
   const nlohmann::json r = nlohmann::json::parse(slurp(report));
   EXPECT_EQ(r["adaptive"]["refine"], "laplacian");
@@ -116,10 +117,13 @@ TEST(AdaptiveCli, LaplacianBuildIsValid) {
 
 TEST(AdaptiveCli, BadFlagCombinationsAreErrors) {
   Workspace w;
-  const std::string base = "build " + q(w.depth) + " --light " + q(w.spot) + " --out " + q(w.dir.file("x.ply")) + " ";
+  const std::string base =
+      "build " + q(w.depth) + " --light " + q(w.spot) + " --out " + q(w.dir.file("x.ply")) + " ";
   expect_input_error(test::run_lightvol(base + "--adaptive"), "--adaptive: needs --max-error");
-  expect_input_error(test::run_lightvol(base + "--max-error 0.1"), "--max-error: applies with --adaptive only");
-  expect_input_error(test::run_lightvol(base + "--refine laplacian"), "--refine laplacian: needs --threshold");
+  expect_input_error(test::run_lightvol(base + "--max-error 0.1"),
+                     "--max-error: applies with --adaptive only");
+  expect_input_error(test::run_lightvol(base + "--refine laplacian"),
+                     "--refine laplacian: needs --threshold");
   expect_input_error(test::run_lightvol(base + "--adaptive --max-error 0.1 --threshold 2"),
                      "--threshold: applies with --refine laplacian only");
   expect_input_error(test::run_lightvol(base + "--adaptive --max-error -1"), "--max-error");
@@ -128,7 +132,8 @@ TEST(AdaptiveCli, BadFlagCombinationsAreErrors) {
       test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.spot) + " --max-error 0.1,abc"),
       "--max-error: 'abc' is not a non-negative number");
   expect_input_error(
-      test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.spot) + " --json --csv"), "--json and --csv");
+      test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.spot) + " --json --csv"),
+      "--json and --csv");
 }
 
 }  // namespace

@@ -69,8 +69,10 @@ RayErrors ray_errors(const Mesh& mesh, const Light& light, const DepthImage& dep
       const auto q = mesh.vertex(tri[k]);
       p[k] = {q[0], q[1], q[2]};
     }
-    for (int r = std::max(0, int(std::ceil(r0 - 1e-3))); r <= std::min(h - 1, int(std::floor(r1 + 1e-3))); ++r)
-      for (int c = std::max(0, int(std::ceil(c0 - 1e-3))); c <= std::min(w - 1, int(std::floor(c1 + 1e-3))); ++c) {
+    for (int r = std::max(0, int(std::ceil(r0 - 1e-3)));
+         r <= std::min(h - 1, int(std::floor(r1 + 1e-3))); ++r)
+      for (int c = std::max(0, int(std::ceil(c0 - 1e-3)));
+           c <= std::min(w - 1, int(std::floor(c1 + 1e-3))); ++c) {
         const Vec3d o = u.near_point(c, r), dir = u.far_point(c, r) - o;
         const Vec3d e1 = p[1] - p[0], e2 = p[2] - p[0];
         const Vec3d pv = cross(dir, e2);
@@ -110,11 +112,11 @@ RayErrors ray_errors(const Mesh& mesh, const Light& light, const DepthImage& dep
 DepthImage scene(int w, int h, double floor_depth) {
   return make_depth(w, h, [=](int c, int r) {
     const double x = (c + 0.5) / w, y = (r + 0.5) / h;
-    double d = floor_depth + 0.8 * x + 0.3 * y;                                 // slope
-    if (x > 0.1 && x < 0.3 && y > 0.15 && y < 0.45) d = floor_depth - 3;          // box
-    if (x > 0.55 && x < 0.62 && y > 0.6 && y < 0.9) d = floor_depth - 2.2;        // box
-    if (c == w / 2 || c == w / 2 + 3) d = floor_depth - 1.5;                      // thin bars
-    if (r == (2 * h) / 3) d = std::min(d, floor_depth - 1.0);                     // thin bar
+    double d = floor_depth + 0.8 * x + 0.3 * y;                             // slope
+    if (x > 0.1 && x < 0.3 && y > 0.15 && y < 0.45) d = floor_depth - 3;    // box
+    if (x > 0.55 && x < 0.62 && y > 0.6 && y < 0.9) d = floor_depth - 2.2;  // box
+    if (c == w / 2 || c == w / 2 + 3) d = floor_depth - 1.5;                // thin bars
+    if (r == (2 * h) / 3) d = std::min(d, floor_depth - 1.0);               // thin bar
     const double dx = x - 0.75, dy = y - 0.3, rr = dx * dx + dy * dy;
     if (rr < 0.04) d = std::min(d, floor_depth - 4 + 10 * (0.2 - std::sqrt(0.04 - rr)));  // sphere
     return static_cast<float>(d);
@@ -182,7 +184,8 @@ TEST(Adaptive, BoundHoldsAtEveryTexelSpotWindowAndLinear) {
   for (const char* enc : {"window", "linear"}) {
     SCOPED_TRACE(enc);
     const Light light = light_from_json(spot_json(enc));
-    const DepthImage depth = std::string(enc) == "window" ? window_scene(65, 65) : scene(65, 65, 8.0);
+    const DepthImage depth =
+        std::string(enc) == "window" ? window_scene(65, 65) : scene(65, 65, 8.0);
     for (const double e : {0.2, 0.01}) {
       SCOPED_TRACE(e);
       const Built b = build(light, depth, e);
@@ -198,9 +201,8 @@ TEST(Adaptive, BoundHoldsAtEveryTexelSpotWindowAndLinear) {
 TEST(Adaptive, ThinBarsAreKept) {
   // One-texel bars 2 units above a flat floor: a bound of 0.1 must keep every bar texel.
   const Light light = light_from_json(directional_json("linear"));
-  const DepthImage depth = make_depth(64, 48, [](int c, int r) {
-    return (c == 17 || r == 30 || c == r) ? 3.0f : 5.0f;
-  });
+  const DepthImage depth =
+      make_depth(64, 48, [](int c, int r) { return (c == 17 || r == 30 || c == r) ? 3.0f : 5.0f; });
   const Built b = build(light, depth, 0.1);
   expect_valid(b.mesh);
   const RayErrors r = ray_errors(b.mesh, light, depth);
@@ -222,7 +224,8 @@ TEST(Adaptive, PlaneFacingTheLightIsTwoTriangles) {
     expect_valid(s.mesh);
     // A sloped plane under a directional light (linear depth is affine in the texel).
     const Light dir = light_from_json(directional_json("linear"));
-    const DepthImage slope = make_depth(w, h, [](int c, int r) { return static_cast<float>(4.0 + 0.02 * c - 0.01 * r); });
+    const DepthImage slope = make_depth(
+        w, h, [](int c, int r) { return static_cast<float>(4.0 + 0.02 * c - 0.01 * r); });
     const Built d = build(dir, slope, 1e-6);
     EXPECT_EQ(d.mesh.num_triangles(), 2u + 12u);  // walls 8, cap 4
     EXPECT_EQ(d.mesh.num_vertices(), 4u + 4u + 1u);
@@ -252,7 +255,8 @@ TEST(Adaptive, ZeroBoundOnRoughMapIsTheStaticGrid) {
 TEST(Adaptive, SingleSpikeMakesEveryLevelDifference) {
   // A spike in a 129² floor: leaves from level 0 to 6 meet along 2:1 edges, all closed.
   const Light light = light_from_json(directional_json("linear"));
-  const DepthImage depth = make_depth(129, 129, [](int c, int r) { return (c == 70 && r == 51) ? 2.0f : 6.0f; });
+  const DepthImage depth =
+      make_depth(129, 129, [](int c, int r) { return (c == 70 && r == 51) ? 2.0f : 6.0f; });
   const Built b = build(light, depth, 0.01);
   expect_valid(b.mesh);
   EXPECT_GT(b.report.grid_triangles, 20u);
@@ -265,11 +269,13 @@ TEST(Adaptive, SingleSpikeMakesEveryLevelDifference) {
 // ---- sizes, closedness, determinism ------------------------------------------------------------
 
 TEST(Adaptive, OddAndNonSquareSizesStayClosedAndBounded) {
-  for (const auto& [w, h] : {std::pair{2, 2}, {3, 5}, {5, 3}, {17, 9}, {100, 37}, {37, 100}, {129, 129}, {130, 66}}) {
+  for (const auto& [w, h] :
+       {std::pair{2, 2}, {3, 5}, {5, 3}, {17, 9}, {100, 37}, {37, 100}, {129, 129}, {130, 66}}) {
     SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
     for (const char* kind : {"spot", "directional"}) {
       SCOPED_TRACE(kind);
-      const Light light = light_from_json(std::string(kind) == "spot" ? spot_json("linear") : directional_json("linear"));
+      const Light light = light_from_json(std::string(kind) == "spot" ? spot_json("linear")
+                                                                      : directional_json("linear"));
       const DepthImage depth = scene(w, h, 8.0);
       for (const double e : {1.0, 0.02}) {
         const Built b = build(light, depth, e);
@@ -352,7 +358,8 @@ TEST(Adaptive, ForcedBorderTexelsBecomeVertices) {
   const AdaptiveGrid g = pyramid.tessellate(0.1, true, forced);
   for (int side = 0; side < 4; ++side)
     for (const int p : forced.side[side])
-      EXPECT_TRUE(std::binary_search(g.border[side].begin(), g.border[side].end(), p)) << side << " " << p;
+      EXPECT_TRUE(std::binary_search(g.border[side].begin(), g.border[side].end(), p))
+          << side << " " << p;
   EXPECT_GT(g.num_triangles(), 2u);
   Result<Mesh> mesh = assemble_adaptive_volume(light, depth, g, {}, "x");
   ASSERT_TRUE(mesh.ok());

@@ -39,9 +39,11 @@ double solid_angle(Vec3d a, Vec3d b, Vec3d c) {
   double total = 0;
   for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
     const auto [i, j, k] = mesh.triangle(t);
-    const Vec3d a = vertex(mesh, i) - light, b = vertex(mesh, j) - light, c = vertex(mesh, k) - light;
+    const Vec3d a = vertex(mesh, i) - light, b = vertex(mesh, j) - light,
+                c = vertex(mesh, k) - light;
     if (!(dot(a, cross(b, c)) > 0))
-      return ::testing::AssertionFailure() << "triangle " << t << " does not face away from the light";
+      return ::testing::AssertionFailure()
+             << "triangle " << t << " does not face away from the light";
     total += solid_angle(a, b, c);
   }
   if (std::abs(total - 4 * kPi) > 1e-9 * static_cast<double>(mesh.num_triangles()))

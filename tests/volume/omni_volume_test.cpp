@@ -81,8 +81,8 @@ double solid_angle(Vec3d a, Vec3d b, Vec3d c) {
     const auto [i, j, k] = mesh.triangle(t);
     const Vec3d a = point(mesh, i, light), b = point(mesh, j, light), c = point(mesh, k, light);
     if (!(dot(a, cross(b, c)) > 0))
-      return ::testing::AssertionFailure() << "triangle " << t << " (" << i << ", " << j << ", " << k
-                                           << ") does not face away from the light";
+      return ::testing::AssertionFailure() << "triangle " << t << " (" << i << ", " << j << ", "
+                                           << k << ") does not face away from the light";
     total += solid_angle(a, b, c);
   }
   if (std::abs(total - 4 * kPi) > 1e-9 * static_cast<double>(mesh.num_triangles()) + 1e-9)
@@ -142,8 +142,9 @@ TEST(OmniVolume, SeamsAndCornersAloneCloseTheFaceGrids) {
   for (int drop = 0; drop < 12; ++drop) {
     Mesh without = mesh;
     const std::size_t begin = 3 * (6 * 2 * (w - 1) * (w - 1) + drop * 2 * (w - 1));
-    without.indices.erase(without.indices.begin() + static_cast<std::ptrdiff_t>(begin),
-                          without.indices.begin() + static_cast<std::ptrdiff_t>(begin + 3 * 2 * (w - 1)));
+    without.indices.erase(
+        without.indices.begin() + static_cast<std::ptrdiff_t>(begin),
+        without.indices.begin() + static_cast<std::ptrdiff_t>(begin + 3 * 2 * (w - 1)));
     EXPECT_FALSE(is_closed_and_oriented(without)) << "seam " << drop;
   }
 }
@@ -184,7 +185,8 @@ TEST(OmniVolume, EmptySceneReachesTheFarCube) {
   const Light light = light_from_json(omni_json("window"));
   const int w = 16;
   const Mesh mesh = build(light, cube_of([&](int) { return constant_depth(w, w, 1.0f); }));
-  EXPECT_NEAR(signed_volume(mesh), chamfered_cube_volume(light.far, w), 2e-5 * std::pow(light.far, 3));
+  EXPECT_NEAR(signed_volume(mesh), chamfered_cube_volume(light.far, w),
+              2e-5 * std::pow(light.far, 3));
   EXPECT_TRUE(is_star_shaped_from(mesh, light.position));
 }
 
@@ -212,7 +214,8 @@ TEST(OmniVolume, MismatchedFacesAreErrorsNamingTheFace) {
   cube.faces[3] = constant_depth(4, 3, 2.0f);
   mesh = build_omni_volume(light, cube, {});
   ASSERT_FALSE(mesh.ok());
-  EXPECT_NE(mesh.error().message.find("-Y (ny): is 4x3; omni faces must be square"), std::string::npos)
+  EXPECT_NE(mesh.error().message.find("-Y (ny): is 4x3; omni faces must be square"),
+            std::string::npos)
       << mesh.error().message;
 }
 
@@ -236,7 +239,8 @@ TEST(OmniFaces, TexelRaysFollowTheDesignConvention) {
           const double y = (flip_y ? -1 : 1) * (1 - 2.0 * (r + 0.5) / w);
           const Vec3d expected = normalize(kLook[f] + x * right + y * kUp[f]);
           const Vec3d got = normalize(u.near_point(c, r) - u.apex());
-          EXPECT_NEAR(length(got - expected), 0, 1e-12) << "face " << f << " texel " << c << "," << r;
+          EXPECT_NEAR(length(got - expected), 0, 1e-12)
+              << "face " << f << " texel " << c << "," << r;
         }
     }
   }
@@ -258,7 +262,8 @@ TEST(OmniFaces, AdjacencyMatchesTheTexelRays) {
     std::set<std::pair<int, int>> borders_used;
     for (const OmniSeam& seam : adjacency.seams) {
       for (int side = 0; side < 2; ++side)
-        EXPECT_TRUE(borders_used.insert({seam.face[side], static_cast<int>(seam.border[side])}).second)
+        EXPECT_TRUE(
+            borders_used.insert({seam.face[side], static_cast<int>(seam.border[side])}).second)
             << "border used twice";
       EXPECT_NE(seam.face[0] / 2, seam.face[1] / 2) << "opposite faces never meet";
       // Texel k of one border and its partner straddle the edge: their cube points mirror each
@@ -284,7 +289,8 @@ TEST(OmniFaces, AdjacencyMatchesTheTexelRays) {
     for (const OmniCorner& corner : adjacency.corners) {
       Vec3d p[3];
       for (int k = 0; k < 3; ++k) {
-        EXPECT_TRUE(corners_used.insert({corner.face[k], corner.last_col[k], corner.last_row[k]}).second);
+        EXPECT_TRUE(
+            corners_used.insert({corner.face[k], corner.last_col[k], corner.last_row[k]}).second);
         p[k] = cube_point(light, w, corner.face[k], corner.last_col[k] ? w - 1 : 0,
                           corner.last_row[k] ? w - 1 : 0);
       }

@@ -40,7 +40,8 @@ TEST(StaticVolume, SpotExactCountsClosedOutwardNoDegenerates) {
     SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
     const Mesh m = build(light, occluded(w, h));
     EXPECT_EQ(m.num_vertices(), static_cast<std::size_t>(w * h + 1));
-    EXPECT_EQ(m.num_triangles(), static_cast<std::size_t>(2 * (w - 1) * (h - 1) + 2 * (w - 1) + 2 * (h - 1)));
+    EXPECT_EQ(m.num_triangles(),
+              static_cast<std::size_t>(2 * (w - 1) * (h - 1) + 2 * (w - 1) + 2 * (h - 1)));
     if (w == h) {
       EXPECT_EQ(m.num_triangles(), static_cast<std::size_t>(2 * w * w - 2));
     }
@@ -133,7 +134,8 @@ TEST(StaticVolume, DirectionalVolumeIsTheHeightFieldIntegral) {
 
 TEST(StaticVolume, FlipYAndLightSpaceStayOutward) {
   Light light = test::light_from_json(test::spot_json("window"));
-  const DepthImage d = test::make_depth(8, 5, [](int c, int r) { return 0.9f + 0.01f * static_cast<float>((c * 7 + r * 3) % 5); });
+  const DepthImage d = test::make_depth(
+      8, 5, [](int c, int r) { return 0.9f + 0.01f * static_cast<float>((c * 7 + r * 3) % 5); });
   const double reference = signed_volume(build(light, d));
   light.flip_y = true;
   const Mesh flipped = build(light, d);
@@ -155,7 +157,8 @@ TEST(StaticVolume, MirroringViewMatrixStaysOutward) {
     view += std::to_string(v.m[i]) + (i < 15 ? "," : "]");
     proj += std::to_string(base.projection.m[i]) + (i < 15 ? "," : "]");
   }
-  const Light light = test::light_from_json(R"({"type":"spot","depth":"linear","view":)" + view + R"(,"projection":)" + proj + "}");
+  const Light light = test::light_from_json(R"({"type":"spot","depth":"linear","view":)" + view +
+                                            R"(,"projection":)" + proj + "}");
   const Mesh m = build(light, occluded(6, 5));
   EXPECT_TRUE(test::is_closed_and_oriented(m));
   EXPECT_GT(signed_volume(m), 0);
@@ -186,7 +189,8 @@ TEST(StaticVolume, UnreachableRadialDepthNamesThePixel) {
   d.values[1 * 4 + 2] = 0.1f;
   Result<Mesh> m = build_static_volume(light, d, {}, "rad.exr");
   ASSERT_FALSE(m.ok());
-  EXPECT_NE(m.error().message.find("rad.exr: pixel (2, 1)"), std::string::npos) << m.error().message;
+  EXPECT_NE(m.error().message.find("rad.exr: pixel (2, 1)"), std::string::npos)
+      << m.error().message;
 }
 
 }  // namespace

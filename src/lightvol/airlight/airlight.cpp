@@ -1,5 +1,3 @@
-#include <lightvol/airlight/airlight.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/airlight/airlight.h>
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/json_keys.h>
 
@@ -16,9 +15,12 @@ namespace lightvol {
 
 std::string_view to_string(PhaseType type) {
   switch (type) {
-    case PhaseType::isotropic: return "isotropic";
-    case PhaseType::hg: return "hg";
-    case PhaseType::schlick: return "schlick";
+    case PhaseType::isotropic:
+      return "isotropic";
+    case PhaseType::hg:
+      return "hg";
+    case PhaseType::schlick:
+      return "schlick";
   }
   return "?";
 }
@@ -26,7 +28,8 @@ std::string_view to_string(PhaseType type) {
 double Phase::operator()(double cos_theta) const {
   constexpr double inv4pi = 1.0 / (4.0 * std::numbers::pi);
   switch (type) {
-    case PhaseType::isotropic: return inv4pi;
+    case PhaseType::isotropic:
+      return inv4pi;
     case PhaseType::hg: {
       const double denom = 1.0 + g * g - 2.0 * g * cos_theta;
       return inv4pi * (1.0 - g * g) / (denom * std::sqrt(denom));
@@ -63,9 +66,9 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
     return s.error();
   Medium medium;
   if (!keys.has("scattering")) return keys.error("scattering", "missing");
-  for (auto [key, field] : {std::pair{"scattering", &medium.scattering},
-                            std::pair{"absorption", &medium.absorption},
-                            std::pair{"intensity", &medium.intensity}}) {
+  for (auto [key, field] :
+       {std::pair{"scattering", &medium.scattering}, std::pair{"absorption", &medium.absorption},
+        std::pair{"intensity", &medium.intensity}}) {
     if (!keys.has(key)) continue;
     Result<double> x = keys.number(key);
     if (!x) return x.error();
@@ -88,7 +91,8 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
       medium.phase.type = PhaseType::schlick;
       parameter = "k";
     } else {
-      return phase->error("type", "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + *type + "\"");
+      return phase->error("type",
+                          "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + *type + "\"");
     }
     for (const char* key : {"g", "k"}) {
       if (!phase->has(key)) continue;
@@ -96,7 +100,8 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
         return phase->error(key, "does not apply to a phase of type \"" + *type + "\"");
       Result<double> x = phase->number(key);
       if (!x) return x.error();
-      if (!(std::abs(*x) < 1)) return phase->error(key, "must lie in (-1, 1), got " + format_number(*x));
+      if (!(std::abs(*x) < 1))
+        return phase->error(key, "must lie in (-1, 1), got " + format_number(*x));
       (parameter == "g" ? medium.phase.g : medium.phase.k) = *x;
     }
   }
@@ -130,7 +135,8 @@ Result<Camera> parse_camera(std::string_view json_text, const std::string& sourc
   if (!root) return root.error();
   const KeyReader keys(*root, source);
   Camera camera;
-  for (auto [key, field] : {std::pair{"width", &camera.width}, std::pair{"height", &camera.height}}) {
+  for (auto [key, field] :
+       {std::pair{"width", &camera.width}, std::pair{"height", &camera.height}}) {
     if (!keys.has(key)) return keys.error(key, "missing");
     const json& v = root->at(key);
     if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 16384)
@@ -336,7 +342,8 @@ double RayAirlight::xi(double t) const {
 double RayAirlight::operator()(double t) const {
   if (!(t > 0)) return 0;
   if (directional_) {
-    if (std::isinf(t)) return dir_rate_ > 0 ? dir_scale_ / dir_rate_ : std::numeric_limits<double>::infinity();
+    if (std::isinf(t))
+      return dir_rate_ > 0 ? dir_scale_ / dir_rate_ : std::numeric_limits<double>::infinity();
     const double x = dir_rate_ * t;
     // (1 − e^(−x)) / rate, with its limit t for x → 0.
     return dir_scale_ * (std::abs(x) < 1e-8 ? t * (1 - 0.5 * x) : -std::expm1(-x) / dir_rate_);

@@ -53,7 +53,7 @@ struct Medium {
   double absorption = 0.0;   // σa, 1/world unit
   double intensity = 1.0;    // I: W/sr for spot and omni lights, W/m² for directional lights
   Phase phase;
-  SpotProfile profile;       // spot lights only
+  SpotProfile profile;  // spot lights only
 
   double extinction() const { return scattering + absorption; }  // σt
 };
@@ -67,8 +67,8 @@ Result<Medium> load_medium(const std::string& path);
 
 // ---- camera -------------------------------------------------------------------------------------
 
-// A camera is a light description (DESIGN §2, "type" defaults to "spot"; a directional type gives an
-// orthographic camera) plus the image size. Its "depth" key is the encoding of the camera depth
+// A camera is a light description (DESIGN §2, "type" defaults to "spot"; a directional type gives
+// an orthographic camera) plus the image size. Its "depth" key is the encoding of the camera depth
 // image that `lightvol render --depth` reads.
 struct Camera {
   Light view;  // position, direction, projection, near/far, depth encoding, flip_y

@@ -1,7 +1,5 @@
 // The linear-time checks (closed, edge-manifold, oriented, outward, non-degenerate, T-junctions)
 // and the light's non-self-nesting proof. CGAL's checks are in cgal_checks.cpp.
-#include <lightvol/check/check.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,9 +8,10 @@
 #include <unordered_map>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
+#include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
 #include <lightvol/core/check.h>
 #include <lightvol/core/math.h>
@@ -21,19 +20,26 @@ namespace lightvol {
 
 std::string_view to_string(CheckStatus status) {
   switch (status) {
-    case CheckStatus::passed: return "pass";
-    case CheckStatus::failed: return "FAIL";
-    case CheckStatus::skipped: return "skipped";
+    case CheckStatus::passed:
+      return "pass";
+    case CheckStatus::failed:
+      return "FAIL";
+    case CheckStatus::skipped:
+      return "skipped";
   }
   return "?";
 }
 
 std::string_view to_string(NestingProof proof) {
   switch (proof) {
-    case NestingProof::none: return "none";
-    case NestingProof::solid_angles: return "light: signed solid angles";
-    case NestingProof::projected_areas: return "light: signed projected areas";
-    case NestingProof::cgal: return "CGAL: self-intersections + bounds a volume";
+    case NestingProof::none:
+      return "none";
+    case NestingProof::solid_angles:
+      return "light: signed solid angles";
+    case NestingProof::projected_areas:
+      return "light: signed projected areas";
+    case NestingProof::cgal:
+      return "CGAL: self-intersections + bounds a volume";
   }
   return "?";
 }
@@ -175,7 +181,8 @@ EdgeResults edge_checks(const Mesh& mesh, int max_offenders) {
     const std::size_t n = j - i;
     if (n == 1) {
       const bool reversed = uses[i].face_dir & 1;
-      const std::uint32_t from = reversed ? hi_of(e) : lo_of(e), to = reversed ? lo_of(e) : hi_of(e);
+      const std::uint32_t from = reversed ? hi_of(e) : lo_of(e),
+                          to = reversed ? lo_of(e) : hi_of(e);
       out.boundary.emplace_back(from, to);
       out.boundary_faces.push_back(uses[i].face_dir >> 1);
       if (out.closed.count++ < static_cast<std::uint64_t>(max_offenders))
@@ -219,9 +226,8 @@ CheckResult degenerate_check(const Mesh& mesh, int max_offenders) {
         return n;
       },
       [](std::uint64_t x, std::uint64_t y) { return x + y; });
-  for (std::size_t t = 0; t < nt && r.offenders.size() < static_cast<std::size_t>(max_offenders) &&
-                          r.count > 0;
-       ++t)
+  for (std::size_t t = 0;
+       t < nt && r.offenders.size() < static_cast<std::size_t>(max_offenders) && r.count > 0; ++t)
     if (is_degenerate(t)) r.offenders.push_back(face_offender(mesh, t));
   r.status = r.count == 0 ? CheckStatus::passed : CheckStatus::failed;
   r.detail = std::to_string(r.count) + " faces with zero area or a repeated vertex";
@@ -260,7 +266,8 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
     return std::array<std::int64_t, 3>{axis_cell(p.x), axis_cell(p.y), axis_cell(p.z)};
   };
   const auto key_of = [](std::array<std::int64_t, 3> c) {
-    return static_cast<std::uint64_t>(c[0]) * 73856093u ^ static_cast<std::uint64_t>(c[1]) * 19349663u ^
+    return static_cast<std::uint64_t>(c[0]) * 73856093u ^
+           static_cast<std::uint64_t>(c[1]) * 19349663u ^
            static_cast<std::uint64_t>(c[2]) * 83492791u;
   };
   std::unordered_multimap<std::uint64_t, std::uint32_t> grid;
@@ -307,10 +314,10 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
 
 // Per-triangle sums of the light proof.
 struct LightSums {
-  double positive = 0;   // Σ of the contributions counted
-  double negative = 0;   // Σ |contribution| of faces on the wrong side (offenders)
-  double source = 0;     // directional: Σ |area| of near-plane faces facing the light
-  double zeroed = 0;     // Σ |contribution| of faces counted as edge-on
+  double positive = 0;  // Σ of the contributions counted
+  double negative = 0;  // Σ |contribution| of faces on the wrong side (offenders)
+  double source = 0;    // directional: Σ |area| of near-plane faces facing the light
+  double zeroed = 0;    // Σ |contribution| of faces counted as edge-on
   std::uint64_t wrong = 0;
   LightSums operator+(const LightSums& o) const {
     return {positive + o.positive, negative + o.negative, source + o.source, zeroed + o.zeroed,
@@ -352,8 +359,8 @@ double apex_cone_solid_angle(const Mesh& mesh, std::uint32_t apex_vertex, Vec3d 
   return 2 * kPi + turning;
 }
 
-CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos, double quantum,
-                                int max_offenders, CheckReport* report) {
+CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos,
+                                double quantum, int max_offenders, CheckReport* report) {
   CheckResult r;
   r.name = kCheckNesting;
   report->proof = NestingProof::solid_angles;
@@ -366,7 +373,8 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   // far distance from its apex. Quantized positions are only known to within their step.
   const double light_ulp =
       std::ldexp(std::max({std::abs(light_pos.x), std::abs(light_pos.y), std::abs(light_pos.z),
-                           static_cast<double>(std::numeric_limits<float>::min())}), -23);
+                           static_cast<double>(std::numeric_limits<float>::min())}),
+                 -23);
   const double at_light_tol = std::max(4 * light_ulp, quantum);
   double light_offset = 0;  // of the vertex at the light, max-norm
   for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
@@ -447,7 +455,8 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
     if (light_offset > 4 * light_ulp) {
       std::ostringstream off;
       off.precision(3);
-      off << " (" << light_offset << " from it, within the positions' quantization step " << quantum << ")";
+      off << " (" << light_offset << " from it, within the positions' quantization step " << quantum
+          << ")";
       where += off.str();
     }
     if (expected < 0) {
@@ -513,10 +522,18 @@ CheckResult nesting_check_directional(const Mesh& mesh, const Light& light, doub
         for (std::size_t t = range.begin(); t != range.end(); ++t) {
           double area = 0;
           switch (classify(t, &area)) {
-            case 1: s.positive += area; break;
-            case 2: s.source -= area; break;
-            case -1: s.negative += std::abs(area), ++s.wrong; break;
-            default: s.zeroed += std::abs(area); break;
+            case 1:
+              s.positive += area;
+              break;
+            case 2:
+              s.source -= area;
+              break;
+            case -1:
+              s.negative += std::abs(area), ++s.wrong;
+              break;
+            default:
+              s.zeroed += std::abs(area);
+              break;
           }
         }
         return s;
@@ -583,11 +600,10 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
       }
     }
   }
-  indices.status = indices.count == 0 && !too_big && mesh.num_triangles() > 0
-                       ? CheckStatus::passed
-                       : CheckStatus::failed;
+  indices.status = indices.count == 0 && !too_big && mesh.num_triangles() > 0 ? CheckStatus::passed
+                                                                              : CheckStatus::failed;
   indices.detail = mesh.num_triangles() == 0 ? "the mesh has no triangles"
-                   : too_big ? "more than 2^31 triangles"
+                   : too_big                 ? "more than 2^31 triangles"
                              : std::to_string(indices.count) + " faces name a vertex beyond the " +
                                    std::to_string(nv) + " vertices";
   report.checks.push_back(indices);
@@ -635,8 +651,8 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
   } else if (!topology) {
     report.checks.push_back(skipped(kCheckNesting, "needs a closed, edge-manifold, oriented mesh"));
   } else if (light->type == LightType::directional) {
-    report.checks.push_back(
-        nesting_check_directional(mesh, *light, eps_pos, quantization_step, max_offenders, &report));
+    report.checks.push_back(nesting_check_directional(mesh, *light, eps_pos, quantization_step,
+                                                      max_offenders, &report));
   } else {
     report.checks.push_back(
         nesting_check_point(mesh, *light, eps_pos, quantization_step, max_offenders, &report));
@@ -647,8 +663,9 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
 CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOptions& options) {
   CheckReport report =
       check_volume_linear(mesh, light, options.max_offenders, options.quantization_step);
-  const auto nesting_it = std::find_if(report.checks.begin(), report.checks.end(),
-                                       [](const CheckResult& c) { return c.name == kCheckNesting; });
+  const auto nesting_it =
+      std::find_if(report.checks.begin(), report.checks.end(),
+                   [](const CheckResult& c) { return c.name == kCheckNesting; });
   LV_CHECK(nesting_it != report.checks.end());
   const std::size_t nesting_at = static_cast<std::size_t>(nesting_it - report.checks.begin());
   const bool light_proved = nesting_it->status == CheckStatus::passed;
@@ -676,20 +693,20 @@ CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOption
     } else {
       si.count = c.intersecting_pairs;
       si.status = c.intersecting_pairs == 0 ? CheckStatus::passed : CheckStatus::failed;
-      si.detail = std::to_string(c.intersecting_pairs) +
-                  (c.pairs_truncated ? " or more" : "") + " pairs of intersecting faces";
+      si.detail = std::to_string(c.intersecting_pairs) + (c.pairs_truncated ? " or more" : "") +
+                  " pairs of intersecting faces";
       for (const auto& [f, g] : c.first_pairs) {
         const auto [a, b, cc] = mesh.triangle(f);
         const auto [d, e, h] = mesh.triangle(g);
-        si.offenders.push_back(make_offender(mesh, {static_cast<std::int64_t>(f),
-                                                    static_cast<std::int64_t>(g)},
-                                             {a, b, cc, d, e, h}));
+        si.offenders.push_back(
+            make_offender(mesh, {static_cast<std::int64_t>(f), static_cast<std::int64_t>(g)},
+                          {a, b, cc, d, e, h}));
       }
     }
     CheckResult bv;
     if (!c.ran_volume_test) {
-      bv = skipped(kCheckBoundsVolume, c.built ? "needs a closed mesh without self-intersections"
-                                               : c.why_not);
+      bv = skipped(kCheckBoundsVolume,
+                   c.built ? "needs a closed mesh without self-intersections" : c.why_not);
     } else {
       bv.name = kCheckBoundsVolume;
       bv.status = c.bounds_a_volume ? CheckStatus::passed : CheckStatus::failed;

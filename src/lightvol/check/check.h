@@ -41,12 +41,12 @@ struct CheckResult {
 };
 
 // Check names, in report order.
-inline constexpr std::string_view kCheckIndices = "indices";              // all in range
-inline constexpr std::string_view kCheckClosed = "closed";                // no boundary edge
-inline constexpr std::string_view kCheckManifold = "edge-manifold";       // ≤ 2 faces per edge
-inline constexpr std::string_view kCheckOriented = "oriented";            // neighbours agree
-inline constexpr std::string_view kCheckOutward = "outward";              // signed volume > 0
-inline constexpr std::string_view kCheckDegenerate = "non-degenerate";    // no zero-area face
+inline constexpr std::string_view kCheckIndices = "indices";            // all in range
+inline constexpr std::string_view kCheckClosed = "closed";              // no boundary edge
+inline constexpr std::string_view kCheckManifold = "edge-manifold";     // ≤ 2 faces per edge
+inline constexpr std::string_view kCheckOriented = "oriented";          // neighbours agree
+inline constexpr std::string_view kCheckOutward = "outward";            // signed volume > 0
+inline constexpr std::string_view kCheckDegenerate = "non-degenerate";  // no zero-area face
 inline constexpr std::string_view kCheckTJunctions = "no-t-junctions";
 inline constexpr std::string_view kCheckSelfIntersections = "no-self-intersections";
 inline constexpr std::string_view kCheckBoundsVolume = "bounds-a-volume";

@@ -1,4 +1,4 @@
-#include <lightvol/core/atomic_file.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include <unistd.h>
+#include <lightvol/core/atomic_file.h>
 
 namespace lightvol {
 namespace fs = std::filesystem;
@@ -28,13 +28,15 @@ Status write_file_atomically(const std::string& path,
   const fs::path target(path);
   std::error_code ec;
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  if (!fs::is_directory(dir, ec)) return Error{path + ": directory " + dir.string() + " does not exist"};
+  if (!fs::is_directory(dir, ec))
+    return Error{path + ": directory " + dir.string() + " does not exist"};
   if (fs::is_directory(target, ec)) return Error{path + ": is a directory"};
   // The finished file is renamed over the target: that would replace a device or a pipe
   // (/dev/stdout) with a plain file.
   if (const fs::file_status st = fs::status(target, ec); fs::exists(st) && !fs::is_regular_file(st))
-    return Error{path + ": exists and is not a regular file (a device or a pipe); outputs are "
-                        "written to files"};
+    return Error{path +
+                 ": exists and is not a regular file (a device or a pipe); outputs are "
+                 "written to files"};
 
   const std::string temp = temp_name_for(target);
   Status status;

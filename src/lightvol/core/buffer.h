@@ -1,11 +1,11 @@
 // Allocation of the large flat buffers a volume lives in.
 #pragma once
 
+#include <sys/mman.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
-
-#include <sys/mman.h>
 
 namespace lightvol {
 

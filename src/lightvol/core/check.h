@@ -24,17 +24,17 @@ std::string describe_pair(const char* expr_a, const char* op, const char* expr_b
 
 }  // namespace lightvol::detail
 
-#define LV_CHECK(cond)                                                            \
-  do {                                                                            \
+#define LV_CHECK(cond)                                                                           \
+  do {                                                                                           \
     if (!(cond)) ::lightvol::detail::check_failed(__FILE__, __LINE__, "check " #cond " failed"); \
   } while (0)
 
-#define LV_CHECK_OP(a, op, b)                                                              \
-  do {                                                                                     \
-    const auto& lv_a_ = (a);                                                               \
-    const auto& lv_b_ = (b);                                                               \
-    if (!(lv_a_ op lv_b_))                                                                 \
-      ::lightvol::detail::check_failed(                                                    \
+#define LV_CHECK_OP(a, op, b)                                                                \
+  do {                                                                                       \
+    const auto& lv_a_ = (a);                                                                 \
+    const auto& lv_b_ = (b);                                                                 \
+    if (!(lv_a_ op lv_b_))                                                                   \
+      ::lightvol::detail::check_failed(                                                      \
           __FILE__, __LINE__, ::lightvol::detail::describe_pair(#a, #op, #b, lv_a_, lv_b_)); \
   } while (0)
 

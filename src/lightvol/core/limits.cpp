@@ -1,11 +1,11 @@
-#include <lightvol/core/limits.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 
-#include <unistd.h>
+#include <lightvol/core/limits.h>
 
 namespace lightvol {
 namespace {
@@ -36,7 +36,8 @@ Result<std::uint64_t> parse_memory_size(const std::string& text) {
   const Error bad{"--max-memory: '" + text +
                   "' is not a memory size (examples: 512M, 8G, 1.5GiB, 2000000000)"};
   std::size_t i = 0;
-  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.')) ++i;
+  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.'))
+    ++i;
   if (i == 0) return bad;
   double value = 0;
   try {
@@ -55,12 +56,23 @@ Result<std::uint64_t> parse_memory_size(const std::string& text) {
     const std::string rest = suffix.substr(1);
     if (rest != "" && rest != "B" && rest != "IB") return bad;
     switch (unit) {
-      case 'B': if (!rest.empty()) return bad; break;
-      case 'K': scale = 1024.0; break;
-      case 'M': scale = 1024.0 * 1024; break;
-      case 'G': scale = 1024.0 * 1024 * 1024; break;
-      case 'T': scale = 1024.0 * 1024 * 1024 * 1024; break;
-      default: return bad;
+      case 'B':
+        if (!rest.empty()) return bad;
+        break;
+      case 'K':
+        scale = 1024.0;
+        break;
+      case 'M':
+        scale = 1024.0 * 1024;
+        break;
+      case 'G':
+        scale = 1024.0 * 1024 * 1024;
+        break;
+      case 'T':
+        scale = 1024.0 * 1024 * 1024 * 1024;
+        break;
+      default:
+        return bad;
     }
   }
   const double bytes = value * scale;
@@ -77,8 +89,10 @@ std::string format_bytes(std::uint64_t bytes) {
     ++u;
   }
   char buffer[64];
-  if (u == 0) std::snprintf(buffer, sizeof buffer, "%llu bytes", static_cast<unsigned long long>(bytes));
-  else std::snprintf(buffer, sizeof buffer, "%.1f %s", v, units[u]);
+  if (u == 0)
+    std::snprintf(buffer, sizeof buffer, "%llu bytes", static_cast<unsigned long long>(bytes));
+  else
+    std::snprintf(buffer, sizeof buffer, "%.1f %s", v, units[u]);
   return buffer;
 }
 

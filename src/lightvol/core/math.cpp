@@ -1,7 +1,6 @@
-#include <lightvol/core/math.h>
-
 #include <numbers>
 
+#include <lightvol/core/math.h>
 
 namespace lightvol {
 // Cofactor expansion (as in MESA's gluInvertMatrix), in double precision.
@@ -11,14 +10,14 @@ Mat4d inverse(const Mat4d& a, bool* ok) {
   auto& inv = r.m;
   inv[0] = m[5] * m[10] * m[15] - m[5] * m[11] * m[14] - m[9] * m[6] * m[15] + m[9] * m[7] * m[14] +
            m[13] * m[6] * m[11] - m[13] * m[7] * m[10];
-  inv[4] = -m[4] * m[10] * m[15] + m[4] * m[11] * m[14] + m[8] * m[6] * m[15] - m[8] * m[7] * m[14] -
-           m[12] * m[6] * m[11] + m[12] * m[7] * m[10];
+  inv[4] = -m[4] * m[10] * m[15] + m[4] * m[11] * m[14] + m[8] * m[6] * m[15] -
+           m[8] * m[7] * m[14] - m[12] * m[6] * m[11] + m[12] * m[7] * m[10];
   inv[8] = m[4] * m[9] * m[15] - m[4] * m[11] * m[13] - m[8] * m[5] * m[15] + m[8] * m[7] * m[13] +
            m[12] * m[5] * m[11] - m[12] * m[7] * m[9];
-  inv[12] = -m[4] * m[9] * m[14] + m[4] * m[10] * m[13] + m[8] * m[5] * m[14] - m[8] * m[6] * m[13] -
-            m[12] * m[5] * m[10] + m[12] * m[6] * m[9];
-  inv[1] = -m[1] * m[10] * m[15] + m[1] * m[11] * m[14] + m[9] * m[2] * m[15] - m[9] * m[3] * m[14] -
-           m[13] * m[2] * m[11] + m[13] * m[3] * m[10];
+  inv[12] = -m[4] * m[9] * m[14] + m[4] * m[10] * m[13] + m[8] * m[5] * m[14] -
+            m[8] * m[6] * m[13] - m[12] * m[5] * m[10] + m[12] * m[6] * m[9];
+  inv[1] = -m[1] * m[10] * m[15] + m[1] * m[11] * m[14] + m[9] * m[2] * m[15] -
+           m[9] * m[3] * m[14] - m[13] * m[2] * m[11] + m[13] * m[3] * m[10];
   inv[5] = m[0] * m[10] * m[15] - m[0] * m[11] * m[14] - m[8] * m[2] * m[15] + m[8] * m[3] * m[14] +
            m[12] * m[2] * m[11] - m[12] * m[3] * m[10];
   inv[9] = -m[0] * m[9] * m[15] + m[0] * m[11] * m[13] + m[8] * m[1] * m[15] - m[8] * m[3] * m[13] -
@@ -77,19 +76,43 @@ Mat4d look_at(Vec3d eye, Vec3d direction, Vec3d up) {
 Mat4d perspective(double fov_y_deg, double aspect, double near, double far) {
   const double f = 1.0 / std::tan(fov_y_deg * std::numbers::pi / 360.0);
   Mat4d r;
-  r.m = {f / aspect, 0, 0, 0,                                              //
-         0, f, 0, 0,                                                       //
-         0, 0, (far + near) / (near - far), 2 * far * near / (near - far),  //
-         0, 0, -1, 0};
+  r.m = {f / aspect,
+         0,
+         0,
+         0,  //
+         0,
+         f,
+         0,
+         0,  //
+         0,
+         0,
+         (far + near) / (near - far),
+         2 * far * near / (near - far),  //
+         0,
+         0,
+         -1,
+         0};
   return r;
 }
 
 Mat4d orthographic(double left, double right, double bottom, double top, double near, double far) {
   Mat4d r;
-  r.m = {2 / (right - left), 0, 0, -(right + left) / (right - left),  //
-         0, 2 / (top - bottom), 0, -(top + bottom) / (top - bottom),  //
-         0, 0, -2 / (far - near), -(far + near) / (far - near),       //
-         0, 0, 0, 1};
+  r.m = {2 / (right - left),
+         0,
+         0,
+         -(right + left) / (right - left),  //
+         0,
+         2 / (top - bottom),
+         0,
+         -(top + bottom) / (top - bottom),  //
+         0,
+         0,
+         -2 / (far - near),
+         -(far + near) / (far - near),  //
+         0,
+         0,
+         0,
+         1};
   return r;
 }
 

@@ -1,9 +1,9 @@
-#include <lightvol/core/mesh.h>
-
 #include <algorithm>
 
-#include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <lightvol/core/mesh.h>
 
 namespace lightvol {
 
@@ -35,7 +35,8 @@ double signed_volume(const Mesh& mesh) {
                  const double ax = a[0], ay = a[1], az = a[2];
                  const double bx = b[0], by = b[1], bz = b[2];
                  const double cx = c[0], cy = c[1], cz = c[2];
-                 acc += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+                 acc +=
+                     ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
                }
                return acc;
              },

@@ -13,7 +13,7 @@
 namespace lightvol {
 
 struct Mesh {
-  std::vector<float> positions;     // x0 y0 z0 x1 y1 z1 ...; the frame is the producer's to say
+  std::vector<float> positions;        // x0 y0 z0 x1 y1 z1 ...; the frame is the producer's to say
   std::vector<std::uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
 
   std::size_t num_vertices() const { return positions.size() / 3; }

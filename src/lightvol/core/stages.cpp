@@ -1,8 +1,7 @@
-#include <lightvol/core/stages.h>
-
 #include <sys/resource.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/stages.h>
 
 namespace lightvol {
 

@@ -1,6 +1,5 @@
-#include <lightvol/depth/cube_faces.h>
-
 #include <lightvol/core/check.h>
+#include <lightvol/depth/cube_faces.h>
 
 namespace lightvol {
 namespace {
@@ -25,7 +24,8 @@ Status check_face(const CubeFaces& cube, int f) {
   const std::string where = cube.sources[f] + ": face " + omni_face_name(f) + ": ";
   if (image.width != image.height)
     return Error{where + "is " + size_text(image) + "; omni faces must be square"};
-  if (image.width < 2) return Error{where + "is " + size_text(image) + "; faces need at least 2x2 texels"};
+  if (image.width < 2)
+    return Error{where + "is " + size_text(image) + "; faces need at least 2x2 texels"};
   if (image.values.size() != static_cast<std::size_t>(image.width) * image.height)
     return Error{where + "holds " + std::to_string(image.values.size()) + " values for " +
                  size_text(image) + " texels"};
@@ -93,8 +93,10 @@ Result<CubeFaces> read_cube_faces(const std::vector<std::string>& paths,
   std::array<std::string, kOmniFaces> face_paths;
   for (const std::string& p : paths)
     if (p.find(kFacePlaceholder) != std::string::npos && paths.size() != 1)
-      return Error{p + ": a path with {face} stands for all six faces and must be the only depth "
-                       "path, got " + std::to_string(paths.size()) + " paths"};
+      return Error{p +
+                   ": a path with {face} stands for all six faces and must be the only depth "
+                   "path, got " +
+                   std::to_string(paths.size()) + " paths"};
   if (paths.size() == 1 && paths[0].find(kFacePlaceholder) == std::string::npos) {
     Result<DepthImage> strip = read_depth_image(paths[0], options);
     if (!strip) return strip.error();
@@ -105,8 +107,10 @@ Result<CubeFaces> read_cube_faces(const std::vector<std::string>& paths,
   } else if (paths.size() == kOmniFaces) {
     for (int f = 0; f < kOmniFaces; ++f) face_paths[f] = paths[f];
   } else {
-    return Error{"an omni light takes six depth images (+X -X +Y -Y +Z -Z), one path containing "
-                 "{face}, or one W x 6W strip; got " + std::to_string(paths.size()) + " paths"};
+    return Error{
+        "an omni light takes six depth images (+X -X +Y -Y +Z -Z), one path containing "
+        "{face}, or one W x 6W strip; got " +
+        std::to_string(paths.size()) + " paths"};
   }
 
   CubeFaces cube;

@@ -17,7 +17,7 @@
 namespace lightvol {
 
 struct CubeFaces {
-  std::array<DepthImage, kOmniFaces> faces;    // +X −X +Y −Y +Z −Z, all W×W
+  std::array<DepthImage, kOmniFaces> faces;     // +X −X +Y −Y +Z −Z, all W×W
   std::array<std::string, kOmniFaces> sources;  // what names each face in errors (file, or strip)
 
   int size() const { return faces[0].width; }

@@ -1,5 +1,3 @@
-#include <lightvol/depth/depth_image.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -11,6 +9,7 @@
 
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/detail/image_file.h>
 
 namespace lightvol {
@@ -28,8 +27,8 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
   if (!options.channel.empty()) {
     for (int c = 0; c < spec.nchannels; ++c)
       if (names[c] == options.channel) return c;
-    return Error{path + ": no channel named '" + options.channel + "' (channels: " +
-                 join_names(names) + ")"};
+    return Error{path + ": no channel named '" + options.channel +
+                 "' (channels: " + join_names(names) + ")"};
   }
   if (spec.nchannels == 1) return 0;
   for (const char* preferred : {"Z", "depth", "Y"})
@@ -42,8 +41,8 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
     candidate = c;
   }
   if (non_alpha == 1) return candidate;
-  return Error{path + ": has " + std::to_string(spec.nchannels) + " channels (" + join_names(names) +
-               "): choose the depth channel with --channel"};
+  return Error{path + ": has " + std::to_string(spec.nchannels) + " channels (" +
+               join_names(names) + "): choose the depth channel with --channel"};
 }
 
 }  // namespace
@@ -66,8 +65,9 @@ Status validate_depths(const DepthImage& image, const std::string& source) {
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options) {
   const auto within_budget = [&](const OIIO::ImageSpec& spec) {
     return check_memory(depth_build_memory_bytes(spec.width, spec.height, options.images), path,
-                        "a volume from " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                            " texels" + (options.images > 1 ? " x " + std::to_string(options.images) : ""));
+                        "a volume from " + std::to_string(spec.width) + "x" +
+                            std::to_string(spec.height) + " texels" +
+                            (options.images > 1 ? " x " + std::to_string(options.images) : ""));
   };
   const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
     const Result<int> channel = choose_channel(spec, options, path);
@@ -78,7 +78,8 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
                    "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
     return channel;
   };
-  Result<detail::ImageChannel> read = detail::read_image_channel(path, within_budget, select, "cannot read pixels");
+  Result<detail::ImageChannel> read =
+      detail::read_image_channel(path, within_budget, select, "cannot read pixels");
   if (!read) return read.error();
   DepthImage image;
   image.width = read->width;
@@ -93,10 +94,13 @@ namespace {
 // floats, rows stored bottom to top.
 static_assert(std::endian::native == std::endian::little, "PFM output assumes little-endian");
 Status write_pfm(const std::string& path, const DepthImage& image) {
-  std::string bytes = "Pf\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+  std::string bytes =
+      "Pf\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
   const std::size_t row_bytes = sizeof(float) * static_cast<std::size_t>(image.width);
   for (int r = image.height - 1; r >= 0; --r)
-    bytes.append(reinterpret_cast<const char*>(&image.values[static_cast<std::size_t>(r) * image.width]), row_bytes);
+    bytes.append(
+        reinterpret_cast<const char*>(&image.values[static_cast<std::size_t>(r) * image.width]),
+        row_bytes);
   return write_bytes_atomically(path, bytes);
 }
 }  // namespace
@@ -107,7 +111,9 @@ Status write_depth_image(const std::string& path, const DepthImage& image) {
   if (extension == ".pfm") return write_pfm(path, image);
   return write_file_atomically(path, [&](const std::string& temp_path) -> Status {
     auto out = OIIO::ImageOutput::create(path);
-    if (!out) return Error{path + ": cannot write images of this type: " + detail::oiio_message(OIIO::geterror())};
+    if (!out)
+      return Error{path +
+                   ": cannot write images of this type: " + detail::oiio_message(OIIO::geterror())};
     OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);

@@ -1,5 +1,3 @@
-#include <lightvol/export/export.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -18,6 +16,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/export/detail/flat_exporter.h>
 #include <lightvol/export/detail/ply_writer.h>
+#include <lightvol/export/export.h>
 #include <lightvol/io/detail/draco_mesh.h>
 #include <lightvol/io/detail/glb_reader.h>
 
@@ -25,7 +24,8 @@ namespace lightvol {
 
 Result<MeshFormat> mesh_format_from_path(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   if (ext == ".ply") return MeshFormat::ply;
   if (ext == ".obj") return MeshFormat::obj;
   if (ext == ".off") return MeshFormat::off;
@@ -68,14 +68,16 @@ Status check_bits(int bits) {
 
 // What a lossy encoding must preserve: the same number of faces, and a sound volume, proved with
 // the light when there is one, allowing for the quantization step (as `check` does on the file).
-Status verify_decoded(const Mesh& original, const detail::DracoMesh& decoded, const std::string& what,
-                      const ExportOptions& options) {
+Status verify_decoded(const Mesh& original, const detail::DracoMesh& decoded,
+                      const std::string& what, const ExportOptions& options) {
   if (decoded.mesh.num_triangles() != original.num_triangles())
-    return Error{what + ": " + std::to_string(original.num_triangles() - decoded.mesh.num_triangles()) +
+    return Error{what + ": " +
+                 std::to_string(original.num_triangles() - decoded.mesh.num_triangles()) +
                  " faces were lost (collapsed by quantization); raise --draco-bits"};
   if (options.light) {
     const CheckReport report = check_volume_linear(decoded.mesh, options.light, 1, decoded.step);
-    if (!report.valid()) return Error{what + ": " + report.first_failure() + "; raise --draco-bits"};
+    if (!report.valid())
+      return Error{what + ": " + report.first_failure() + "; raise --draco-bits"};
     return {};
   }
   if (Status s = check_closed_outward(decoded.mesh, what); !s)
@@ -92,9 +94,14 @@ Status write_with_openmesh(const std::string& path, const std::string& temp, Mes
       ext = "stl";
       if (!options.ascii) opts += OpenMesh::IO::Options::Binary;
       break;
-    case MeshFormat::obj: ext = "obj"; break;
-    case MeshFormat::off: ext = "off"; break;
-    default: LV_CHECK(false);
+    case MeshFormat::obj:
+      ext = "obj";
+      break;
+    case MeshFormat::off:
+      ext = "off";
+      break;
+    default:
+      LV_CHECK(false);
   }
   // OpenMesh chats on its log streams; a command-line tool speaks for itself.
   omlog().disable();
@@ -153,7 +160,8 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       Result<std::string> bytes = encode_draco(mesh, options.draco_bits);
       if (!bytes) return Error{path + ": " + bytes.error().message};
       const Result<detail::DracoMesh> back = detail::decode_draco(*bytes);
-      if (!back) return Error{path + ": Draco cannot decode what it encoded: " + back.error().message};
+      if (!back)
+        return Error{path + ": Draco cannot decode what it encoded: " + back.error().message};
       if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
       return write_bytes_atomically(path, *bytes);
     }
@@ -162,7 +170,8 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       if (!bytes) return Error{path + ": " + bytes.error().message};
       if (options.draco) {
         const Result<detail::DracoMesh> back = detail::read_glb(*bytes, path);
-        if (!back) return Error{path + ": cannot read the glTF just encoded: " + back.error().message};
+        if (!back)
+          return Error{path + ": cannot read the glTF just encoded: " + back.error().message};
         if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
       }
       return write_bytes_atomically(path, *bytes);

@@ -15,9 +15,9 @@ enum class MeshFormat { ply, obj, off, stl, drc, glb };
 Result<MeshFormat> mesh_format_from_path(const std::string& path);
 
 struct ExportOptions {
-  bool ascii = false;     // PLY: ASCII instead of binary little-endian; STL: ASCII instead of binary
-  int draco_bits = 16;    // DRC and compressed GLB: position quantization bits, 1..30
-  bool draco = false;     // GLB: compress with KHR_draco_mesh_compression
+  bool ascii = false;   // PLY: ASCII instead of binary little-endian; STL: ASCII instead of binary
+  int draco_bits = 16;  // DRC and compressed GLB: position quantization bits, 1..30
+  bool draco = false;   // GLB: compress with KHR_draco_mesh_compression
   // The volume's light, in the mesh's frame: a lossy encoding must then pass the light's
   // non-self-nesting proof too (check_volume_linear), as `lightvol check --light` will test it.
   const Light* light = nullptr;

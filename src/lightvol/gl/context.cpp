@@ -1,5 +1,3 @@
-#include <lightvol/gl/context.h>
-
 #include <cstdio>
 #include <cstring>
 
@@ -7,6 +5,7 @@
 #include <EGL/eglext.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/gl/context.h>
 
 namespace lightvol::gl {
 
@@ -18,17 +17,28 @@ namespace {
 
 std::string egl_error_name(EGLint code) {
   switch (code) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    default: return "EGL error " + std::to_string(code);
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
+    default:
+      return "EGL error " + std::to_string(code);
   }
 }
 
@@ -61,7 +71,8 @@ EGLDisplay open_display(std::string* platform, std::string* why) {
     return d;
   };
 
-  if (get_platform_display != nullptr && has_extension(client_ext, "EGL_MESA_platform_surfaceless")) {
+  if (get_platform_display != nullptr &&
+      has_extension(client_ext, "EGL_MESA_platform_surfaceless")) {
     EGLDisplay d = try_display(
         get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr),
         "surfaceless");
@@ -74,8 +85,8 @@ EGLDisplay open_display(std::string* platform, std::string* why) {
     EGLDeviceEXT devices[8];
     EGLint count = 0;
     if (query_devices(8, devices, &count) == EGL_TRUE && count > 0) {
-      EGLDisplay d = try_display(get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[0], nullptr),
-                                 "device");
+      EGLDisplay d =
+          try_display(get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[0], nullptr), "device");
       if (d != EGL_NO_DISPLAY) return d;
     }
   }
@@ -87,7 +98,8 @@ EGLDisplay open_display(std::string* platform, std::string* why) {
 Result<std::unique_ptr<Context>> Context::create() {
   std::string platform, why;
   EGLDisplay display = open_display(&platform, &why);
-  if (display == EGL_NO_DISPLAY) return Error{"no OpenGL: no EGL display could be opened (" + why + ")"};
+  if (display == EGL_NO_DISPLAY)
+    return Error{"no OpenGL: no EGL display could be opened (" + why + ")"};
 
   auto fail = [&](const std::string& what) -> Error {
     const std::string message = "no OpenGL: " + what + " (" + egl_error_name(eglGetError()) +
@@ -105,8 +117,10 @@ Result<std::unique_ptr<Context>> Context::create() {
     if (eglChooseConfig(display, attributes, &config, 1, &count) != EGL_TRUE || count < 1)
       return fail("no EGL config renders OpenGL");
   }
-  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
-                                       EGL_CONTEXT_MINOR_VERSION, 5,
+  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                       4,
+                                       EGL_CONTEXT_MINOR_VERSION,
+                                       5,
                                        EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                        EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                        EGL_NONE};
@@ -118,8 +132,8 @@ Result<std::unique_ptr<Context>> Context::create() {
   }
 
   std::string missing;
-#define LIGHTVOL_GL_LOAD(type, name)                                        \
-  name = reinterpret_cast<type>(eglGetProcAddress(#name));                  \
+#define LIGHTVOL_GL_LOAD(type, name)                       \
+  name = reinterpret_cast<type>(eglGetProcAddress(#name)); \
   if (name == nullptr) missing += std::string(missing.empty() ? "" : ", ") + #name;
   LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_LOAD)
 #undef LIGHTVOL_GL_LOAD
@@ -211,12 +225,18 @@ namespace {
 
 GLenum format_of(GLenum internal_format) {
   switch (internal_format) {
-    case GL_R32F: return GL_RED;
-    case GL_RG32F: return GL_RG;
-    case GL_RGB32F: return GL_RGB;
-    case GL_RGBA32F: return GL_RGBA;
-    case GL_DEPTH_COMPONENT32F: return GL_DEPTH_COMPONENT;
-    default: break;
+    case GL_R32F:
+      return GL_RED;
+    case GL_RG32F:
+      return GL_RG;
+    case GL_RGB32F:
+      return GL_RGB;
+    case GL_RGBA32F:
+      return GL_RGBA;
+    case GL_DEPTH_COMPONENT32F:
+      return GL_DEPTH_COMPONENT;
+    default:
+      break;
   }
   LV_CHECK(!"unsupported internal format");
   return GL_RED;
@@ -224,11 +244,16 @@ GLenum format_of(GLenum internal_format) {
 
 GLenum format_of_channels(int channels) {
   switch (channels) {
-    case 1: return GL_RED;
-    case 2: return GL_RG;
-    case 3: return GL_RGB;
-    case 4: return GL_RGBA;
-    default: break;
+    case 1:
+      return GL_RED;
+    case 2:
+      return GL_RG;
+    case 3:
+      return GL_RGB;
+    case 4:
+      return GL_RGBA;
+    default:
+      break;
   }
   LV_CHECK(!"channels must be 1, 2, 3 or 4");
   return GL_RED;
@@ -286,11 +311,13 @@ Result<Framebuffer> Framebuffer::create(int width, int height,
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (status != GL_FRAMEBUFFER_COMPLETE)
     return Error{"OpenGL: framebuffer " + std::to_string(width) + "x" + std::to_string(height) +
-                 " is incomplete (status 0x" + [&] {
+                 " is incomplete (status 0x" +
+                 [&] {
                    char buf[16];
                    std::snprintf(buf, sizeof buf, "%x", status);
                    return std::string(buf);
-                 }() + ")"};
+                 }() +
+                 ")"};
   return fb;
 }
 
@@ -332,13 +359,20 @@ double GpuTimer::seconds() const {
 std::string pending_error() {
   const GLenum e = glGetError();
   switch (e) {
-    case GL_NO_ERROR: return {};
-    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
-    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
-    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
-    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
-    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
-    default: return "GL error " + std::to_string(e);
+    case GL_NO_ERROR:
+      return {};
+    case GL_INVALID_ENUM:
+      return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE:
+      return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION:
+      return "GL_INVALID_OPERATION";
+    case GL_INVALID_FRAMEBUFFER_OPERATION:
+      return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_OUT_OF_MEMORY:
+      return "GL_OUT_OF_MEMORY";
+    default:
+      return "GL error " + std::to_string(e);
   }
 }
 

@@ -1,5 +1,3 @@
-#include <lightvol/io/mesh_reader.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -8,8 +6,8 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <string_view>
 #include <sstream>
+#include <string_view>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
@@ -23,6 +21,7 @@
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
 #include <lightvol/io/detail/ply_reader.h>
+#include <lightvol/io/mesh_reader.h>
 
 namespace lightvol {
 namespace {
@@ -46,8 +45,8 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
   // whose header promises billions must not make the readers allocate them).
   FlatImporter(Mesh* mesh, std::size_t max_elements) : mesh_(mesh), max_elements_(max_elements) {}
 
-  std::string error;           // the first bad face, if any
-  std::size_t polygons = 0;    // faces as read, before triangulation
+  std::string error;         // the first bad face, if any
+  std::size_t polygons = 0;  // faces as read, before triangulation
 
   VH add_vertex(const Vec3f& p) override {
     if (mesh_->num_vertices() >= max_elements_) {
@@ -58,8 +57,8 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
     return VH(static_cast<int>(mesh_->num_vertices() - 1));
   }
   VH add_vertex(const Vec3d& p) override {
-    return add_vertex(Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]),
-                            static_cast<float>(p[2])));
+    return add_vertex(
+        Vec3f(static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])));
   }
   VH add_vertex() override { return add_vertex(Vec3f(0, 0, 0)); }
   void set_point(VH v, const Vec3f& p) override {
@@ -78,8 +77,8 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
         error = "face " + std::to_string(face) + " has " + std::to_string(vs.size()) + " vertices";
       return FH();
     }
-    // A face's vertex list takes bytes in the file too (fuzz finding, when OpenMesh read PLY: a count of
-    // 32,749,287 in a 1 KB file, which OpenMesh filled in and we would have fanned out).
+    // A face's vertex list takes bytes in the file too (fuzz finding, when OpenMesh read PLY: a
+    // count of 32,749,287 in a 1 KB file, which OpenMesh filled in and we would have fanned out).
     if (vs.size() > max_elements_) {
       if (error.empty())
         error = "face " + std::to_string(face) + " lists " + std::to_string(vs.size()) +
@@ -96,10 +95,9 @@ class FlatImporter final : public OpenMesh::IO::BaseImporter {
       }
     }
     for (std::size_t k = 1; k + 1 < vs.size(); ++k) {
-      mesh_->indices.insert(mesh_->indices.end(),
-                            {static_cast<std::uint32_t>(vs[0].idx()),
-                             static_cast<std::uint32_t>(vs[k].idx()),
-                             static_cast<std::uint32_t>(vs[k + 1].idx())});
+      mesh_->indices.insert(mesh_->indices.end(), {static_cast<std::uint32_t>(vs[0].idx()),
+                                                   static_cast<std::uint32_t>(vs[k].idx()),
+                                                   static_cast<std::uint32_t>(vs[k + 1].idx())});
     }
     return FH(static_cast<int>(mesh_->num_triangles() - 1));
   }
@@ -190,10 +188,12 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
       if (first != std::string::npos && head.compare(first, 5, "solid") == 0 &&
           head.find('\0') == std::string::npos)
         return {};  // ASCII
-      return Error{path + ": not an STL file (binary size does not match its triangle count, and "
-                          "it does not start with 'solid')"};
+      return Error{path +
+                   ": not an STL file (binary size does not match its triangle count, and "
+                   "it does not start with 'solid')"};
     }
-    default: return {};
+    default:
+      return {};
   }
 }
 
@@ -239,36 +239,47 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
   counts.clear();
   counts.str(rest);
   long long nv = -1, nf = -1;
-  if (first.empty() && !next_line(&counts)) return Error{path + ": OFF file has no vertex and face counts"};
+  if (first.empty() && !next_line(&counts))
+    return Error{path + ": OFF file has no vertex and face counts"};
   if (!(counts >> nv >> nf)) return Error{at_line() + "expected the vertex and face counts"};
   const auto most = static_cast<long long>(max_elements(size));
   if (nv < 0 || nf < 0 || nv > most || nf > most || nv + nf > most)
-    return Error{path + ": OFF header: " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
-                 " faces cannot fit in " + std::to_string(size) + " bytes (truncated file?)"};
+    return Error{path + ": OFF header: " + std::to_string(nv) + " vertices and " +
+                 std::to_string(nf) + " faces cannot fit in " + std::to_string(size) +
+                 " bytes (truncated file?)"};
   Mesh mesh;
   mesh.positions.reserve(3 * static_cast<std::size_t>(nv));
   for (long long v = 0; v < nv; ++v) {
     if (!next_line(&words))
-      return Error{path + ": OFF file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices"};
+      return Error{path + ": OFF file ends after " + std::to_string(v) + " of " +
+                   std::to_string(nv) + " vertices"};
     double x = 0, y = 0, z = 0;
     if (!(words >> x >> y >> z)) return Error{at_line() + "expected a vertex: x y z"};
-    mesh.positions.insert(mesh.positions.end(), {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+    mesh.positions.insert(mesh.positions.end(),
+                          {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
   }
   std::vector<long long> face;
   for (long long f = 0; f < nf; ++f) {
     if (!next_line(&words))
-      return Error{path + ": OFF file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces"};
+      return Error{path + ": OFF file ends after " + std::to_string(f) + " of " +
+                   std::to_string(nf) + " faces"};
     long long n = 0;
     if (!(words >> n) || n < 3 || n > static_cast<long long>(line.size()))
-      return Error{at_line() + "expected a face: a vertex count of at least 3, then that many vertices"};
+      return Error{at_line() +
+                   "expected a face: a vertex count of at least 3, then that many vertices"};
     face.resize(static_cast<std::size_t>(n));
     for (long long& i : face) {
-      if (!(words >> i)) return Error{at_line() + "face " + std::to_string(f) + " lists fewer than " + std::to_string(n) + " vertices"};
+      if (!(words >> i))
+        return Error{at_line() + "face " + std::to_string(f) + " lists fewer than " +
+                     std::to_string(n) + " vertices"};
       if (i < 0 || i >= nv)
-        return Error{at_line() + "face " + std::to_string(f) + " names vertex " + std::to_string(i) + ", but there are " + std::to_string(nv)};
+        return Error{at_line() + "face " + std::to_string(f) + " names vertex " +
+                     std::to_string(i) + ", but there are " + std::to_string(nv)};
     }
     for (std::size_t k = 1; k + 1 < face.size(); ++k)
-      mesh.indices.insert(mesh.indices.end(), {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]), static_cast<std::uint32_t>(face[k + 1])});
+      mesh.indices.insert(mesh.indices.end(),
+                          {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
+                           static_cast<std::uint32_t>(face[k + 1])});
   }
   return mesh;
 }
@@ -313,9 +324,13 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
         const Error broken{path + ": OpenMesh's reader broke off its answer"};
         Error refusal;
         switch (in.read_verdict(&refusal)) {
-          case ChildInput::Verdict::broken: return broken;
-          case ChildInput::Verdict::refused: result = refusal; return {};
-          case ChildInput::Verdict::accepted: break;
+          case ChildInput::Verdict::broken:
+            return broken;
+          case ChildInput::Verdict::refused:
+            result = refusal;
+            return {};
+          case ChildInput::Verdict::accepted:
+            break;
         }
         Mesh mesh;
         Status refused;
@@ -328,7 +343,8 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
 }
 
 // DRC and GLB: the whole file in memory, decoded by Draco or read by the GLB reader.
-Result<Mesh> read_draco_or_glb(const std::string& path, MeshFormat format, double* quantization_step) {
+Result<Mesh> read_draco_or_glb(const std::string& path, MeshFormat format,
+                               double* quantization_step) {
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) return Error{path + ": cannot read: " + std::strerror(errno)};
@@ -336,7 +352,9 @@ Result<Mesh> read_draco_or_glb(const std::string& path, MeshFormat format, doubl
     return Error{path + ": not a GLB file (no 'glTF' magic)"};
   Result<detail::DracoMesh> decoded =
       format == MeshFormat::drc ? detail::decode_draco(bytes) : detail::read_glb(bytes, path);
-  if (!decoded) return Error{format == MeshFormat::drc ? path + ": " + decoded.error().message : decoded.error().message};
+  if (!decoded)
+    return Error{format == MeshFormat::drc ? path + ": " + decoded.error().message
+                                           : decoded.error().message};
   if (quantization_step) *quantization_step = decoded->step;
   return std::move(decoded->mesh);
 }
@@ -359,10 +377,10 @@ Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
 
   Result<Mesh> mesh = (*format == MeshFormat::drc || *format == MeshFormat::glb)
                           ? read_draco_or_glb(path, *format, quantization_step)
-                          : *format == MeshFormat::off ? read_off(path, size)
-                          : *format == MeshFormat::ply ? detail::read_ply(path, size)
-                          : *format == MeshFormat::obj ? detail::read_obj(path)
-                                                       : read_with_openmesh(path, *format, size);
+                      : *format == MeshFormat::off ? read_off(path, size)
+                      : *format == MeshFormat::ply ? detail::read_ply(path, size)
+                      : *format == MeshFormat::obj ? detail::read_obj(path)
+                                                   : read_with_openmesh(path, *format, size);
   if (!mesh) return mesh;
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};
   if (mesh->num_vertices() >= std::numeric_limits<std::uint32_t>::max())

@@ -1,5 +1,3 @@
-#include <lightvol/light/light.h>
-
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -9,23 +7,30 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/json_keys.h>
+#include <lightvol/light/light.h>
 
 namespace lightvol {
 
 std::string_view to_string(LightType type) {
   switch (type) {
-    case LightType::spot: return "spot";
-    case LightType::directional: return "directional";
-    case LightType::omni: return "omni";
+    case LightType::spot:
+      return "spot";
+    case LightType::directional:
+      return "directional";
+    case LightType::omni:
+      return "omni";
   }
   return "?";
 }
 
 std::string_view to_string(DepthEncoding encoding) {
   switch (encoding) {
-    case DepthEncoding::window: return "window";
-    case DepthEncoding::linear: return "linear";
-    case DepthEncoding::radial: return "radial";
+    case DepthEncoding::window:
+      return "window";
+    case DepthEncoding::linear:
+      return "linear";
+    case DepthEncoding::radial:
+      return "radial";
   }
   return "?";
 }
@@ -34,22 +39,22 @@ namespace {
 
 using nlohmann::json;
 
-#define LV_TRY_ASSIGN(var, expr)            \
-  auto var##_result = (expr);               \
+#define LV_TRY_ASSIGN(var, expr)                  \
+  auto var##_result = (expr);                     \
   if (!var##_result) return var##_result.error(); \
   auto var = std::move(*var##_result)
 
-constexpr const char* kAllKeys[] = {"type", "position", "direction", "up", "fov_y_deg", "aspect",
-                                    "ortho", "near", "far", "depth", "flip_y", "view",
-                                    "projection"};
+constexpr const char* kAllKeys[] = {"type",   "position", "direction", "up",  "fov_y_deg",
+                                    "aspect", "ortho",    "near",      "far", "depth",
+                                    "flip_y", "view",     "projection"};
 
 // Keys each type accepts in the parametric form; the matrix form swaps the geometric ones for
 // "view" and "projection".
 std::set<std::string> parametric_keys(LightType type) {
   switch (type) {
     case LightType::spot:
-      return {"type", "position", "direction", "up", "fov_y_deg", "aspect", "near", "far", "depth",
-              "flip_y"};
+      return {"type",   "position", "direction", "up",    "fov_y_deg",
+              "aspect", "near",     "far",       "depth", "flip_y"};
     case LightType::directional:
       return {"type", "position", "direction", "up", "ortho", "near", "far", "depth", "flip_y"};
     case LightType::omni:
@@ -71,15 +76,18 @@ Status parse_near_far(const KeyReader& keys, bool perspective, Light* light) {
   LV_TRY_ASSIGN(far, keys.number("far"));
   if (perspective && near <= 0)
     return keys.error("near", "must be > 0 for a perspective light, got " + format_number(near));
-  if (!perspective && near < 0) return keys.error("near", "must be >= 0, got " + format_number(near));
+  if (!perspective && near < 0)
+    return keys.error("near", "must be >= 0, got " + format_number(near));
   if (near >= far)
-    return keys.error("far", "must be greater than near (" + format_number(near) + "), got " + format_number(far));
+    return keys.error("far", "must be greater than near (" + format_number(near) + "), got " +
+                                 format_number(far));
   light->near = near;
   light->far = far;
   return {};
 }
 
-// Position, direction and up into a view matrix, rejecting a zero direction and a zero or parallel up.
+// Position, direction and up into a view matrix, rejecting a zero direction and a zero or parallel
+// up.
 Status parse_frame(const KeyReader& keys, Light* light) {
   LV_TRY_ASSIGN(position, keys.vec3("position"));
   LV_TRY_ASSIGN(direction, keys.vec3("direction"));
@@ -147,8 +155,9 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
 
   for (const auto& [key, value] : root.items()) {
     if (std::find(std::begin(kAllKeys), std::end(kAllKeys), key) == std::end(kAllKeys))
-      return keys.error(key, "unknown key (known: type, position, direction, up, fov_y_deg, "
-                             "aspect, ortho, near, far, depth, flip_y, view, projection)");
+      return keys.error(key,
+                        "unknown key (known: type, position, direction, up, fov_y_deg, "
+                        "aspect, ortho, near, far, depth, flip_y, view, projection)");
   }
 
   Light light;
@@ -170,10 +179,15 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
 
   if (keys.has("depth")) {
     LV_TRY_ASSIGN(name, keys.string("depth"));
-    if (name == "window") light.depth = DepthEncoding::window;
-    else if (name == "linear") light.depth = DepthEncoding::linear;
-    else if (name == "radial") light.depth = DepthEncoding::radial;
-    else return keys.error("depth", "expected \"window\", \"linear\" or \"radial\", got \"" + name + "\"");
+    if (name == "window")
+      light.depth = DepthEncoding::window;
+    else if (name == "linear")
+      light.depth = DepthEncoding::linear;
+    else if (name == "radial")
+      light.depth = DepthEncoding::radial;
+    else
+      return keys.error("depth",
+                        "expected \"window\", \"linear\" or \"radial\", got \"" + name + "\"");
   }
   if (keys.has("flip_y")) {
     LV_TRY_ASSIGN(flip, keys.boolean("flip_y"));
@@ -206,9 +220,11 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
       if (Status s = parse_near_far(keys, false, &light); !s) return s.error();
       LV_TRY_ASSIGN(o, keys.array4("ortho"));
       if (!(o[0] < o[1]) || !(o[2] < o[3]))
-        return keys.error("ortho", "extents [left, right, bottom, top] must have left < right and "
-                                   "bottom < top, got [" + format_number(o[0]) + ", " + format_number(o[1]) + ", " +
-                                   format_number(o[2]) + ", " + format_number(o[3]) + "]");
+        return keys.error("ortho",
+                          "extents [left, right, bottom, top] must have left < right and "
+                          "bottom < top, got [" +
+                              format_number(o[0]) + ", " + format_number(o[1]) + ", " +
+                              format_number(o[2]) + ", " + format_number(o[3]) + "]");
       light.projection = orthographic(o[0], o[1], o[2], o[3], light.near, light.far);
       break;
     }
@@ -240,8 +256,8 @@ std::string_view omni_face_tag(int face) {
 }
 
 Mat4d omni_face_view(const Light& light, int face) {
-  static constexpr Vec3d look[kOmniFaces] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0},
-                                             {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  static constexpr Vec3d look[kOmniFaces] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                             {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
   static constexpr Vec3d up[kOmniFaces] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1},
                                            {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
   LV_CHECK(face >= 0 && face < kOmniFaces);

@@ -33,8 +33,8 @@ struct Light {
   Mat4d projection;  // light eye → clip (omni: the 90° face projection)
   double near = 0;   // eye-space distances of the near and far planes, near < far
   double far = 1;
-  Vec3d position;    // world: the light (spot, omni) or the view origin (directional)
-  Vec3d direction;   // world, unit: where the light looks (spot, directional)
+  Vec3d position;   // world: the light (spot, omni) or the view origin (directional)
+  Vec3d direction;  // world, unit: where the light looks (spot, directional)
 
   bool is_perspective() const { return type != LightType::directional; }
 };
@@ -63,10 +63,10 @@ class Unprojector {
   // world, or the light's eye space (omni: world axes, origin at the light).
   Unprojector(const Light& light, int width, int height, int face, Space space);
 
-  // The point of texel (col, row) whose stored depth is `depth` (finite and ≥ 0; the caller checks).
-  // Depths at or beyond the far plane give the far plane's point, depths before the near plane the
-  // near plane's; for a directional light, depths at or before its near plane give the point
-  // min_t() of the way down the ray instead, so that no vertex lies in the cap's plane (see
+  // The point of texel (col, row) whose stored depth is `depth` (finite and ≥ 0; the caller
+  // checks). Depths at or beyond the far plane give the far plane's point, depths before the near
+  // plane the near plane's; for a directional light, depths at or before its near plane give the
+  // point min_t() of the way down the ray instead, so that no vertex lies in the cap's plane (see
   // min_t()). Returns false only for a radial depth that a parallel (directional) ray never
   // reaches: one smaller than the ray's distance from the light position.
   bool point(int col, int row, double depth, Vec3d* out) const;

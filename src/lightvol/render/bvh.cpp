@@ -1,10 +1,9 @@
-#include <lightvol/render/bvh.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include <lightvol/core/check.h>
+#include <lightvol/render/bvh.h>
 
 namespace lightvol {
 

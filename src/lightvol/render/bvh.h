@@ -11,8 +11,8 @@
 namespace lightvol {
 
 struct RayHit {
-  double t = 0;        // ray parameter (world units along a unit direction)
-  double facing = 0;   // dot(triangle normal, ray direction): > 0 leaving (back face), < 0 entering
+  double t = 0;       // ray parameter (world units along a unit direction)
+  double facing = 0;  // dot(triangle normal, ray direction): > 0 leaving (back face), < 0 entering
   std::uint32_t triangle = 0;
 };
 

@@ -1,5 +1,3 @@
-#include <lightvol/render/gl_marchers.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -7,6 +5,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/gl/context.h>
+#include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
 
 namespace lightvol {
@@ -18,13 +17,15 @@ std::vector<float> window_depth_maps(const Light& light, const std::vector<Depth
   for (std::size_t f = 0; f < maps.size(); ++f) {
     const DepthImage& map = maps[f];
     const Unprojector un(light, map.width, map.height, static_cast<int>(f), Space::world);
-    const Mat4d view = light.type == LightType::omni ? omni_face_view(light, static_cast<int>(f)) : light.view;
+    const Mat4d view =
+        light.type == LightType::omni ? omni_face_view(light, static_cast<int>(f)) : light.view;
     const Mat4d to_clip = light.projection * view;
     for (int row = 0; row < map.height; ++row)
       for (int col = 0; col < map.width; ++col) {
         Vec3d p;
         double window = 1.0;
-        if (un.point(col, row, map.at(col, row), &p)) window = 0.5 * to_clip.transform_point(p).z + 0.5;
+        if (un.point(col, row, map.at(col, row), &p))
+          window = 0.5 * to_clip.transform_point(p).z + 0.5;
         out.push_back(static_cast<float>(std::clamp(window, 0.0, 1.0)));
       }
   }
@@ -234,7 +235,8 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
       return Error{sources[f] + ": shadow map face is " + std::to_string(maps[f].width) + "x" +
                    std::to_string(maps[f].height) + ", the first is " +
                    std::to_string(maps[0].width) + "x" + std::to_string(maps[0].height)};
-  if (options.samples < 1 || options.interleave < 1) return Error{"raymarch: samples and interleave must be >= 1"};
+  if (options.samples < 1 || options.interleave < 1)
+    return Error{"raymarch: samples and interleave must be >= 1"};
 
   std::unique_ptr<GlMarcher> r(new GlMarcher());
   r->state_ = std::make_unique<State>();
@@ -242,8 +244,9 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
   s.scene = scene;
   s.options = options;
   const bool march = options.method == MarchMethod::raymarch;
-  Result<Program> first = Program::compile(kFullscreenVs, with_common(march ? kMarchFs : kOcclusionFs),
-                                           march ? "raymarch" : "radial occlusion");
+  Result<Program> first =
+      Program::compile(kFullscreenVs, with_common(march ? kMarchFs : kOcclusionFs),
+                       march ? "raymarch" : "radial occlusion");
   if (!first) return first.error();
   s.first = std::move(*first);
   Result<Program> second = Program::compile(kFullscreenVs, march ? kGatherFs : kRadialFs,
@@ -266,19 +269,21 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
   glUniform1i(s.first.uniform("surface"), 0);
   if (march) {
     const std::vector<float> window = window_depth_maps(light, maps);
-    s.shadow = make_texture_2d(maps[0].width, maps[0].height * static_cast<int>(maps.size()), GL_R32F,
-                               window.data(), 1);
+    s.shadow = make_texture_2d(maps[0].width, maps[0].height * static_cast<int>(maps.size()),
+                               GL_R32F, window.data(), 1);
     glUniform1i(s.first.uniform("shadow"), 1);
     glUniform2i(s.first.uniform("map_size"), maps[0].width, maps[0].height);
     glUniform1i(s.first.uniform("faces"), static_cast<int>(maps.size()));
     glUniform1i(s.first.uniform("map_flip_y"), light.flip_y ? 1 : 0);
     for (std::size_t f = 0; f < maps.size(); ++f) {
       const std::string name = "light_views[" + std::to_string(f) + "]";
-      set_matrix(s.first, name.c_str(),
-                 light.type == LightType::omni ? omni_face_view(light, static_cast<int>(f)) : light.view);
+      set_matrix(
+          s.first, name.c_str(),
+          light.type == LightType::omni ? omni_face_view(light, static_cast<int>(f)) : light.view);
     }
     set_matrix(s.first, "light_projection", light.projection);
-    // Bounds: omni, a cube of half-size `far` around the light; else the frustum's box in eye space.
+    // Bounds: omni, a cube of half-size `far` around the light; else the frustum's box in eye
+    // space.
     Vec3d lo{-light.far, -light.far, -light.far}, hi{light.far, light.far, light.far};
     if (light.type != LightType::omni) {
       bool ok = false;
@@ -287,7 +292,8 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
       lo = {1e300, 1e300, 1e300};
       hi = {-1e300, -1e300, -1e300};
       for (int k = 0; k < 8; ++k) {
-        const Vec3d c = inv.transform_point({k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0});
+        const Vec3d c =
+            inv.transform_point({k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0});
         lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
         hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
       }
@@ -318,7 +324,8 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
     glUniform1f(s.radial.uniform("density"), float(options.density));
   }
   glUseProgram(0);
-  if (std::string e = pending_error(); !e.empty()) return Error{"OpenGL: setting up the marcher: " + e};
+  if (std::string e = pending_error(); !e.empty())
+    return Error{"OpenGL: setting up the marcher: " + e};
   return r;
 }
 

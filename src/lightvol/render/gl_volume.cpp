@@ -1,12 +1,11 @@
-#include <lightvol/render/gl_volume.h>
-
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
 
 #include <lightvol/core/check.h>
+#include <lightvol/render/gl_volume.h>
 
 namespace lightvol {
 
@@ -183,8 +182,10 @@ void set_scene_uniforms(const Program& program, const RenderScene& scene) {
   const SpotProfile& profile = scene.medium.profile;
   const bool use_profile = profile.enabled() && light.type == LightType::spot;
   glUniform1i(program.uniform("profile_enabled"), use_profile ? 1 : 0);
-  glUniform1f(program.uniform("profile_cos_inner"), f(std::cos(profile.inner_deg * std::numbers::pi / 180)));
-  glUniform1f(program.uniform("profile_cos_outer"), f(std::cos(profile.outer_deg * std::numbers::pi / 180)));
+  glUniform1f(program.uniform("profile_cos_inner"),
+              f(std::cos(profile.inner_deg * std::numbers::pi / 180)));
+  glUniform1f(program.uniform("profile_cos_outer"),
+              f(std::cos(profile.outer_deg * std::numbers::pi / 180)));
 }
 
 // ---- the F(u, v) table --------------------------------------------------------------------------
@@ -212,8 +213,9 @@ const SunTable& sun_table() {
         for (int p = 0; p < 2; ++p) {
           const double mid = lo + (p + 0.5) * 0.5 * dv, half = 0.25 * dv;
           for (int k = 0; k < 4; ++k)
-            sum += half * w[k] * (std::exp(-u * std::tan(mid - half * x[k])) +
-                                  std::exp(-u * std::tan(mid + half * x[k])));
+            sum += half * w[k] *
+                   (std::exp(-u * std::tan(mid - half * x[k])) +
+                    std::exp(-u * std::tan(mid + half * x[k])));
         }
         t.values[static_cast<std::size_t>(i) * t.cols + j] = static_cast<float>(sum);
       }
@@ -403,13 +405,15 @@ Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderS
   s.volume.use();
   glUniform1i(s.volume.uniform("surface"), 0);
   // The profile's soft edge is only C1: more panels keep the quadrature at float accuracy.
-  glUniform1i(s.volume.uniform("panels"), scene.medium.profile.enabled() ? std::max(options.panels, 8) : options.panels);
+  glUniform1i(s.volume.uniform("panels"),
+              scene.medium.profile.enabled() ? std::max(options.panels, 8) : options.panels);
   glUniform1f(s.volume.uniform("facing_sign"), s.facing_sign);
   glUniformMatrix4fv(s.volume.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
   s.resolve.use();
   glUniform1i(s.resolve.uniform("accumulated"), 0);
   glUseProgram(0);
-  if (std::string e = pending_error(); !e.empty()) return Error{"OpenGL: setting up the volume renderer: " + e};
+  if (std::string e = pending_error(); !e.empty())
+    return Error{"OpenGL: setting up the volume renderer: " + e};
   return r;
 }
 

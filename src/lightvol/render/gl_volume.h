@@ -34,7 +34,7 @@ namespace lightvol {
 
 struct GlVolumeOptions {
   bool baseline = true;  // integrate fragments from the closest point to the light (see above)
-  int panels = 2;        // Gauss–Legendre panels (8 nodes each) per fragment for quadrature phases
+  int panels = 2;  // Gauss–Legendre panels (8 nodes each) per fragment for quadrature phases
 };
 
 // Renders light volumes of one scene. Needs a current gl::Context on this thread for its lifetime.

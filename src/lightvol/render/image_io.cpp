@@ -1,5 +1,3 @@
-#include <lightvol/render/image_io.h>
-
 #include <algorithm>
 #include <cmath>
 
@@ -8,6 +6,7 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/depth/detail/image_file.h>
+#include <lightvol/render/image_io.h>
 
 namespace lightvol {
 
@@ -16,7 +15,8 @@ namespace {
 std::string lower_extension(const std::string& path) {
   const auto dot = path.find_last_of('.');
   std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
   return ext;
 }
 
@@ -28,7 +28,8 @@ double srgb(double x) {
 
 Status write_image(const std::string& path, const Image& image, double exposure) {
   const std::string ext = lower_extension(path);
-  const bool eight_bit = ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "bmp" || ext == "tga";
+  const bool eight_bit =
+      ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "bmp" || ext == "tga";
   const std::size_t n = image.values.size();
   return write_file_atomically(path, [&](const std::string& temp) -> Status {
     auto out = OIIO::ImageOutput::create(temp);
@@ -45,7 +46,8 @@ Status write_image(const std::string& path, const Image& image, double exposure)
         double p = 0;
         if (!sorted.empty()) {
           const std::size_t k = std::min(sorted.size() - 1, sorted.size() * 995 / 1000);
-          std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+          std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k),
+                           sorted.end());
           p = sorted[k];
         }
         scale = p > 0 ? 4.0 / p : 1.0;
@@ -73,16 +75,20 @@ Status write_image(const std::string& path, const Image& image, double exposure)
 Result<Image> read_image(const std::string& path) {
   // A float per texel while reading, and the image's own values.
   const auto within_budget = [&](const OIIO::ImageSpec& spec) {
-    const auto texels = static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
-    return check_memory(texels * (sizeof(float) + sizeof(double)), path,
-                        "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
+    const auto texels =
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+    return check_memory(
+        texels * (sizeof(float) + sizeof(double)), path,
+        "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
   };
   const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
-    if (spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::INT8)
+    if (spec.format.basetype == OIIO::TypeDesc::UINT8 ||
+        spec.format.basetype == OIIO::TypeDesc::INT8)
       return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
     return 0;
   };
-  const Result<detail::ImageChannel> read = detail::read_image_channel(path, within_budget, select, "cannot read image");
+  const Result<detail::ImageChannel> read =
+      detail::read_image_channel(path, within_budget, select, "cannot read image");
   if (!read) return read.error();
   Image image;
   image.width = read->width;

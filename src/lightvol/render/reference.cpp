@@ -1,5 +1,3 @@
-#include <lightvol/render/reference.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,6 +7,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/render/bvh.h>
+#include <lightvol/render/reference.h>
 
 namespace lightvol {
 
@@ -25,7 +24,8 @@ ImageDifference compare_images(const Image& image, const Image& reference) {
   ImageDifference out;
   out.relative_l2 = ref2 > 0 ? std::sqrt(diff2 / ref2) : std::sqrt(diff2);
   out.max_abs = max_abs;
-  const double rmse = image.values.empty() ? 0 : std::sqrt(diff2 / static_cast<double>(image.values.size()));
+  const double rmse =
+      image.values.empty() ? 0 : std::sqrt(diff2 / static_cast<double>(image.values.size()));
   out.psnr_db = rmse > 0 ? 20.0 * std::log10(peak / rmse) : std::numeric_limits<double>::infinity();
   return out;
 }
@@ -39,34 +39,35 @@ Image render_reference(const Mesh& volume, const RenderScene& scene) {
   image.height = cam.height;
   image.values.assign(scene.surface.size(), 0.0);
   const Bvh bvh(volume);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<RayHit> hits;
-    for (int row = rows.begin(); row < rows.end(); ++row) {
-      for (int col = 0; col < cam.width; ++col) {
-        const std::size_t i = static_cast<std::size_t>(row) * cam.width + col;
-        const Ray ray = pixel_ray(cam, col, row);
-        hits.clear();
-        bvh.intersect_all(ray.origin, ray.direction, 0.0, &hits);
-        dedupe_hits(&hits);
-        if (hits.empty()) continue;
-        const RayAirlight la(scene.light, scene.medium, ray);
-        const double surface = scene.surface[i];
-        double sum = 0;
-        // Hits beyond the surface all clamp to it and share one value.
-        double at_surface = std::numeric_limits<double>::quiet_NaN();
-        for (const RayHit& h : hits) {
-          const double sign = h.facing > 0 ? 1.0 : -1.0;
-          if (h.t >= surface) {
-            if (std::isnan(at_surface)) at_surface = la(surface);
-            sum += sign * at_surface;
-          } else {
-            sum += sign * la(h.t);
-          }
-        }
-        image.values[i] = sum;
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
+                    [&](const tbb::blocked_range<int>& rows) {
+                      std::vector<RayHit> hits;
+                      for (int row = rows.begin(); row < rows.end(); ++row) {
+                        for (int col = 0; col < cam.width; ++col) {
+                          const std::size_t i = static_cast<std::size_t>(row) * cam.width + col;
+                          const Ray ray = pixel_ray(cam, col, row);
+                          hits.clear();
+                          bvh.intersect_all(ray.origin, ray.direction, 0.0, &hits);
+                          dedupe_hits(&hits);
+                          if (hits.empty()) continue;
+                          const RayAirlight la(scene.light, scene.medium, ray);
+                          const double surface = scene.surface[i];
+                          double sum = 0;
+                          // Hits beyond the surface all clamp to it and share one value.
+                          double at_surface = std::numeric_limits<double>::quiet_NaN();
+                          for (const RayHit& h : hits) {
+                            const double sign = h.facing > 0 ? 1.0 : -1.0;
+                            if (h.t >= surface) {
+                              if (std::isnan(at_surface)) at_surface = la(surface);
+                              sum += sign * at_surface;
+                            } else {
+                              sum += sign * la(h.t);
+                            }
+                          }
+                          image.values[i] = sum;
+                        }
+                      }
+                    });
   return image;
 }
 

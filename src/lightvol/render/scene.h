@@ -31,8 +31,8 @@ struct Image {
 // Comparison of an image against a reference of the same size.
 struct ImageDifference {
   double relative_l2 = 0;  // ‖a − ref‖₂ / ‖ref‖₂ (the absolute L2 when the reference is zero)
-  double max_abs = 0;      // max |a − ref|
-  double psnr_db = 0;      // 20 log10(max |ref| / RMSE); +infinity for identical images
+  double max_abs = 0;  // max |a − ref|
+  double psnr_db = 0;  // 20 log10(max |ref| / RMSE); +infinity for identical images
 };
 ImageDifference compare_images(const Image& image, const Image& reference);
 

@@ -1,5 +1,3 @@
-#include <lightvol/scene/raycast.h>
-
 #include <algorithm>
 #include <cstddef>
 
@@ -7,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/scene/raycast.h>
 #include <lightvol/scene/scene.h>
 
 namespace lightvol {
@@ -57,7 +56,8 @@ std::vector<double> raycast_window_depth(const Bvh& bvh, const Light& light, int
     std::vector<RayHit> hits;
     for (int row = range.begin(); row < range.end(); ++row)
       for (int col = 0; col < width; ++col)
-        depth[static_cast<std::size_t>(row) * width + col] = rays.cast(bvh, col + 0.5, row + 0.5, &hits);
+        depth[static_cast<std::size_t>(row) * width + col] =
+            rays.cast(bvh, col + 0.5, row + 0.5, &hits);
   });
   return depth;
 }

@@ -1,5 +1,3 @@
-#include <lightvol/scene/scene.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -7,6 +5,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/io/mesh_reader.h>
+#include <lightvol/scene/scene.h>
 
 namespace lightvol {
 
@@ -71,7 +70,9 @@ DepthImage encode(const Light& light, int width, int height, const std::vector<T
       if (d >= 1.0) {
         // Round away from the light so that the stored float still reads as the far plane.
         const float f = static_cast<float>(value);
-        value = static_cast<double>(f) < value ? std::nextafter(f, std::numeric_limits<float>::max()) : f;
+        value = static_cast<double>(f) < value
+                    ? std::nextafter(f, std::numeric_limits<float>::max())
+                    : f;
       }
       out.values[i] = static_cast<float>(value);
     }
@@ -81,11 +82,13 @@ DepthImage encode(const Light& light, int width, int height, const std::vector<T
 
 }  // namespace
 
-DepthImage encode_depth(const Light& light, int width, int height, const std::vector<double>& window) {
+DepthImage encode_depth(const Light& light, int width, int height,
+                        const std::vector<double>& window) {
   return encode(light, width, height, window);
 }
 
-DepthImage encode_depth(const Light& light, int width, int height, const std::vector<float>& window) {
+DepthImage encode_depth(const Light& light, int width, int height,
+                        const std::vector<float>& window) {
   return encode(light, width, height, window);
 }
 
@@ -100,7 +103,9 @@ DepthImage depth_preview(const Light& light, int width, int height,
   const Mat4d inv_projection = inverse(light.projection, &ok);
   LV_CHECK(ok);
   // −z_eye of window depth d on the view axis (the projections here map it independently of x, y).
-  const auto eye_depth = [&](double d) { return -inv_projection.transform_point({0, 0, 2 * d - 1}).z; };
+  const auto eye_depth = [&](double d) {
+    return -inv_projection.transform_point({0, 0, 2 * d - 1}).z;
+  };
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const std::vector<float>& pass : passes) {
     LV_CHECK_EQ(pass.size(), n);
@@ -114,7 +119,8 @@ DepthImage depth_preview(const Light& light, int width, int height,
   for (std::size_t p = 0; p < passes.size(); ++p)
     for (std::size_t i = 0; i < n; ++i) {
       const float d = passes[p][i];
-      if (d < 1.0f) out.values[p * n + i] = static_cast<float>(1.0 - 0.9 * (eye_depth(d) - lo) / range);
+      if (d < 1.0f)
+        out.values[p * n + i] = static_cast<float>(1.0 - 0.9 * (eye_depth(d) - lo) / range);
     }
   return out;
 }

@@ -45,8 +45,10 @@ inline int pass_count(const Light& light) { return light.type == LightType::omni
 // window is kept; linear becomes −z_eye; radial |p_eye| (the distance to the light position, or
 // for a directional light to its view origin). Window depths ≥ 1 ("nothing hit") become 1, the
 // far distance, or the texel ray's distance to the far plane, so they still read as the far plane.
-DepthImage encode_depth(const Light& light, int width, int height, const std::vector<double>& window);
-DepthImage encode_depth(const Light& light, int width, int height, const std::vector<float>& window);
+DepthImage encode_depth(const Light& light, int width, int height,
+                        const std::vector<double>& window);
+DepthImage encode_depth(const Light& light, int width, int height,
+                        const std::vector<float>& window);
 
 // A picture of window-depth passes for people: the passes (each W×H) stacked top to bottom, each
 // texel's eye-space depth −z_eye mapped linearly from the nearest hit (1, white) to the farthest

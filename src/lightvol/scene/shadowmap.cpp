@@ -1,11 +1,10 @@
-#include <lightvol/scene/shadowmap.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <string>
 
 #include <lightvol/core/check.h>
+#include <lightvol/scene/shadowmap.h>
 
 namespace lightvol {
 
@@ -42,7 +41,8 @@ void set_matrix(const Program& program, const Mat4d& m) {
 
 Result<ShadowMapRenderer> ShadowMapRenderer::create(const Mesh& scene) {
   ShadowMapRenderer r;
-  Result<Program> program = Program::compile(kVertexShader, kFragmentShader, "shadow-map depth pass");
+  Result<Program> program =
+      Program::compile(kVertexShader, kFragmentShader, "shadow-map depth pass");
   if (!program) return program.error();
   r.program_ = std::move(*program);
 
@@ -102,7 +102,8 @@ Result<std::vector<float>> ShadowMapRenderer::render_window_depth(const Light& l
                  ": " + e};
   if (light.flip_y) {
     const std::size_t w = static_cast<std::size_t>(width);
-    for (std::size_t top = 0, bottom = static_cast<std::size_t>(height) - 1; top < bottom; ++top, --bottom)
+    for (std::size_t top = 0, bottom = static_cast<std::size_t>(height) - 1; top < bottom;
+         ++top, --bottom)
       std::swap_ranges(depth.begin() + static_cast<std::ptrdiff_t>(top * w),
                        depth.begin() + static_cast<std::ptrdiff_t>((top + 1) * w),
                        depth.begin() + static_cast<std::ptrdiff_t>(bottom * w));

@@ -1,4 +1,4 @@
-#include <lightvol/tessellate/adaptive_grid.h>
+#include <sys/mman.h>
 
 #include <algorithm>
 #include <array>
@@ -13,8 +13,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/check.h>
-
-#include <sys/mman.h>
+#include <lightvol/tessellate/adaptive_grid.h>
 
 namespace lightvol {
 
@@ -28,7 +27,8 @@ std::unique_ptr<double[]> uninitialized_array(std::size_t n) {
   const auto begin = reinterpret_cast<std::uintptr_t>(a.get());
   const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
   const std::uintptr_t end = (begin + n * sizeof(double)) & ~(kHuge - 1);
-  if (end > aligned + 4 * kHuge) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
+  if (end > aligned + 4 * kHuge)
+    ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
   return a;
 }
 
@@ -124,7 +124,6 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   return t;
 }
 
-
 // ---- triangles over the lattice ----------------------------------------------------------------
 
 namespace {
@@ -143,7 +142,8 @@ std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b)
 // exactly what the emitted flat triangle gives along each texel ray.
 template <bool kUniform>
 double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, int y_end) {
-  std::int64_t area2 = std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
+  std::int64_t area2 =
+      std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
   if (area2 < 0) {
     std::swap(b, c);
     area2 = -area2;
@@ -209,7 +209,9 @@ double triangle_error(const TexelDepths& t, Pt a, Pt b, Pt c) {
   if (static_cast<std::int64_t>(y1 - y0) * (x1 - x0) < (1 << 16)) return rows(y0, y1);
   return tbb::parallel_reduce(
       tbb::blocked_range<int>(y0, y1, 16), 0.0,
-      [&](const tbb::blocked_range<int>& r, double m) { return std::max(m, rows(r.begin(), r.end())); },
+      [&](const tbb::blocked_range<int>& r, double m) {
+        return std::max(m, rows(r.begin(), r.end()));
+      },
       [](double p, double q) { return std::max(p, q); });
 }
 
@@ -255,7 +257,8 @@ double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begi
   double worst = 0;
   for (int y = y_begin; y < y_end; ++y) {
     const int s = y - b.y0;
-    const int xs = b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
+    const int xs =
+        b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
     const double* dt = t.depth_row(y);
     const double base1 = da + g1y * s, base2 = dd + g2y * (y - b.y1);
     double m = 0;
@@ -297,7 +300,6 @@ double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin,
   return t.uniform() ? box_error_rows_t<true>(t, b, y_begin, y_end)
                      : box_error_rows_t<false>(t, b, y_begin, y_end);
 }
-
 
 // Edge-split bits of a cell's configuration.
 enum : unsigned { kSplitTop = 1, kSplitRight = 2, kSplitBottom = 4, kSplitLeft = 8 };
@@ -370,7 +372,8 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
           const auto at = [&](int cc, int rr) {
             return texels_.window_depth(std::clamp(cc, 0, w - 1), std::clamp(rr, 0, h - 1));
           };
-          const double lap = at(c - 1, r) + at(c + 1, r) + at(c, r - 1) + at(c, r + 1) - 4 * at(c, r);
+          const double lap =
+              at(c - 1, r) + at(c + 1, r) + at(c, r - 1) + at(c, r + 1) - 4 * at(c, r);
           edges[static_cast<std::size_t>(r) * w + c] = round_up(std::abs(lap));
         }
     });
@@ -383,21 +386,24 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
   const auto compute = [&](int level, int i, int j) {
     const Quadtree::Box b = q.box(level, i, j);
     float v = 0;
-    if (refinement_ == Refinement::max_error && level == 1 && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+    if (refinement_ == Refinement::max_error && level == 1 && b.x1 - b.x0 == 2 &&
+        b.y1 - b.y0 == 2) {
       // A whole level-1 cell: five texels, each halfway along an edge or the diagonal.
       const TexelDepths& t = texels_;
       const int x = b.x0, y = b.y0;
       const double da = t.window_depth(x, y), db = t.window_depth(x + 2, y),
                    dc = t.window_depth(x, y + 2), dd = t.window_depth(x + 2, y + 2);
-      const double e = std::max({t.error(x + 1, y, 0.5 * (da + db)), t.error(x, y + 1, 0.5 * (da + dc)),
-                                 t.error(x + 1, y + 1, 0.5 * (db + dc)), t.error(x + 2, y + 1, 0.5 * (db + dd)),
-                                 t.error(x + 1, y + 2, 0.5 * (dc + dd))});
+      const double e =
+          std::max({t.error(x + 1, y, 0.5 * (da + db)), t.error(x, y + 1, 0.5 * (da + dc)),
+                    t.error(x + 1, y + 1, 0.5 * (db + dc)), t.error(x + 2, y + 1, 0.5 * (db + dd)),
+                    t.error(x + 1, y + 2, 0.5 * (dc + dd))});
       v = round_up(e);
     } else if (refinement_ == Refinement::max_error) {
       v = round_up(box_error_rows(texels_, b, b.y0, b.y1 + 1));
     } else if (level == 1) {
       for (int y = b.y0; y <= b.y1; ++y)
-        for (int x = b.x0; x <= b.x1; ++x) v = std::max(v, edges[static_cast<std::size_t>(y) * w + x]);
+        for (int x = b.x0; x <= b.x1; ++x)
+          v = std::max(v, edges[static_cast<std::size_t>(y) * w + x]);
     }
     if (level > 1) {
       const std::vector<float>& below = value_[level - 1];
@@ -418,16 +424,17 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
     const int ntx = q.nx(tile);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.cells(tile)),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t t = range.begin(); t != range.end(); ++t) {
-        const int ti = static_cast<int>(t % ntx), tj = static_cast<int>(t / ntx);
-        for (int level = 1; level <= tile; ++level) {
-          const int span = 1 << (tile - level);
-          const int i1 = std::min((ti + 1) * span, q.nx(level)), j1 = std::min((tj + 1) * span, q.ny(level));
-          for (int j = tj * span; j < j1; ++j)
-            for (int i = ti * span; i < i1; ++i) compute(level, i, j);
-        }
-      }
-    });
+                        for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                          const int ti = static_cast<int>(t % ntx), tj = static_cast<int>(t / ntx);
+                          for (int level = 1; level <= tile; ++level) {
+                            const int span = 1 << (tile - level);
+                            const int i1 = std::min((ti + 1) * span, q.nx(level)),
+                                      j1 = std::min((tj + 1) * span, q.ny(level));
+                            for (int j = tj * span; j < j1; ++j)
+                              for (int i = ti * span; i < i1; ++i) compute(level, i, j);
+                          }
+                        }
+                      });
   }
   if (top_ > tile && refinement_ == Refinement::max_error) {
     using Own = std::vector<std::vector<double>>;  // per upper level, per cell
@@ -456,7 +463,8 @@ RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
           return a;
         });
     for (int level = tile + 1; level <= top_; ++level)
-      for (std::size_t c = 0; c < own[level].size(); ++c) value_[level][c] = round_up(own[level][c]);
+      for (std::size_t c = 0; c < own[level].size(); ++c)
+        value_[level][c] = round_up(own[level][c]);
   }
   for (int level = tile + 1; level <= top_; ++level) {
     // Upper levels: the max with the children (own measures are in place).
@@ -510,10 +518,18 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
       for (int level = top; level >= 1 && (p & ((1 << level) - 1)) != 0; --level) {
         const int k = p >> level;
         switch (side) {
-          case kTop: set_split(level, k, 0); break;
-          case kBottom: set_split(level, k, q.ny(level) - 1); break;
-          case kLeft: set_split(level, 0, k); break;
-          default: set_split(level, q.nx(level) - 1, k); break;
+          case kTop:
+            set_split(level, k, 0);
+            break;
+          case kBottom:
+            set_split(level, k, q.ny(level) - 1);
+            break;
+          case kLeft:
+            set_split(level, 0, k);
+            break;
+          default:
+            set_split(level, q.nx(level) - 1, k);
+            break;
         }
       }
     }
@@ -568,21 +584,22 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
     for (int level = 2; level <= top; ++level) {
       const int nx = q.nx(level);
       std::vector<std::uint8_t>& s = split[level];
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s.size(), 1024),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t cell = range.begin(); cell != range.end(); ++cell) {
-          if (s[cell]) continue;
-          const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
-          const int l = level - 1, ci = 2 * i, cj = 2 * j;
-          const bool any = is_split(l, ci, cj) || is_split(l, ci + 1, cj) ||
-                           is_split(l, ci, cj + 1) || is_split(l, ci + 1, cj + 1) ||
-                           is_split(l, ci - 1, cj) || is_split(l, ci - 1, cj + 1) ||
-                           is_split(l, ci + 2, cj) || is_split(l, ci + 2, cj + 1) ||
-                           is_split(l, ci, cj - 1) || is_split(l, ci + 1, cj - 1) ||
-                           is_split(l, ci, cj + 2) || is_split(l, ci + 1, cj + 2);
-          if (any) s[cell] = 1;
-        }
-      });
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, s.size(), 1024),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t cell = range.begin(); cell != range.end(); ++cell) {
+              if (s[cell]) continue;
+              const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
+              const int l = level - 1, ci = 2 * i, cj = 2 * j;
+              const bool any = is_split(l, ci, cj) || is_split(l, ci + 1, cj) ||
+                               is_split(l, ci, cj + 1) || is_split(l, ci + 1, cj + 1) ||
+                               is_split(l, ci - 1, cj) || is_split(l, ci - 1, cj + 1) ||
+                               is_split(l, ci + 2, cj) || is_split(l, ci + 2, cj + 1) ||
+                               is_split(l, ci, cj - 1) || is_split(l, ci + 1, cj - 1) ||
+                               is_split(l, ci, cj + 2) || is_split(l, ci + 1, cj + 2);
+              if (any) s[cell] = 1;
+            }
+          });
     }
     if (!bounded) break;
 
@@ -640,29 +657,31 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
   const auto mark = [&](Pt p) {
     std::atomic_ref<std::uint64_t> word(used[static_cast<std::size_t>(p.y) * words + p.x / 64]);
     const std::uint64_t bit = std::uint64_t{1} << (p.x % 64);
-    if ((word.load(std::memory_order_relaxed) & bit) == 0) word.fetch_or(bit, std::memory_order_relaxed);
+    if ((word.load(std::memory_order_relaxed) & bit) == 0)
+      word.fetch_or(bit, std::memory_order_relaxed);
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size()),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const int level = blocks[k].level;
-      std::uint64_t tris = 0, leaves = 0;
-      for_each_leaf(blocks[k], [&](int i, int j) {
-        const Quadtree::Box b = q.box(level, i, j);
-        const unsigned config = config_of(level, i, j, b);
-        ++leaves;
-        tris += 2 + static_cast<unsigned>(std::popcount(config));
-        mark({b.x0, b.y0}), mark({b.x1, b.y0}), mark({b.x0, b.y1}), mark({b.x1, b.y1});
-        const int half = level > 0 ? 1 << (level - 1) : 0;
-        if (config & kSplitTop) mark({b.x0 + half, b.y0});
-        if (config & kSplitBottom) mark({b.x0 + half, b.y1});
-        if (config & kSplitLeft) mark({b.x0, b.y0 + half});
-        if (config & kSplitRight) mark({b.x1, b.y0 + half});
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, blocks.size()),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+          const int level = blocks[k].level;
+          std::uint64_t tris = 0, leaves = 0;
+          for_each_leaf(blocks[k], [&](int i, int j) {
+            const Quadtree::Box b = q.box(level, i, j);
+            const unsigned config = config_of(level, i, j, b);
+            ++leaves;
+            tris += 2 + static_cast<unsigned>(std::popcount(config));
+            mark({b.x0, b.y0}), mark({b.x1, b.y0}), mark({b.x0, b.y1}), mark({b.x1, b.y1});
+            const int half = level > 0 ? 1 << (level - 1) : 0;
+            if (config & kSplitTop) mark({b.x0 + half, b.y0});
+            if (config & kSplitBottom) mark({b.x0 + half, b.y1});
+            if (config & kSplitLeft) mark({b.x0, b.y0 + half});
+            if (config & kSplitRight) mark({b.x1, b.y0 + half});
+          });
+          block_triangles[k + 1] = tris;
+          block_leaves[k] = leaves;
+        }
       });
-      block_triangles[k + 1] = tris;
-      block_leaves[k] = leaves;
-    }
-  });
   for (std::size_t k = 0; k < blocks.size(); ++k) {
     block_triangles[k + 1] += block_triangles[k];
     grid.leaves += block_leaves[k];
@@ -694,26 +713,27 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
   grid.indices.resize(3 * block_triangles.back());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t k = range.begin(); k != range.end(); ++k) {
-      const int level = blocks[k].level;
-      std::uint32_t* out = grid.indices.data() + 3 * block_triangles[k];
-      for_each_leaf(blocks[k], [&](int i, int j) {
-        const Quadtree::Box b = q.box(level, i, j);
-        std::array<Pt, 3> tri[6];
-        const int n = cell_triangles(b, level > 0 ? 1 << (level - 1) : 0,
-                                     config_of(level, i, j, b), tri);
-        for (int t = 0; t < n; ++t) {
-          const std::uint32_t a = rank(tri[t][0]), bb = rank(tri[t][1]), c = rank(tri[t][2]);
-          if (standard) {
-            *out++ = a, *out++ = bb, *out++ = c;
-          } else {
-            *out++ = a, *out++ = c, *out++ = bb;
-          }
-        }
-      });
-      LV_CHECK_EQ(out, grid.indices.data() + 3 * block_triangles[k + 1]);
-    }
-  });
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        const int level = blocks[k].level;
+                        std::uint32_t* out = grid.indices.data() + 3 * block_triangles[k];
+                        for_each_leaf(blocks[k], [&](int i, int j) {
+                          const Quadtree::Box b = q.box(level, i, j);
+                          std::array<Pt, 3> tri[6];
+                          const int n = cell_triangles(b, level > 0 ? 1 << (level - 1) : 0,
+                                                       config_of(level, i, j, b), tri);
+                          for (int t = 0; t < n; ++t) {
+                            const std::uint32_t a = rank(tri[t][0]), bb = rank(tri[t][1]),
+                                                c = rank(tri[t][2]);
+                            if (standard) {
+                              *out++ = a, *out++ = bb, *out++ = c;
+                            } else {
+                              *out++ = a, *out++ = c, *out++ = bb;
+                            }
+                          }
+                        });
+                        LV_CHECK_EQ(out, grid.indices.data() + 3 * block_triangles[k + 1]);
+                      }
+                    });
 
   // Border vertices per side.
   const auto has = [&](int col, int row) {
@@ -741,8 +761,8 @@ double RefinementPyramid::measure(const AdaptiveGrid& grid) const {
       tbb::blocked_range<std::size_t>(0, grid.num_triangles(), 256), 0.0,
       [&](const tbb::blocked_range<std::size_t>& r, double m) {
         for (std::size_t t = r.begin(); t != r.end(); ++t)
-          m = std::max(m, triangle_error(texels_, pt(grid.indices[3 * t]), pt(grid.indices[3 * t + 1]),
-                                         pt(grid.indices[3 * t + 2])));
+          m = std::max(m, triangle_error(texels_, pt(grid.indices[3 * t]),
+                                         pt(grid.indices[3 * t + 1]), pt(grid.indices[3 * t + 2])));
         return m;
       },
       [](double a, double b) { return std::max(a, b); });

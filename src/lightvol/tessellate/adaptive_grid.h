@@ -42,7 +42,8 @@ class TexelDepths {
   int height() const { return height_; }
   // The texel's window depth, clamped to [0, 1] (its vertex lies on the far plane at 1).
   double window_depth(int col, int row) const { return depth_[index(col, row)]; }
-  // World distance between the point of texel (col, row)'s ray at window depth `d` and its own point.
+  // World distance between the point of texel (col, row)'s ray at window depth `d` and its own
+  // point.
   double error(int col, int row, double d) const {
     const std::size_t v = index(col, row);
     if (uniform_) return std::abs(d - depth_[v]) * uniform_scale_;
@@ -94,8 +95,8 @@ struct AdaptiveGrid {
   std::vector<int> border[4];           // per GridSide, ascending positions of its vertices
                                         // (both corners included): what a closing or seam uses
   std::uint64_t leaves = 0;             // quadtree leaves (cells emitted)
-  int fixup_rounds = 0;                 // rounds of splitting leaves whose configuration broke the bound
-  double balance_seconds = 0;           // threshold, balance and fix-up
+  int fixup_rounds = 0;        // rounds of splitting leaves whose configuration broke the bound
+  double balance_seconds = 0;  // threshold, balance and fix-up
   double emit_seconds = 0;
 
   std::size_t num_triangles() const { return indices.size() / 3; }

@@ -1,5 +1,3 @@
-#include <lightvol/tessellate/adaptive_volume.h>
-
 #include <atomic>
 #include <chrono>
 #include <limits>
@@ -8,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/tessellate/adaptive_volume.h>
 #include <lightvol/volume/closing.h>
 
 namespace lightvol {
@@ -48,21 +47,21 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
   const std::uint32_t uw = static_cast<std::uint32_t>(w);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t v = range.begin(); v != range.end(); ++v) {
-      const std::uint32_t id = grid.vertices[v];
-      const int c = static_cast<int>(id % uw), r = static_cast<int>(id / uw);
-      Vec3d p;
-      if (!unproject.point(c, r, depth.values[id], &p)) {
-        std::size_t seen = first_bad.load();
-        while (id < seen && !first_bad.compare_exchange_weak(seen, id)) {
-        }
-        p = unproject.near_point(c, r);
-      }
-      mesh.positions[3 * v] = static_cast<float>(p.x);
-      mesh.positions[3 * v + 1] = static_cast<float>(p.y);
-      mesh.positions[3 * v + 2] = static_cast<float>(p.z);
-    }
-  });
+                      for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                        const std::uint32_t id = grid.vertices[v];
+                        const int c = static_cast<int>(id % uw), r = static_cast<int>(id / uw);
+                        Vec3d p;
+                        if (!unproject.point(c, r, depth.values[id], &p)) {
+                          std::size_t seen = first_bad.load();
+                          while (id < seen && !first_bad.compare_exchange_weak(seen, id)) {
+                          }
+                          p = unproject.near_point(c, r);
+                        }
+                        mesh.positions[3 * v] = static_cast<float>(p.x);
+                        mesh.positions[3 * v + 1] = static_cast<float>(p.y);
+                        mesh.positions[3 * v + 2] = static_cast<float>(p.z);
+                      }
+                    });
   if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
     return Error{source + ": pixel (" + std::to_string(bad % w) + ", " + std::to_string(bad / w) +
                  "): radial depth " + std::to_string(depth.values[bad]) +
@@ -71,9 +70,9 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
   mesh.indices.reserve(3 * counts.triangles);
   mesh.indices.insert(mesh.indices.end(), grid.indices.begin(), grid.indices.end());
 
-  const std::vector<BorderVertex> ring = border_ring(
-      w, h, grid.border, unproject.standard_winding(),
-      [&](int col, int row) { return grid.vertex_index(col, row); });
+  const std::vector<BorderVertex> ring =
+      border_ring(w, h, grid.border, unproject.standard_winding(),
+                  [&](int col, int row) { return grid.vertex_index(col, row); });
   append_closing(light.type, unproject, w, h, ring, &mesh);
   LV_CHECK_EQ(mesh.num_vertices(), counts.vertices);
   LV_CHECK_EQ(mesh.num_triangles(), counts.triangles);
@@ -91,7 +90,8 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   AdaptiveReport r;
   r.pyramid_seconds = seconds_since(start);
 
-  const bool standard = Unprojector(light, depth.width, depth.height, 0, volume.space).standard_winding();
+  const bool standard =
+      Unprojector(light, depth.width, depth.height, 0, volume.space).standard_winding();
   const double bound =
       options.refinement == Refinement::max_error ? options.max_error : options.threshold;
   const AdaptiveGrid grid = pyramid.tessellate(bound, standard);

@@ -1,6 +1,5 @@
-#include <lightvol/volume/closing.h>
-
 #include <lightvol/core/check.h>
+#include <lightvol/volume/closing.h>
 
 namespace lightvol {
 
@@ -43,9 +42,9 @@ void append_closing(LightType type, const Unprojector& unproject, int width, int
   // Near-plane copies of the ring, in ring order, then the cap's centre.
   const std::uint32_t base = static_cast<std::uint32_t>(mesh->num_vertices());
   for (const BorderVertex& b : ring) push_vertex(mesh, unproject.near_point(b.col, b.row));
-  const Vec3d centre = 0.25 * (unproject.near_point(0, 0) + unproject.near_point(width - 1, 0) +
-                               unproject.near_point(0, height - 1) +
-                               unproject.near_point(width - 1, height - 1));
+  const Vec3d centre =
+      0.25 * (unproject.near_point(0, 0) + unproject.near_point(width - 1, 0) +
+              unproject.near_point(0, height - 1) + unproject.near_point(width - 1, height - 1));
   const std::uint32_t cap = push_vertex(mesh, centre);
   for (std::size_t k = 0; k < nb; ++k) {
     const std::size_t k1 = (k + 1) % nb;

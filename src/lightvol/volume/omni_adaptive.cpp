@@ -1,5 +1,3 @@
-#include <lightvol/volume/omni_adaptive.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -11,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
 namespace lightvol {
@@ -22,10 +21,14 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 GridSide grid_side(FaceBorder border) {
   switch (border) {
-    case FaceBorder::top: return kTop;
-    case FaceBorder::bottom: return kBottom;
-    case FaceBorder::left: return kLeft;
-    case FaceBorder::right: return kRight;
+    case FaceBorder::top:
+      return kTop;
+    case FaceBorder::bottom:
+      return kBottom;
+    case FaceBorder::left:
+      return kLeft;
+    case FaceBorder::right:
+      return kRight;
   }
   return kTop;
 }
@@ -50,7 +53,7 @@ std::vector<int> merged(const std::vector<int>& a, const std::vector<int>& b) {
 }  // namespace
 
 Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFaces& cube,
-                                               Refinement refinement, Space space) {
+                                              Refinement refinement, Space space) {
   LV_CHECK(light.type == LightType::omni);
   if (Status s = validate_cube_faces(cube); !s) return s.error();
   const auto start = std::chrono::steady_clock::now();
@@ -141,7 +144,9 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   std::array<std::uint32_t, kOmniFaces + 1> base{};
   for (int f = 0; f < kOmniFaces; ++f) {
     const std::uint64_t next = std::uint64_t{base[f]} + grids[f].vertices.size();
-    LV_CHECK_LT(next, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});  // 2^32 vertices: > 16 GB of input
+    LV_CHECK_LT(next,
+                std::uint64_t{
+                    std::numeric_limits<std::uint32_t>::max()});  // 2^32 vertices: > 16 GB of input
     base[f + 1] = static_cast<std::uint32_t>(next);
   }
   std::uint64_t seam_triangles = 0;
@@ -158,16 +163,17 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     const DepthImage& depth = cube.faces[f];
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.vertices.size(), 4096),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t v = range.begin(); v != range.end(); ++v) {
-        const std::uint32_t id = grid.vertices[v];
-        const int c = static_cast<int>(id % uw), row = static_cast<int>(id / uw);
-        Vec3d p;
-        const bool reached = faces[f].point(c, row, depth.values[id], &p);
-        LV_CHECK(reached);  // a perspective ray reaches every depth
-        float* out = mesh.positions.data() + 3 * (std::size_t{base[f]} + v);
-        out[0] = static_cast<float>(p.x), out[1] = static_cast<float>(p.y), out[2] = static_cast<float>(p.z);
-      }
-    });
+                        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                          const std::uint32_t id = grid.vertices[v];
+                          const int c = static_cast<int>(id % uw), row = static_cast<int>(id / uw);
+                          Vec3d p;
+                          const bool reached = faces[f].point(c, row, depth.values[id], &p);
+                          LV_CHECK(reached);  // a perspective ray reaches every depth
+                          float* out = mesh.positions.data() + 3 * (std::size_t{base[f]} + v);
+                          out[0] = static_cast<float>(p.x), out[1] = static_cast<float>(p.y),
+                          out[2] = static_cast<float>(p.z);
+                        }
+                      });
     d.face_triangles[f] = grid.num_triangles();
     for (const std::uint32_t i : grid.indices) mesh.indices.push_back(base[f] + i);
   }
@@ -181,7 +187,8 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   };
   for (const OmniSeam& seam : adjacency.seams) {
     const std::vector<int>& along = grids[seam.face[0]].border[grid_side(seam.border[0])];
-    LV_CHECK(mapped(along, seam.reversed, w) == grids[seam.face[1]].border[grid_side(seam.border[1])]);
+    LV_CHECK(mapped(along, seam.reversed, w) ==
+             grids[seam.face[1]].border[grid_side(seam.border[1])]);
     const auto at = [&](int side, int position) {
       int col = 0, row = 0;
       border_texel(seam.border[side], w, side == 1 && seam.reversed ? w - 1 - position : position,

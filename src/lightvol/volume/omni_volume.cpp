@@ -1,5 +1,3 @@
-#include <lightvol/volume/omni_volume.h>
-
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -9,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/volume/omni_volume.h>
 
 namespace lightvol {
 namespace {
@@ -171,7 +170,8 @@ Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
   for (int f = 0; f < kOmniFaces; ++f) faces.emplace_back(light, w, w, f, options.space);
   const std::size_t face_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(w);
   const auto vertex = [&](int face, int col, int row) {
-    return static_cast<std::uint32_t>(face * face_vertices + static_cast<std::size_t>(row) * w + col);
+    return static_cast<std::uint32_t>(face * face_vertices + static_cast<std::size_t>(row) * w +
+                                      col);
   };
 
   Mesh mesh;
@@ -179,39 +179,42 @@ Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
   mesh.indices.resize(3 * counts.triangles);
 
   // Grid vertices: rows of all six faces in parallel.
-  tbb::parallel_for(tbb::blocked_range<int>(0, kOmniFaces * w), [&](const tbb::blocked_range<int>& rows) {
-    for (int fr = rows.begin(); fr != rows.end(); ++fr) {
-      const int f = fr / w, r = fr % w;
-      const DepthImage& depth = cube.faces[f];
-      for (int c = 0; c < w; ++c) {
-        Vec3d p;
-        const bool reached = faces[f].point(c, r, depth.at(c, r), &p);
-        LV_CHECK(reached);  // a perspective ray reaches every depth
-        put(mesh.positions, vertex(f, c, r), p);
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<int>(0, kOmniFaces * w),
+                    [&](const tbb::blocked_range<int>& rows) {
+                      for (int fr = rows.begin(); fr != rows.end(); ++fr) {
+                        const int f = fr / w, r = fr % w;
+                        const DepthImage& depth = cube.faces[f];
+                        for (int c = 0; c < w; ++c) {
+                          Vec3d p;
+                          const bool reached = faces[f].point(c, r, depth.at(c, r), &p);
+                          LV_CHECK(reached);  // a perspective ray reaches every depth
+                          put(mesh.positions, vertex(f, c, r), p);
+                        }
+                      }
+                    });
 
   // Grid triangles: two per texel quad, wound to face away from the light.
   std::uint32_t* idx = mesh.indices.data();
   const std::uint32_t uw = static_cast<std::uint32_t>(w);
   const std::size_t quads_per_face = static_cast<std::size_t>(w - 1) * (w - 1);
-  tbb::parallel_for(tbb::blocked_range<int>(0, kOmniFaces * (w - 1)), [&](const tbb::blocked_range<int>& rows) {
-    for (int fr = rows.begin(); fr != rows.end(); ++fr) {
-      const int f = fr / (w - 1), r = fr % (w - 1);
-      const bool standard = faces[f].standard_winding();
-      std::uint32_t* out = idx + 6 * (f * quads_per_face + static_cast<std::size_t>(r) * (w - 1));
-      for (int c = 0; c + 1 < w; ++c) {
-        const std::uint32_t a = vertex(f, c, r), b = a + 1, cc = a + uw, d = cc + 1;
-        if (standard) {
-          out[0] = a, out[1] = b, out[2] = cc, out[3] = b, out[4] = d, out[5] = cc;
-        } else {
-          out[0] = a, out[1] = cc, out[2] = b, out[3] = b, out[4] = cc, out[5] = d;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, kOmniFaces * (w - 1)), [&](const tbb::blocked_range<int>& rows) {
+        for (int fr = rows.begin(); fr != rows.end(); ++fr) {
+          const int f = fr / (w - 1), r = fr % (w - 1);
+          const bool standard = faces[f].standard_winding();
+          std::uint32_t* out =
+              idx + 6 * (f * quads_per_face + static_cast<std::size_t>(r) * (w - 1));
+          for (int c = 0; c + 1 < w; ++c) {
+            const std::uint32_t a = vertex(f, c, r), b = a + 1, cc = a + uw, d = cc + 1;
+            if (standard) {
+              out[0] = a, out[1] = b, out[2] = cc, out[3] = b, out[4] = d, out[5] = cc;
+            } else {
+              out[0] = a, out[1] = cc, out[2] = b, out[3] = b, out[4] = cc, out[5] = d;
+            }
+            out += 6;
+          }
         }
-        out += 6;
-      }
-    }
-  });
+      });
 
   // Seams along the twelve cube edges, then one triangle per cube corner.
   const OmniAdjacency adjacency = omni_adjacency(light);

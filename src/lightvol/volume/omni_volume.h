@@ -30,10 +30,18 @@ enum class FaceBorder {
 // The texel (col, row) at position k along `border` of a W×W face.
 inline void border_texel(FaceBorder border, int width, int k, int* col, int* row) {
   switch (border) {
-    case FaceBorder::top: *col = k, *row = 0; return;
-    case FaceBorder::bottom: *col = k, *row = width - 1; return;
-    case FaceBorder::left: *col = 0, *row = k; return;
-    case FaceBorder::right: *col = width - 1, *row = k; return;
+    case FaceBorder::top:
+      *col = k, *row = 0;
+      return;
+    case FaceBorder::bottom:
+      *col = k, *row = width - 1;
+      return;
+    case FaceBorder::left:
+      *col = 0, *row = k;
+      return;
+    case FaceBorder::right:
+      *col = width - 1, *row = k;
+      return;
   }
 }
 

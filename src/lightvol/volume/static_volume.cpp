@@ -1,14 +1,13 @@
-#include <lightvol/volume/static_volume.h>
-
 #include <atomic>
 #include <limits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <lightvol/core/check.h>
 #include <lightvol/core/buffer.h>
+#include <lightvol/core/check.h>
 #include <lightvol/volume/closing.h>
+#include <lightvol/volume/static_volume.h>
 
 namespace lightvol {
 
@@ -17,9 +16,12 @@ VolumeCounts static_volume_counts(LightType type, int width, int height) {
   const std::uint64_t grid = 2 * (w - 1) * (h - 1);
   const std::uint64_t border = 2 * (w - 1) + 2 * (h - 1);
   switch (type) {
-    case LightType::spot: return {w * h + 1, grid + border};
-    case LightType::directional: return {w * h + border + 1, grid + 3 * border};
-    case LightType::omni: return {6 * w * h, 6 * grid + 12 * 2 * (w - 1) + 8};
+    case LightType::spot:
+      return {w * h + 1, grid + border};
+    case LightType::directional:
+      return {w * h + border + 1, grid + 3 * border};
+    case LightType::omni:
+      return {6 * w * h, 6 * grid + 12 * 2 * (w - 1) + 8};
   }
   return {};
 }
@@ -39,7 +41,6 @@ std::vector<std::uint32_t> border_loop(int width, int height, bool standard) {
   if (!standard) std::reverse(loop.begin(), loop.end());
   return loop;
 }
-
 
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  const VolumeOptions& options, const std::string& source) {
@@ -62,7 +63,8 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r) {
       const std::size_t row_start = static_cast<std::size_t>(r) * w;
-      const int bad_col = unproject.row_points(r, &depth.values[row_start], &mesh.positions[3 * row_start]);
+      const int bad_col =
+          unproject.row_points(r, &depth.values[row_start], &mesh.positions[3 * row_start]);
       if (bad_col < 0) continue;
       const std::size_t v = row_start + static_cast<std::size_t>(bad_col);
       std::size_t seen = first_bad.load();

@@ -1,14 +1,10 @@
 // The only translation unit that includes CGAL (slow to compile): the flat Mesh becomes a
 // CGAL::Surface_mesh here and nowhere else.
-#include <lightvol/check/detail/cgal_checks.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <iterator>
 #include <mutex>
-
-#include <tbb/parallel_for.h>
 
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
@@ -20,6 +16,9 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/Euler_operations.h>
 #include <CGAL/box_intersection_d.h>
+#include <tbb/parallel_for.h>
+
+#include <lightvol/check/detail/cgal_checks.h>
 
 namespace lightvol::detail {
 namespace {
@@ -84,7 +83,8 @@ bool to_surface_mesh(const Mesh& mesh, SurfaceMesh* out, std::string* why_not) {
 // Does triangle (a, b, c) meet the box? The separating-axis test (Akenine-Möller) in double
 // precision on a slightly inflated box: conservative (never says no to a pair that touches), so
 // it only prunes the traversal; the exact test comes after.
-bool triangle_may_meet_box(const std::array<std::array<double, 3>, 3>& tri, const CGAL::Bbox_3& box) {
+bool triangle_may_meet_box(const std::array<std::array<double, 3>, 3>& tri,
+                           const CGAL::Bbox_3& box) {
   std::array<double, 3> centre, half;
   for (int k = 0; k < 3; ++k) {
     centre[k] = 0.5 * (box.min(k) + box.max(k));
@@ -107,8 +107,8 @@ bool triangle_may_meet_box(const std::array<std::array<double, 3>, 3>& tri, cons
   // Separated along `axis` when the triangle's projection misses the box's, with slack.
   const auto separated = [&](const std::array<double, 3>& axis) {
     const double p0 = dot3(v[0], axis), p1 = dot3(v[1], axis), p2 = dot3(v[2], axis);
-    const double r = half[0] * std::abs(axis[0]) + half[1] * std::abs(axis[1]) +
-                     half[2] * std::abs(axis[2]);
+    const double r =
+        half[0] * std::abs(axis[0]) + half[1] * std::abs(axis[1]) + half[2] * std::abs(axis[2]);
     const double slack = 1e-9 * (std::abs(p0) + std::abs(p1) + std::abs(p2) + r);
     return std::min({p0, p1, p2}) > r + slack || std::max({p0, p1, p2}) < -r - slack;
   };
@@ -117,7 +117,8 @@ bool triangle_may_meet_box(const std::array<std::array<double, 3>, 3>& tri, cons
     axis[k] = 1;
     if (separated(axis)) return false;
   }
-  const std::array<std::array<double, 3>, 3> edges = {sub(v[1], v[0]), sub(v[2], v[1]), sub(v[0], v[2])};
+  const std::array<std::array<double, 3>, 3> edges = {sub(v[1], v[0]), sub(v[2], v[1]),
+                                                      sub(v[0], v[2])};
   if (separated(cross3(edges[0], edges[1]))) return false;
   for (const auto& e : edges)
     for (int k = 0; k < 3; ++k) {
@@ -159,8 +160,8 @@ class DisjointFaceLister {
       gv[k++] = v;
     }
     if (!triangle_may_meet_box(tri_, CGAL::Polygon_mesh_processing::face_bbox(g, sm_))) return;
-    if (CGAL::do_intersect(query, Kernel::Triangle_3(sm_.point(gv[0]), sm_.point(gv[1]),
-                                                     sm_.point(gv[2]))))
+    if (CGAL::do_intersect(
+            query, Kernel::Triangle_3(sm_.point(gv[0]), sm_.point(gv[1]), sm_.point(gv[2]))))
       out_->push_back(g);
   }
 
@@ -172,7 +173,8 @@ class DisjointFaceLister {
   std::array<std::array<double, 3>, 3> tri_;
 };
 
-// ---- Hubs: vertices shared by many faces ---------------------------------------------------------
+// ---- Hubs: vertices shared by many faces
+// ---------------------------------------------------------
 //
 // Every face around a vertex h contains h, so their boxes all overlap there and any box sweep tests
 // all deg(h)² pairs: a spot volume's apex (4W faces), a directional cap's centre, or a hostile mesh
@@ -208,7 +210,8 @@ void add_arc(const Dir& u, const Dir& w, double lo[3], double hi[3]) {
     return;
   }
   const double s = 1 / (1 + uw);
-  const double pts[3][3] = {{u.x, u.y, u.z}, {w.x, w.y, w.z}, {(u.x + w.x) * s, (u.y + w.y) * s, (u.z + w.z) * s}};
+  const double pts[3][3] = {
+      {u.x, u.y, u.z}, {w.x, w.y, w.z}, {(u.x + w.x) * s, (u.y + w.y) * s, (u.z + w.z) * s}};
   for (const auto& p : pts)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
 }
@@ -220,7 +223,8 @@ SphereBox make_sphere_box(double lo[3], double hi[3], std::uint32_t info) {
 }
 
 double det3(const Dir& a, const Dir& b, const Dir& c) {
-  return a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) + a.z * (b.x * c.y - b.y * c.x);
+  return a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) +
+         a.z * (b.x * c.y - b.y * c.x);
 }
 
 // The box of the cone of directions from h to triangle (u1, u2, u3) (their directions): its three
@@ -327,18 +331,20 @@ bool faces_intersect(const SurfaceMesh& sm, FaceIndex f, FaceIndex g) {
 // the same pair test CGAL's sweep uses.
 std::vector<std::pair<FaceIndex, FaceIndex>> sweep_pairs(const SurfaceMesh& sm,
                                                          const std::vector<FaceIndex>& faces,
-                                                         double long_face_ratio, std::size_t limit) {
+                                                         double long_face_ratio,
+                                                         std::size_t limit) {
   const std::size_t nf = faces.size();
   std::vector<double> extent(sm.number_of_faces(), 0.0);
   std::vector<double> sorted;
   sorted.reserve(nf);
   for (FaceIndex f : faces) {
     const CGAL::Bbox_3 box = PMP::face_bbox(f, sm);
-    extent[f.idx()] = std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(),
-                                box.zmax() - box.zmin()});
+    extent[f.idx()] =
+        std::max({box.xmax() - box.xmin(), box.ymax() - box.ymin(), box.zmax() - box.zmin()});
     sorted.push_back(extent[f.idx()]);
   }
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(nf / 2), sorted.end());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(nf / 2),
+                   sorted.end());
   const double threshold = long_face_ratio * (nf ? sorted[nf / 2] : 0.0);
   std::vector<FaceIndex> short_faces, long_faces;
   std::vector<char> is_long(sm.number_of_faces(), 0);
@@ -404,7 +410,8 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
   std::vector<FaceIndex> rest;
   for (const FaceIndex f : sm.faces())
     if (!hubbed[f.idx()]) rest.push_back(f);
-  std::vector<std::pair<FaceIndex, FaceIndex>> pairs = sweep_pairs(sm, rest, long_face_ratio, limit);
+  std::vector<std::pair<FaceIndex, FaceIndex>> pairs =
+      sweep_pairs(sm, rest, long_face_ratio, limit);
 
   std::vector<std::pair<FaceIndex, FaceIndex>> candidates;
   for (const auto h : hubs) {
@@ -428,14 +435,15 @@ std::vector<std::pair<FaceIndex, FaceIndex>> intersecting_pairs(const SurfaceMes
 
 }  // namespace
 
-CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
-                       double long_face_ratio, std::size_t min_hub_degree) {
+CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs, double long_face_ratio,
+                       std::size_t min_hub_degree) {
   CgalChecks out;
   SurfaceMesh sm;
   if (!to_surface_mesh(mesh, &sm, &out.why_not)) return out;
   out.built = true;
 
-  std::vector<std::pair<FaceIndex, FaceIndex>> pairs = intersecting_pairs(sm, long_face_ratio, min_hub_degree, kMaxPairs);
+  std::vector<std::pair<FaceIndex, FaceIndex>> pairs =
+      intersecting_pairs(sm, long_face_ratio, min_hub_degree, kMaxPairs);
   for (auto& [f, g] : pairs)
     if (g < f) std::swap(f, g);
   std::sort(pairs.begin(), pairs.end());
@@ -455,7 +463,8 @@ CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
   return out;
 }
 
-bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio, std::size_t min_hub_degree) {
+bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio,
+                              std::size_t min_hub_degree) {
   SurfaceMesh sm;
   std::string why_not;
   if (!to_surface_mesh(mesh, &sm, &why_not)) return true;

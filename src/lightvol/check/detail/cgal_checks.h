@@ -13,8 +13,8 @@
 namespace lightvol::detail {
 
 struct CgalChecks {
-  bool built = false;       // the mesh converted to a Surface_mesh (edge-manifold and oriented)
-  std::string why_not;      // why it did not
+  bool built = false;   // the mesh converted to a Surface_mesh (edge-manifold and oriented)
+  std::string why_not;  // why it did not
   std::uint64_t intersecting_pairs = 0;
   bool pairs_truncated = false;  // stopped counting at the limit
   std::vector<std::pair<std::uint32_t, std::uint32_t>> first_pairs;  // face indices

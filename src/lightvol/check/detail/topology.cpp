@@ -1,10 +1,10 @@
-#include <lightvol/check/detail/topology.h>
-
 #include <algorithm>
 #include <cstring>
 #include <sstream>
 
 #include <tbb/parallel_sort.h>
+
+#include <lightvol/check/detail/topology.h>
 
 namespace lightvol {
 namespace {
@@ -102,7 +102,8 @@ Status check_closed_outward(const Mesh& mesh, const std::string& what) {
     std::size_t j = i;
     while (j < keys.size() && (keys[j] >> 1) == (keys[i] >> 1)) ++j;
     const std::size_t uses = j - i;
-    if (uses == 1) return Error{what + ": not closed: edge " + edge_text(keys[i]) + " has one face"};
+    if (uses == 1)
+      return Error{what + ": not closed: edge " + edge_text(keys[i]) + " has one face"};
     if (uses > 2)
       return Error{what + ": not edge-manifold: edge " + edge_text(keys[i]) + " has " +
                    std::to_string(uses) + " faces"};

@@ -1,4 +1,8 @@
-#include <lightvol/core/detail/isolated.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -10,12 +14,7 @@
 #include <limits>
 #include <new>
 
-#include <fcntl.h>
-#include <poll.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
+#include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -57,8 +56,8 @@ rlimit cpu_limit(double seconds) {
   return {soft, RLIM_INFINITY};
 }
 
-// In the child: no core files, `cpu` seconds of processor time, and at most `space` bytes of address space (not under AddressSanitizer, whose shadow
-// memory alone exceeds any such limit).
+// In the child: no core files, `cpu` seconds of processor time, and at most `space` bytes of
+// address space (not under AddressSanitizer, whose shadow memory alone exceeds any such limit).
 void limit_child(double cpu, std::uint64_t space) {
   const rlimit no_core{0, 0};
   setrlimit(RLIMIT_CORE, &no_core);
@@ -125,20 +124,26 @@ ChildInput::Verdict ChildInput::read_verdict(Error* refusal) {
 bool ChildInput::read_mesh(Mesh* mesh, const std::string& source, Status* refused) {
   std::uint64_t floats = 0, indices = 0;
   if (!read_value(&floats) || !read_value(&indices)) return false;
-  if (floats % 3 != 0 || indices % 3 != 0 || floats / 3 >= std::numeric_limits<std::uint32_t>::max() ||
-      indices > std::numeric_limits<std::uint64_t>::max() / 16 || floats > std::numeric_limits<std::uint64_t>::max() / 16)
+  if (floats % 3 != 0 || indices % 3 != 0 ||
+      floats / 3 >= std::numeric_limits<std::uint32_t>::max() ||
+      indices > std::numeric_limits<std::uint64_t>::max() / 16 ||
+      floats > std::numeric_limits<std::uint64_t>::max() / 16)
     return false;
   // The arrays, and the copy welding makes of them.
-  if (Status s = check_memory(8 * (floats + indices), source, "reading " + std::to_string(indices / 3) + " triangles"); !s) {
+  if (Status s = check_memory(8 * (floats + indices), source,
+                              "reading " + std::to_string(indices / 3) + " triangles");
+      !s) {
     *refused = s;
     return false;
   }
   mesh->positions.resize(floats);
   mesh->indices.resize(indices);
-  if (!read(mesh->positions.data(), floats * sizeof(float)) || !read(mesh->indices.data(), indices * sizeof(std::uint32_t)))
+  if (!read(mesh->positions.data(), floats * sizeof(float)) ||
+      !read(mesh->indices.data(), indices * sizeof(std::uint32_t)))
     return false;
   const std::uint64_t vertices = floats / 3;
-  return std::all_of(mesh->indices.begin(), mesh->indices.end(), [&](std::uint32_t v) { return v < vertices; });
+  return std::all_of(mesh->indices.begin(), mesh->indices.end(),
+                     [&](std::uint32_t v) { return v < vertices; });
 }
 
 void ChildInput::allow_more(double cpu_seconds) {
@@ -178,7 +183,8 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   const std::uint64_t memory = limits.memory > 0 ? limits.memory : memory_budget();
   const std::uint64_t space = address_space_bytes() + memory;
   int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0) return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
+  if (::pipe2(fds, O_CLOEXEC) != 0)
+    return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
   const double deadline = now_seconds() + limits.wall_seconds;
   const pid_t pid = ::fork();
   if (pid < 0) {
@@ -228,19 +234,24 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   const double used = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
                       1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   const auto cpu = static_cast<double>(cpu_limit(in.cpu_seconds()).rlim_cur);
-  if (WIFSIGNALED(status) && (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= cpu)))
-    return Error{what + " used more than " + seconds(cpu) + " s of processor time on this input and was stopped"};
+  if (WIFSIGNALED(status) &&
+      (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= cpu)))
+    return Error{what + " used more than " + seconds(cpu) +
+                 " s of processor time on this input and was stopped"};
   if (in.timed_out())
-    return Error{what + " took longer than " + seconds(limits.wall_seconds + in.wall_seconds_added()) +
+    return Error{what + " took longer than " +
+                 seconds(limits.wall_seconds + in.wall_seconds_added()) +
                  " s on this input and was stopped"};
   const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
   if (WIFSIGNALED(status) && !killed_by_us) {
     const int sig = WTERMSIG(status);
     const char* name = ::strsignal(sig);
-    return Error{what + " crashed on this input (signal " + std::to_string(sig) + (name ? std::string(": ") + name : "") + ")"};
+    return Error{what + " crashed on this input (signal " + std::to_string(sig) +
+                 (name ? std::string(": ") + name : "") + ")"};
   }
   if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
-    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " + limits.memory_advice + ")"};
+    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " +
+                 limits.memory_advice + ")"};
   if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
     return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
   return answer;

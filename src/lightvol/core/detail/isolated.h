@@ -4,9 +4,10 @@
 // fuzzing covers them, and fuzzing here found crashes, hangs and huge allocations in them. Their
 // input is checked as far as its structure can be seen from outside; what remains is contained:
 // the work runs in a forked child with an address-space limit (the memory budget), a limit on its
-// processor time and a wall-clock deadline, and sends its answer back through a pipe. A crash, a hang or an exhausted limit in the child is
-// then an Error for the parent, never a signal, a hang or an allocation in it; nothing the child
-// sends is trusted beyond the byte counts the parent asked for.
+// processor time and a wall-clock deadline, and sends its answer back through a pipe. A crash, a
+// hang or an exhausted limit in the child is then an Error for the parent, never a signal, a hang
+// or an allocation in it; nothing the child sends is trusted beyond the byte counts the parent
+// asked for.
 #pragma once
 
 #include <cstddef>
@@ -26,7 +27,9 @@ class ChildOutput {
   explicit ChildOutput(int fd) : fd_(fd) {}
   void write(const void* data, std::size_t bytes);
   template <class T>
-  void write_value(const T& value) { write(&value, sizeof(value)); }
+  void write_value(const T& value) {
+    write(&value, sizeof(value));
+  }
   // Its length, then its bytes (at most kMaxString of them).
   void write_string(const std::string& text);
   static constexpr std::size_t kMaxString = 4096;
@@ -43,11 +46,14 @@ class ChildOutput {
 // The parent's end: reads exactly the bytes asked for before the deadline, or fails.
 class ChildInput {
  public:
-  ChildInput(int fd, int pid, double cpu_seconds, double deadline) : fd_(fd), pid_(pid), cpu_(cpu_seconds), deadline_(deadline) {}
+  ChildInput(int fd, int pid, double cpu_seconds, double deadline)
+      : fd_(fd), pid_(pid), cpu_(cpu_seconds), deadline_(deadline) {}
   // False (and `timed_out()` true if so) when the child ended, broke off or ran out of time first.
   bool read(void* data, std::size_t bytes);
   template <class T>
-  bool read_value(T* value) { return read(value, sizeof(*value)); }
+  bool read_value(T* value) {
+    return read(value, sizeof(*value));
+  }
   // A string as ChildOutput::write_string sends it; false if it breaks off or is too long.
   bool read_string(std::string* text);
   // A mesh as ChildOutput::write_mesh sends it, checked: whole triangles, every index naming a
@@ -89,8 +95,8 @@ struct IsolationLimits {
 // (only the forking thread exists in the child). The result is `parent`'s, unless the child was
 // killed by a signal, ran out of time, or exited otherwise than after `child` returned: then it is
 // an Error "<what> crashed on this input (signal N: name)", "<what> used more than S s of processor
-// time ...", "<what> took longer than S s ...", "<what> ran out of memory ..." or "<what> failed ...".
-// When `parent` fails because the child's answer broke off, the child's fate is the message.
+// time ...", "<what> took longer than S s ...", "<what> ran out of memory ..." or "<what> failed
+// ...". When `parent` fails because the child's answer broke off, the child's fate is the message.
 // Where fork is not possible the Error says so.
 Status run_isolated(const std::string& what, const IsolationLimits& limits,
                     const std::function<void(ChildOutput&)>& child,

@@ -1,5 +1,3 @@
-#include <lightvol/core/detail/json_keys.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -8,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 #include <vector>
+
+#include <lightvol/core/detail/json_keys.h>
 
 namespace lightvol {
 namespace {
@@ -44,7 +44,8 @@ Result<std::string> read_text_file(const std::string& path, const char* what) {
   while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
     text.append(buffer, static_cast<std::size_t>(in.gcount()));
     if (text.size() > kMaxBytes)
-      return Error{path + ": is larger than 64 MiB; a " + std::string(what) + " is a small JSON file"};
+      return Error{path + ": is larger than 64 MiB; a " + std::string(what) +
+                   " is a small JSON file"};
   }
   if (in.bad()) return Error{path + ": cannot read " + what};
   return text;
@@ -57,7 +58,8 @@ Result<json> parse_json_object(std::string_view text, const std::string& source,
   } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
     const std::string message = e.what();
     const auto at = message.find("parse error");
-    return Error{source + ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
+    return Error{source +
+                 ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
   }
   if (!root.is_object()) return Error{source + ": expected a JSON object describing " + what};
   return root;

@@ -1,5 +1,3 @@
-#include <lightvol/depth/detail/image_file.h>
-
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
@@ -12,9 +10,9 @@
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/depth/detail/image_file.h>
 
 namespace lightvol::detail {
-
 
 // OpenImageIO keeps errors in per-thread (global) or per-object queues; fetch and tidy them.
 // OpenImageIO's error queue as one line: OpenEXR's core can queue a dozen lines per file, each
@@ -24,7 +22,8 @@ std::string oiio_message(const std::string& message) {
   std::istringstream in(message);
   for (std::string line; std::getline(in, line);) {
     if (line.rfind("EXR Error (", 0) == 0) {
-      if (const std::size_t end = line.find("): "); end != std::string::npos) line.erase(0, end + 3);
+      if (const std::size_t end = line.find("): "); end != std::string::npos)
+        line.erase(0, end + 3);
     }
     while (!line.empty() && (line.back() == ' ' || line.back() == '\r')) line.pop_back();
     if (!line.empty()) lines.push_back(line);
@@ -57,12 +56,30 @@ std::string file_prefix(std::ifstream& in, std::size_t n) {
 // size. OpenEXR's readers trust these and lose their place when they disagree (fuzz findings: a
 // channel list running past its size made the core read text as a 1.9 GB size). Returns why not.
 Status check_exr_attribute(std::string_view value, const std::string& type) {
-  static const std::map<std::string, std::size_t> kFixed = {
-      {"box2i", 16}, {"box2f", 16}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12},
-      {"v3f", 12}, {"v3d", 24}, {"int", 4}, {"float", 4}, {"double", 8}, {"compression", 1},
-      {"lineOrder", 1}, {"envmap", 1}, {"deepImageState", 1}, {"tiledesc", 9},
-      {"rational", 8}, {"timecode", 8}, {"keycode", 28}, {"chromaticities", 32},
-      {"m33f", 36}, {"m33d", 72}, {"m44f", 64}, {"m44d", 128}};
+  static const std::map<std::string, std::size_t> kFixed = {{"box2i", 16},
+                                                            {"box2f", 16},
+                                                            {"v2i", 8},
+                                                            {"v2f", 8},
+                                                            {"v2d", 16},
+                                                            {"v3i", 12},
+                                                            {"v3f", 12},
+                                                            {"v3d", 24},
+                                                            {"int", 4},
+                                                            {"float", 4},
+                                                            {"double", 8},
+                                                            {"compression", 1},
+                                                            {"lineOrder", 1},
+                                                            {"envmap", 1},
+                                                            {"deepImageState", 1},
+                                                            {"tiledesc", 9},
+                                                            {"rational", 8},
+                                                            {"timecode", 8},
+                                                            {"keycode", 28},
+                                                            {"chromaticities", 32},
+                                                            {"m33f", 36},
+                                                            {"m33d", 72},
+                                                            {"m44f", 64},
+                                                            {"m44d", 128}};
   const auto i32 = [&](std::size_t at) {
     std::int32_t v = 0;
     std::memcpy(&v, value.data() + at, 4);
@@ -101,7 +118,8 @@ Status check_exr_attribute(std::string_view value, const std::string& type) {
   }
   if (type == "preview") {  // width, height, then width × height RGBA bytes
     if (value.size() < 8) return Error{"no preview size"};
-    const std::uint64_t w = static_cast<std::uint32_t>(i32(0)), h = static_cast<std::uint32_t>(i32(4));
+    const std::uint64_t w = static_cast<std::uint32_t>(i32(0)),
+                        h = static_cast<std::uint32_t>(i32(4));
     if (8 + 4 * w * h != value.size()) return Error{"the preview's size does not match its pixels"};
     return {};
   }
@@ -127,7 +145,7 @@ Status check_exr_header(const std::string& path) {
     return true;
   };
   std::set<std::string> names;  // of the current header
-  for (;;) {  // headers; a single-part file has one
+  for (;;) {                    // headers; a single-part file has one
     std::string name, type;
     if (!read_name(&name)) return {};  // header longer than the prefix: leave it to OpenEXR
     if (name.empty()) {
@@ -149,9 +167,11 @@ Status check_exr_header(const std::string& path) {
     std::int32_t size = 0;
     std::memcpy(&size, head.data() + at, sizeof size);
     at += 4;
-    if (size < 0 || static_cast<std::uintmax_t>(size) > file_size - std::min<std::uintmax_t>(at, file_size))
+    if (size < 0 ||
+        static_cast<std::uintmax_t>(size) > file_size - std::min<std::uintmax_t>(at, file_size))
       return Error{where + "attribute '" + name + "' claims " + std::to_string(size) +
-                   " bytes, but the file has " + std::to_string(file_size) + " (truncated or corrupt)"};
+                   " bytes, but the file has " + std::to_string(file_size) +
+                   " (truncated or corrupt)"};
     if (at + static_cast<std::size_t>(size) > head.size()) return {};
     if (Status s = check_exr_attribute(head.substr(at, static_cast<std::size_t>(size)), type); !s)
       return Error{where + "attribute '" + name + "' (" + type + "): " + s.error().message +
@@ -193,12 +213,16 @@ Status check_png_chunks(const std::string& path) {
 // Never any other: OpenImageIO's DPX reader allocated 1.9 GB for a 2 KB header (fuzz finding),
 // and its try-every-plugin fallback reaches video, camera-raw and DICOM decoders.
 Result<std::string> image_format(const std::string& path, const std::string& magic) {
-  const auto starts = [&](std::string_view prefix) { return std::string_view(magic).substr(0, prefix.size()) == prefix; };
+  const auto starts = [&](std::string_view prefix) {
+    return std::string_view(magic).substr(0, prefix.size()) == prefix;
+  };
   using namespace std::string_view_literals;
   if (starts("\x76\x2f\x31\x01"sv)) return std::string("openexr");
-  if (starts("II*\0"sv) || starts("MM\0*"sv) || starts("II+\0"sv) || starts("MM\0+"sv)) return std::string("tiff");
+  if (starts("II*\0"sv) || starts("MM\0*"sv) || starts("II+\0"sv) || starts("MM\0+"sv))
+    return std::string("tiff");
   if (starts("\x89PNG"sv)) return std::string("png");
-  if (magic.size() >= 2 && magic[0] == 'P' && std::string_view("123456fF").find(magic[1]) != std::string_view::npos)
+  if (magic.size() >= 2 && magic[0] == 'P' &&
+      std::string_view("123456fF").find(magic[1]) != std::string_view::npos)
     return std::string("pnm");
   if (starts("#?RADIANCE"sv) || starts("#?RGBE"sv)) return std::string("hdr");
   if (starts("\x2f\x08\x67\xab"sv) || starts("\xab\x67\x08\x2f"sv)) return std::string("zfile");
@@ -206,11 +230,13 @@ Result<std::string> image_format(const std::string& path, const std::string& mag
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   static const std::map<std::string, std::string> kByExtension = {
-      {".exr", "openexr"}, {".tif", "tiff"}, {".tiff", "tiff"}, {".png", "png"},  {".pfm", "pnm"},
-      {".pgm", "pnm"},     {".ppm", "pnm"},  {".pnm", "pnm"},   {".hdr", "hdr"},  {".zfile", "zfile"}};
+      {".exr", "openexr"}, {".tif", "tiff"},   {".tiff", "tiff"}, {".png", "png"},
+      {".pfm", "pnm"},     {".pgm", "pnm"},    {".ppm", "pnm"},   {".pnm", "pnm"},
+      {".hdr", "hdr"},     {".zfile", "zfile"}};
   if (const auto f = kByExtension.find(extension); f != kByExtension.end()) return f->second;
-  return Error{path + ": not an image lightvol reads depths from (EXR, TIFF, PNG, PFM, PGM, HDR or "
-                      "ZFile, by its first bytes or its extension)"};
+  return Error{path +
+               ": not an image lightvol reads depths from (EXR, TIFF, PNG, PFM, PGM, HDR or "
+               "ZFile, by its first bytes or its extension)"};
 }
 
 }  // namespace
@@ -231,8 +257,9 @@ Result<ImageFile> check_image_file(const std::string& path) {
   return ImageFile{*format, magic};
 }
 
-Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& file,
-                                     const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
+Result<OpenImage> open_checked_image(
+    const std::string& path, const ImageFile& file,
+    const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
   const std::string& magic = file.magic;
   const std::string* const format = &file.format;
   std::error_code ec;
@@ -244,7 +271,9 @@ Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& f
   (void)exr_core;
   OpenImage image;
   image.input = OIIO::ImageInput::create(*format);
-  if (!image.input) return Error{path + ": cannot read image: no " + *format + " reader: " + oiio_message(OIIO::geterror())};
+  if (!image.input)
+    return Error{path + ": cannot read image: no " + *format +
+                 " reader: " + oiio_message(OIIO::geterror())};
   if (!image.input->open(path, image.spec))
     return Error{path + ": cannot read image: " + oiio_message(image.input->geterror())};
   const OIIO::ImageSpec& spec = image.spec;
@@ -302,18 +331,18 @@ Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& f
     constexpr std::uintmax_t kMaxRatio = 4096;
     const std::uintmax_t decoded = static_cast<std::uintmax_t>(spec.image_bytes(true));
     if (sized && decoded / kMaxRatio > file_size)
-      return Error{path + ": is " + std::to_string(spec.width) + "x" +
-                   std::to_string(spec.height) + " with " + std::to_string(spec.nchannels) +
-                   " channels, " + std::to_string(decoded) + " bytes, in a file of " +
-                   std::to_string(file_size) + ": more than any compression holds (truncated or forged)"};
+      return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                   " with " + std::to_string(spec.nchannels) + " channels, " +
+                   std::to_string(decoded) + " bytes, in a file of " + std::to_string(file_size) +
+                   ": more than any compression holds (truncated or forged)"};
   }
   return image;
 }
 
-Result<ImageChannel> read_image_channel(const std::string& path,
-                                        const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
-                                        const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
-                                        const std::string& read_failure) {
+Result<ImageChannel> read_image_channel(
+    const std::string& path, const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
+    const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
+    const std::string& read_failure) {
   // lightvol's own checks of the file run here, where fuzzing sees them; OpenImageIO in the child.
   const Result<ImageFile> file = check_image_file(path);
   if (!file) return file.error();
@@ -327,10 +356,12 @@ Result<ImageChannel> read_image_channel(const std::string& path,
     out.accept();
     out.write_value(static_cast<std::int32_t>(spec.width));
     out.write_value(static_cast<std::int32_t>(spec.height));
-    std::vector<float> values(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
+    std::vector<float> values(static_cast<std::size_t>(spec.width) *
+                              static_cast<std::size_t>(spec.height));
     OIIO::ImageInput* const in = opened->input.get();
     // A truncated file can come back "read" with the damage reported only in the error queue.
-    if (!in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT, values.data()) || in->has_error())
+    if (!in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT, values.data()) ||
+        in->has_error())
       return out.refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
     in->close();
     out.accept();
@@ -344,9 +375,15 @@ Result<ImageChannel> read_image_channel(const std::string& path,
   const auto accepted = [&](ChildInput& in, Status* answer) {
     Error refusal;
     switch (in.read_verdict(&refusal)) {
-      case ChildInput::Verdict::accepted: return true;
-      case ChildInput::Verdict::refused: result = refusal; *answer = {}; return false;
-      case ChildInput::Verdict::broken: *answer = broken; return false;
+      case ChildInput::Verdict::accepted:
+        return true;
+      case ChildInput::Verdict::refused:
+        result = refusal;
+        *answer = {};
+        return false;
+      case ChildInput::Verdict::broken:
+        *answer = broken;
+        return false;
     }
     return false;
   };
@@ -370,10 +407,12 @@ Result<ImageChannel> read_image_channel(const std::string& path,
     return {};
   };
   IsolationLimits limits;
-  limits.memory = (std::uint64_t{256} << 20) + memory_budget();  // the budget, and room for the libraries' own state
+  limits.memory = (std::uint64_t{256} << 20) +
+                  memory_budget();  // the budget, and room for the libraries' own state
   limits.cpu_seconds = 5;
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
-  if (Status run = run_isolated(path + ": OpenImageIO's reader", limits, child, parent); !run) return run.error();
+  if (Status run = run_isolated(path + ": OpenImageIO's reader", limits, child, parent); !run)
+    return run.error();
   return result;
 }
 

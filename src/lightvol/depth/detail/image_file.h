@@ -34,8 +34,9 @@ struct ImageFile {
   std::string magic;   // the file's first bytes
 };
 Result<ImageFile> check_image_file(const std::string& path);
-Result<OpenImage> open_checked_image(const std::string& path, const ImageFile& file,
-                                     const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
+Result<OpenImage> open_checked_image(
+    const std::string& path, const ImageFile& file,
+    const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
 
 // One channel of an image as floats, rows as stored.
 struct ImageChannel {
@@ -44,18 +45,18 @@ struct ImageChannel {
   std::vector<float> values;  // width × height
 };
 
-// Opens the image at `path` (check_image_file, then open_checked_image), lets `select(spec)` pick the channel to read (or
-// refuse the image with an Error), and reads it as floats: all of it in a child process
-// (core/isolated.h), since OpenImageIO 2.4's readers and the libraries behind them are not
-// hardened against forged files (OpenImageIO's own fuzzing began in 2026 and found, among
+// Opens the image at `path` (check_image_file, then open_checked_image), lets `select(spec)` pick
+// the channel to read (or refuse the image with an Error), and reads it as floats: all of it in a
+// child process (core/isolated.h), since OpenImageIO 2.4's readers and the libraries behind them
+// are not hardened against forged files (OpenImageIO's own fuzzing began in 2026 and found, among
 // others, a heap overflow in its TIFF reader). A crash, more than 5 s of processor time for the
 // header (then 2 s and 200 ns per texel for the pixels), or memory beyond the budget is an Error
 // naming the file; so is a pixel read that fails, as "<path>: <read_failure>: <OpenImageIO's
 // message>".
-Result<ImageChannel> read_image_channel(const std::string& path,
-                                        const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
-                                        const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
-                                        const std::string& read_failure);
+Result<ImageChannel> read_image_channel(
+    const std::string& path, const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
+    const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
+    const std::string& read_failure);
 
 // OpenImageIO's error queue as one line.
 std::string oiio_message(const std::string& message);

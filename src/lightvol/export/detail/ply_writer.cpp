@@ -1,5 +1,3 @@
-#include <lightvol/export/detail/ply_writer.h>
-
 #include <bit>
 #include <charconv>
 #include <cstdint>
@@ -7,9 +5,12 @@
 #include <string>
 #include <vector>
 
+#include <lightvol/export/detail/ply_writer.h>
+
 namespace lightvol::detail {
 
-static_assert(std::endian::native == std::endian::little, "binary PLY output assumes little-endian");
+static_assert(std::endian::native == std::endian::little,
+              "binary PLY output assumes little-endian");
 
 namespace {
 

@@ -1,5 +1,3 @@
-#include <lightvol/io/detail/draco_mesh.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,6 +10,7 @@
 #include <lightvol/check/detail/topology.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/io/detail/draco_mesh.h>
 
 namespace lightvol::detail {
 namespace {
@@ -34,7 +33,8 @@ std::string one_line(const std::string& message) {
 
 // Draco's decoding, unwelded: run in a child process (decode_draco), since Draco's decoders are not
 // hardened against hostile data.
-Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<std::uint32_t> position_id) {
+Result<DracoMesh> decode_in_this_process(std::string_view bytes,
+                                         std::optional<std::uint32_t> position_id) {
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::Decoder decoder;
@@ -42,25 +42,36 @@ Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<s
   // spacing is known; they are dequantized below with Draco's own arithmetic.
   decoder.SetSkipAttributeTransform(draco::GeometryAttribute::POSITION);
   auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-  if (!decoded.ok()) return Error{"not a Draco mesh: " + one_line(decoded.status().error_msg_string())};
+  if (!decoded.ok())
+    return Error{"not a Draco mesh: " + one_line(decoded.status().error_msg_string())};
   const draco::Mesh& in = *decoded.value();
   const draco::PointAttribute* position =
-      position_id ? in.GetAttributeByUniqueId(*position_id) : in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+      position_id ? in.GetAttributeByUniqueId(*position_id)
+                  : in.GetNamedAttribute(draco::GeometryAttribute::POSITION);
   if (!position)
     return Error{position_id ? "no attribute has the POSITION id " + std::to_string(*position_id)
                              : std::string("the mesh has no POSITION attribute")};
   // A decoded file can hold any number of components of any type, and map points to values
   // beyond the attribute (fuzz finding: a 7-component POSITION was copied into 3 floats).
   if (position->num_components() != 3)
-    return Error{"POSITION has " + std::to_string(position->num_components()) + " components, not 3"};
+    return Error{"POSITION has " + std::to_string(position->num_components()) +
+                 " components, not 3"};
   // Numbers only (fuzz finding: a bool POSITION holding other bytes than 0 and 1 was read as bool).
   switch (position->data_type()) {
-    case draco::DT_FLOAT32: case draco::DT_FLOAT64: case draco::DT_INT8: case draco::DT_UINT8:
-    case draco::DT_INT16: case draco::DT_UINT16: case draco::DT_INT32: case draco::DT_UINT32: break;
-    default: return Error{"POSITION is not of a number type"};
+    case draco::DT_FLOAT32:
+    case draco::DT_FLOAT64:
+    case draco::DT_INT8:
+    case draco::DT_UINT8:
+    case draco::DT_INT16:
+    case draco::DT_UINT16:
+    case draco::DT_INT32:
+    case draco::DT_UINT32:
+      break;
+    default:
+      return Error{"POSITION is not of a number type"};
   }
-  // Draco's dequantization (AttributeQuantizationTransform): value = float(q) * (range / max) + min,
-  // in float, with max = 2^bits − 1.
+  // Draco's dequantization (AttributeQuantizationTransform): value = float(q) * (range / max) +
+  // min, in float, with max = 2^bits − 1.
   draco::AttributeQuantizationTransform quantization;
   const bool quantized = position->GetAttributeTransformData() != nullptr;
   float delta = 0;
@@ -83,7 +94,8 @@ Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<s
     if (ok && quantized) {
       std::int32_t q[3];
       ok = position->ConvertValue<std::int32_t, 3>(value, q);
-      for (int c = 0; c < 3; ++c) xyz[c] = static_cast<float>(q[c]) * delta + quantization.min_value(c);
+      for (int c = 0; c < 3; ++c)
+        xyz[c] = static_cast<float>(q[c]) * delta + quantization.min_value(c);
     } else if (ok) {
       ok = position->ConvertValue<float, 3>(value, xyz);
     }
@@ -94,8 +106,8 @@ Result<DracoMesh> decode_in_this_process(std::string_view bytes, std::optional<s
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t v = in.face(f)[k].value();
       if (v >= in.num_points())
-        return Error{"face " + std::to_string(f.value()) + " names point " + std::to_string(v) + ", but there are " +
-                     std::to_string(in.num_points())};
+        return Error{"face " + std::to_string(f.value()) + " names point " + std::to_string(v) +
+                     ", but there are " + std::to_string(in.num_points())};
       out.mesh.indices.push_back(v);
     }
   }
@@ -116,14 +128,19 @@ Status receive(ChildInput& in, Result<DracoMesh>* result) {
   const Error broken{"Draco's decoder broke off its answer"};
   Error refusal;
   switch (in.read_verdict(&refusal)) {
-    case ChildInput::Verdict::broken: return broken;
-    case ChildInput::Verdict::refused: *result = refusal; return {};
-    case ChildInput::Verdict::accepted: break;
+    case ChildInput::Verdict::broken:
+      return broken;
+    case ChildInput::Verdict::refused:
+      *result = refusal;
+      return {};
+    case ChildInput::Verdict::accepted:
+      break;
   }
   DracoMesh out;
   if (!in.read_value(&out.step) || !std::isfinite(out.step) || out.step < 0) return broken;
   Status refused;
-  if (!in.read_mesh(&out.mesh, "the Draco data", &refused)) return refused ? Status{broken} : refused;
+  if (!in.read_mesh(&out.mesh, "the Draco data", &refused))
+    return refused ? Status{broken} : refused;
   *result = std::move(out);
   return {};
 }
@@ -146,13 +163,15 @@ std::vector<Result<DracoMesh>> decode_draco_all(const std::vector<DracoRequest>&
   const std::uint64_t per_byte = 4096 * static_cast<std::uint64_t>(bytes);
   limits.memory = (std::uint64_t{256} << 20) + std::min(per_byte, memory_budget());
   if (per_byte <= memory_budget())
-    limits.memory_advice = "no Draco mesh of " + std::to_string(bytes) + " bytes needs that much: the data is corrupt";
+    limits.memory_advice =
+        "no Draco mesh of " + std::to_string(bytes) + " bytes needs that much: the data is corrupt";
   std::vector<Result<DracoMesh>> decoded;
   decoded.reserve(requests.size());
   const Status run = run_isolated(
       "Draco's decoder", limits,
       [&](ChildOutput& out) {
-        for (const DracoRequest& r : requests) send(decode_in_this_process(r.bytes, r.position_id), out);
+        for (const DracoRequest& r : requests)
+          send(decode_in_this_process(r.bytes, r.position_id), out);
       },
       [&](ChildInput& in) -> Status {
         while (decoded.size() < requests.size()) {
@@ -166,7 +185,8 @@ std::vector<Result<DracoMesh>> decode_draco_all(const std::vector<DracoRequest>&
   // failed after answering them all); any after it were not reached.
   if (!run && decoded.size() == requests.size() && !decoded.empty()) decoded.back() = run.error();
   if (!run && decoded.size() < requests.size()) decoded.emplace_back(run.error());
-  while (decoded.size() < requests.size()) decoded.emplace_back(Error{"not decoded: Draco's decoder failed on earlier data"});
+  while (decoded.size() < requests.size())
+    decoded.emplace_back(Error{"not decoded: Draco's decoder failed on earlier data"});
   for (Result<DracoMesh>& d : decoded)
     if (d) d->mesh = weld_identical_positions(d->mesh);
   return decoded;
@@ -176,7 +196,8 @@ Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32
   return std::move(decode_draco_all({{bytes, position_id}})[0]);
 }
 
-Result<DracoMesh> decode_draco_unisolated(std::string_view bytes, std::optional<std::uint32_t> position_id) {
+Result<DracoMesh> decode_draco_unisolated(std::string_view bytes,
+                                          std::optional<std::uint32_t> position_id) {
   Result<DracoMesh> decoded = decode_in_this_process(bytes, position_id);
   if (!decoded) return decoded;
   decoded->mesh = weld_identical_positions(decoded->mesh);

@@ -28,7 +28,8 @@ struct DracoMesh {
 // no file (the caller prefixes it).
 // Draco runs in a child process (core/isolated.h): a crash inside Draco, more than 5 s + 10 s per
 // MiB of `bytes` of processor time, or an allocation beyond the memory budget is an Error too.
-Result<DracoMesh> decode_draco(std::string_view bytes, std::optional<std::uint32_t> position_id = {});
+Result<DracoMesh> decode_draco(std::string_view bytes,
+                               std::optional<std::uint32_t> position_id = {});
 
 // Several decodings in one child process (a GLB's compressed primitives), each as decode_draco,
 // in order. If the child fails, the data it was decoding gets that Error, the data after it an
@@ -41,6 +42,7 @@ std::vector<Result<DracoMesh>> decode_draco_all(const std::vector<DracoRequest>&
 
 // The same decoding in this process, trusting Draco: only for measuring what the isolation costs
 // (tests/bench/draco_bench). Readers use decode_draco.
-Result<DracoMesh> decode_draco_unisolated(std::string_view bytes, std::optional<std::uint32_t> position_id = {});
+Result<DracoMesh> decode_draco_unisolated(std::string_view bytes,
+                                          std::optional<std::uint32_t> position_id = {});
 
 }  // namespace lightvol::detail

@@ -1,5 +1,3 @@
-#include <lightvol/io/detail/obj_reader.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -7,6 +5,8 @@
 #include <fstream>
 #include <string_view>
 #include <vector>
+
+#include <lightvol/io/detail/obj_reader.h>
 
 namespace lightvol::detail {
 namespace {
@@ -35,12 +35,12 @@ bool parse_face_vertex(std::string_view word, long long* vertex) {
   };
   long long ignored = 0;
   if (!integer(vertex)) return false;
-  if (p == end) return true;                      // v
+  if (p == end) return true;  // v
   if (*p++ != '/') return false;
   if (p != end && *p != '/' && !integer(&ignored)) return false;  // v/t
   if (p == end) return true;
   if (*p++ != '/') return false;
-  return integer(&ignored) && p == end;           // v//n, v/t/n
+  return integer(&ignored) && p == end;  // v//n, v/t/n
 }
 
 }  // namespace
@@ -83,19 +83,24 @@ Result<Mesh> read_obj(const std::string& path) {
     } else if (keyword == "f") {
       face.clear();
       const auto so_far = static_cast<long long>(mesh.num_vertices());
-      for (std::string_view word = next_word(line, &at); !word.empty(); word = next_word(line, &at)) {
+      for (std::string_view word = next_word(line, &at); !word.empty();
+           word = next_word(line, &at)) {
         long long v = 0;
         if (!parse_face_vertex(word, &v))
-          return fail("face vertex '" + std::string(word.substr(0, 40)) + "' is not v, v/t, v//n or v/t/n");
+          return fail("face vertex '" + std::string(word.substr(0, 40)) +
+                      "' is not v, v/t, v//n or v/t/n");
         if (v == 0 || v < -so_far)
-          return fail("face " + std::to_string(faces) + " names vertex " + std::to_string(v) + ", but there are " +
-                      std::to_string(so_far) + " before it");
+          return fail("face " + std::to_string(faces) + " names vertex " + std::to_string(v) +
+                      ", but there are " + std::to_string(so_far) + " before it");
         if (v > so_far) forward.push_back({faces, number, v});
         face.push_back(v < 0 ? so_far + v : v - 1);
       }
-      if (face.size() < 3) return fail("face " + std::to_string(faces) + " has " + std::to_string(face.size()) + " vertices");
+      if (face.size() < 3)
+        return fail("face " + std::to_string(faces) + " has " + std::to_string(face.size()) +
+                    " vertices");
       for (std::size_t k = 1; k + 1 < face.size(); ++k)
-        mesh.indices.insert(mesh.indices.end(), {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
+        mesh.indices.insert(mesh.indices.end(), {static_cast<std::uint32_t>(face[0]),
+                                                 static_cast<std::uint32_t>(face[k]),
                                                  static_cast<std::uint32_t>(face[k + 1])});
       ++faces;
     }
@@ -103,8 +108,9 @@ Result<Mesh> read_obj(const std::string& path) {
   if (in.bad()) return Error{path + ": cannot read: " + std::strerror(errno)};
   for (const Forward& f : forward)
     if (static_cast<unsigned long long>(f.vertex) > mesh.num_vertices())
-      return Error{path + ": OBJ line " + std::to_string(f.line) + ": face " + std::to_string(f.number) +
-                   " names vertex " + std::to_string(f.vertex) + ", but there are " + std::to_string(mesh.num_vertices())};
+      return Error{path + ": OBJ line " + std::to_string(f.line) + ": face " +
+                   std::to_string(f.number) + " names vertex " + std::to_string(f.vertex) +
+                   ", but there are " + std::to_string(mesh.num_vertices())};
   return mesh;
 }
 

@@ -1,5 +1,3 @@
-#include <lightvol/io/detail/ply_reader.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -12,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <lightvol/io/detail/ply_reader.h>
+
 namespace lightvol::detail {
 namespace {
 
@@ -19,10 +19,10 @@ enum class Type : std::uint8_t { i8, u8, i16, u16, i32, u32, f32, f64 };
 
 std::optional<Type> parse_type(std::string_view name) {
   static constexpr std::pair<std::string_view, Type> kNames[] = {
-      {"char", Type::i8},     {"int8", Type::i8},    {"uchar", Type::u8},   {"uint8", Type::u8},
-      {"short", Type::i16},   {"int16", Type::i16},  {"ushort", Type::u16}, {"uint16", Type::u16},
-      {"int", Type::i32},     {"int32", Type::i32},  {"uint", Type::u32},   {"uint32", Type::u32},
-      {"float", Type::f32},   {"float32", Type::f32}, {"double", Type::f64}, {"float64", Type::f64}};
+      {"char", Type::i8},   {"int8", Type::i8},     {"uchar", Type::u8},   {"uint8", Type::u8},
+      {"short", Type::i16}, {"int16", Type::i16},   {"ushort", Type::u16}, {"uint16", Type::u16},
+      {"int", Type::i32},   {"int32", Type::i32},   {"uint", Type::u32},   {"uint32", Type::u32},
+      {"float", Type::f32}, {"float32", Type::f32}, {"double", Type::f64}, {"float64", Type::f64}};
   for (const auto& [n, t] : kNames)
     if (n == name) return t;
   return std::nullopt;
@@ -113,9 +113,10 @@ Result<Header> read_header(const std::string& path, std::uintmax_t size) {
                                                              : Encoding::big_endian;
     } else if (keyword == "element") {
       std::uint64_t count = 0;
-      const auto [end, ec] = words.size() == 3
-                                 ? std::from_chars(words[2].data(), words[2].data() + words[2].size(), count)
-                                 : std::from_chars_result{nullptr, std::errc::invalid_argument};
+      const auto [end, ec] =
+          words.size() == 3
+              ? std::from_chars(words[2].data(), words[2].data() + words[2].size(), count)
+              : std::from_chars_result{nullptr, std::errc::invalid_argument};
       if (words.size() != 3 || (ec != std::errc() && ec != std::errc::result_out_of_range) ||
           end != words[2].data() + words[2].size())
         return fail("expected 'element NAME COUNT' with a whole-number COUNT");
@@ -135,8 +136,9 @@ Result<Header> read_header(const std::string& path, std::uintmax_t size) {
         type = parse_type(words[1]);
       }
       if (!count_type || !type)
-        return fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with TYPE one "
-                    "of char, uchar, short, ushort, int, uint, float, double");
+        return fail(
+            "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with TYPE one "
+            "of char, uchar, short, ushort, int, uint, float, double");
       if (header.elements.empty()) return fail("a property before any element");
       if (list && (*count_type == Type::f32 || *count_type == Type::f64))
         return fail("a list's count must be of an integer type, not " + quoted(words[2]));
@@ -191,8 +193,9 @@ Result<Header> read_header(const std::string& path, std::uintmax_t size) {
     const bool ascii = header.encoding == Encoding::ascii;
     for (const Property& p : e.properties) {
       const std::size_t items = p.role == Role::face ? 3 : 0;
-      record += ascii ? 2 * (1 + items)
-                      : p.list ? size_of(p.count_type) + items * size_of(p.type) : size_of(p.type);
+      record += ascii    ? 2 * (1 + items)
+                : p.list ? size_of(p.count_type) + items * size_of(p.type)
+                         : size_of(p.type);
     }
     record = std::max<std::uintmax_t>(record, 1);
     if (e.count > (body - std::min(body, needed)) / record)
@@ -235,7 +238,8 @@ class ByteReader {
     std::memmove(buffer_.data(), buffer_.data() + at_, end_ - at_);
     end_ -= at_;
     at_ = 0;
-    in_->read(reinterpret_cast<char*>(buffer_.data() + end_), static_cast<std::streamsize>(buffer_.size() - end_));
+    in_->read(reinterpret_cast<char*>(buffer_.data() + end_),
+              static_cast<std::streamsize>(buffer_.size() - end_));
     end_ += static_cast<std::size_t>(std::max<std::streamsize>(in_->gcount(), 0));
     return end_ >= n;
   }
@@ -260,14 +264,22 @@ double load(const unsigned char* p, bool swap) {
 
 double decode(const unsigned char* p, Type t, bool swap) {
   switch (t) {
-    case Type::i8: return load<std::int8_t>(p, false);
-    case Type::u8: return load<std::uint8_t>(p, false);
-    case Type::i16: return load<std::int16_t>(p, swap);
-    case Type::u16: return load<std::uint16_t>(p, swap);
-    case Type::i32: return load<std::int32_t>(p, swap);
-    case Type::u32: return load<std::uint32_t>(p, swap);
-    case Type::f32: return load<float>(p, swap);
-    case Type::f64: return load<double>(p, swap);
+    case Type::i8:
+      return load<std::int8_t>(p, false);
+    case Type::u8:
+      return load<std::uint8_t>(p, false);
+    case Type::i16:
+      return load<std::int16_t>(p, swap);
+    case Type::u16:
+      return load<std::uint16_t>(p, swap);
+    case Type::i32:
+      return load<std::int32_t>(p, swap);
+    case Type::u32:
+      return load<std::uint32_t>(p, swap);
+    case Type::f32:
+      return load<float>(p, swap);
+    case Type::f64:
+      return load<double>(p, swap);
   }
   return 0;
 }
@@ -280,19 +292,21 @@ class Builder {
     mesh_.indices.reserve(3 * static_cast<std::size_t>(header.faces));
   }
   void set(std::uint64_t vertex, Role axis, double value) {
-    mesh_.positions[3 * vertex + static_cast<std::size_t>(axis) - static_cast<std::size_t>(Role::x)] =
-        static_cast<float>(value);
+    mesh_.positions[3 * vertex + static_cast<std::size_t>(axis) -
+                    static_cast<std::size_t>(Role::x)] = static_cast<float>(value);
   }
   // Adds face number `f`, whose vertex numbers are `face`; an empty string, or what is wrong.
   std::string add_face(std::uint64_t f, const std::vector<double>& face) {
-    if (face.size() < 3) return "face " + std::to_string(f) + " has " + std::to_string(face.size()) + " vertices";
+    if (face.size() < 3)
+      return "face " + std::to_string(f) + " has " + std::to_string(face.size()) + " vertices";
     for (const double v : face) {
       if (!(v >= 0 && v < static_cast<double>(vertices_) && v == std::floor(v)))
-        return "face " + std::to_string(f) + " names vertex " + number_text(v) + ", but there are " +
-               std::to_string(vertices_);
+        return "face " + std::to_string(f) + " names vertex " + number_text(v) +
+               ", but there are " + std::to_string(vertices_);
     }
     for (std::size_t k = 1; k + 1 < face.size(); ++k)
-      mesh_.indices.insert(mesh_.indices.end(), {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
+      mesh_.indices.insert(mesh_.indices.end(), {static_cast<std::uint32_t>(face[0]),
+                                                 static_cast<std::uint32_t>(face[k]),
                                                  static_cast<std::uint32_t>(face[k + 1])});
     return {};
   }
@@ -318,8 +332,8 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
   std::vector<double> face;
   for (const Element& e : header.elements) {
     const auto ends = [&](std::uint64_t i) -> Result<Mesh> {
-      return Error{path + ": PLY file ends inside " + e.name + " element " + std::to_string(i) + " of " +
-                   std::to_string(e.count) + " (truncated?)"};
+      return Error{path + ": PLY file ends inside " + e.name + " element " + std::to_string(i) +
+                   " of " + std::to_string(e.count) + " (truncated?)"};
     };
     for (std::uint64_t i = 0; i < e.count; ++i) {
       for (const Property& p : e.properties) {
@@ -333,8 +347,9 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
         if (!count) return ends(i);
         const double n = decode(count, p.count_type, swap);
         if (n < 0 || n * static_cast<double>(size_of(p.type)) > static_cast<double>(bytes.left()))
-          return Error{path + ": PLY body: " + e.name + " element " + std::to_string(i) + ": a list of " +
-                       std::to_string(static_cast<long long>(n)) + " items, more than the rest of the file holds"};
+          return Error{path + ": PLY body: " + e.name + " element " + std::to_string(i) +
+                       ": a list of " + std::to_string(static_cast<long long>(n)) +
+                       " items, more than the rest of the file holds"};
         const auto items = static_cast<std::size_t>(n);
         if (p.role != Role::face) {
           if (!bytes.skip(items * size_of(p.type))) return ends(i);
@@ -346,7 +361,8 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
           if (!item) return ends(i);
           v = decode(item, p.type, swap);
         }
-        if (std::string bad = mesh.add_face(i, face); !bad.empty()) return Error{path + ": PLY body: " + bad};
+        if (std::string bad = mesh.add_face(i, face); !bad.empty())
+          return Error{path + ": PLY body: " + bad};
       }
     }
   }
@@ -373,8 +389,8 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
     for (std::uint64_t i = 0; i < e.count; ++i) {
       do {
         if (!std::getline(in, line))
-          return Error{path + ": PLY file ends after " + std::to_string(i) + " of " + std::to_string(e.count) +
-                       " " + e.name + " elements (truncated?)"};
+          return Error{path + ": PLY file ends after " + std::to_string(i) + " of " +
+                       std::to_string(e.count) + " " + e.name + " elements (truncated?)"};
         ++number;
         words = split(line);
       } while (words.empty());
@@ -385,28 +401,32 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
       for (const Property& p : e.properties) {
         double value = 0;
         if (at >= words.size())
-          return fail(std::to_string(words.size()) + " values, too few for the properties of element '" + e.name + "'");
+          return fail(std::to_string(words.size()) +
+                      " values, too few for the properties of element '" + e.name + "'");
         if (!parse_number(words[at], &value)) return fail(quoted(words[at]) + " is not a number");
         ++at;
         if (!p.list) {
           if (p.role != Role::skip) mesh.set(i, p.role, value);
           continue;
         }
-        if (!(value >= 0) || value > static_cast<double>(words.size() - at) || value != std::floor(value))
-          return fail("a list of " + std::string(words[at - 1].substr(0, 20)) + " items on a line of " +
-                      std::to_string(words.size()) + " values");
+        if (!(value >= 0) || value > static_cast<double>(words.size() - at) ||
+            value != std::floor(value))
+          return fail("a list of " + std::string(words[at - 1].substr(0, 20)) +
+                      " items on a line of " + std::to_string(words.size()) + " values");
         const auto items = static_cast<std::size_t>(value);
         if (p.role == Role::face) {
           face.resize(items);
           for (std::size_t k = 0; k < items; ++k)
-            if (!parse_number(words[at + k], &face[k])) return fail(quoted(words[at + k]) + " is not a number");
+            if (!parse_number(words[at + k], &face[k]))
+              return fail(quoted(words[at + k]) + " is not a number");
           if (std::string bad = mesh.add_face(i, face); !bad.empty()) return fail(bad);
         }
         at += items;
       }
       if (at != words.size())
-        return fail(std::to_string(words.size()) + " values, more than the properties of element '" + e.name +
-                    "' take (" + std::to_string(at) + ")");
+        return fail(std::to_string(words.size()) +
+                    " values, more than the properties of element '" + e.name + "' take (" +
+                    std::to_string(at) + ")");
     }
   }
   return mesh.take();
@@ -417,7 +437,8 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
 Result<Mesh> read_ply(const std::string& path, std::uintmax_t size) {
   Result<Header> header = read_header(path, size);
   if (!header) return header.error();
-  return header->encoding == Encoding::ascii ? read_ascii(path, *header) : read_binary(path, size, *header);
+  return header->encoding == Encoding::ascii ? read_ascii(path, *header)
+                                             : read_binary(path, size, *header);
 }
 
 }  // namespace lightvol::detail
