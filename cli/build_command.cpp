@@ -12,7 +12,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>

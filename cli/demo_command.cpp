@@ -15,12 +15,12 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
-#include <lightvol/render/bvh.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/scene.h>
+#include <lightvol/scene/bvh.h>
 #include <lightvol/scene/raycast.h>
 #include <lightvol/scene/scene.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 #ifdef LIGHTVOL_HAS_SHADOWMAP
 #include <lightvol/gl/context.h>

@@ -12,7 +12,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/gl/context.h>
 #include <lightvol/light/light.h>
-#include <lightvol/render/bvh.h>
+#include <lightvol/scene/bvh.h>
 #include <lightvol/scene/raycast.h>
 #include <lightvol/scene/scene.h>
 #include <lightvol/scene/shadowmap.h>

@@ -8,7 +8,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format
 )
 sudo=""
 [ "$(id -u)" -eq 0 ] || sudo="sudo"

@@ -4,7 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <lightvol/light/light.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 
 #include "synthetic_scene.h"
 

@@ -22,7 +22,7 @@
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/reference.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "render/analytic_scene.h"

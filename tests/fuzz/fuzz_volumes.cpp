@@ -14,7 +14,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/light/light.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>

@@ -17,6 +17,8 @@ data=$(cd "$here/../../data" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work"
+# Inputs by a relative path: reports name their inputs, and the checkout's folder must not matter.
+ln -s "$data" data
 
 # JSON without the fields that measure time or memory, keys sorted.
 strip_json() {
@@ -37,53 +39,53 @@ run() { "$exe" "$@" --quiet > /dev/null; }
 {
   # Static and adaptive spot volumes in every format; a directional volume; light space.
   for ext in ply obj off stl drc glb; do
-    run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out "static.$ext"
-    run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out "adaptive.$ext" \
+    run build "data/synthetic_256.exr" --light "data/spot_light.json" --out "static.$ext"
+    run build "data/synthetic_256.exr" --light "data/spot_light.json" --out "adaptive.$ext" \
       --adaptive --max-error 0.01
   done
-  run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out static_ascii.ply --ascii
-  run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out static_draco.glb --draco
-  run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out laplacian.ply \
+  run build "data/synthetic_256.exr" --light "data/spot_light.json" --out static_ascii.ply --ascii
+  run build "data/synthetic_256.exr" --light "data/spot_light.json" --out static_draco.glb --draco
+  run build "data/synthetic_256.exr" --light "data/spot_light.json" --out laplacian.ply \
     --refine laplacian --threshold 0.001
-  run build "$data/synthetic_256.exr" --light "$data/directional_light.json" --out directional.ply
-  run build "$data/synthetic_256.exr" --light "$data/directional_light.json" --out directional_adaptive.ply \
+  run build "data/synthetic_256.exr" --light "data/directional_light.json" --out directional.ply
+  run build "data/synthetic_256.exr" --light "data/directional_light.json" --out directional_adaptive.ply \
     --adaptive --max-error 0.001
-  run build "$data/synthetic_256.exr" --light "$data/spot_light.json" --out light_space.ply --space light
+  run build "data/synthetic_256.exr" --light "data/spot_light.json" --out light_space.ply --space light
 
   # Omni: six faces rendered on the CPU from the bundled scene, then static and adaptive volumes.
   printf '{ "type": "omni", "position": [0.5, 3.0, -1.0], "near": 0.1, "far": 40.0 }\n' > omni.json
-  run shadowmap "$data/sponza_crop.ply" --light omni.json --size 48 --out 'omni_{face}.exr' --cpu
+  run shadowmap "data/sponza_crop.ply" --light omni.json --size 48 --out 'omni_{face}.exr' --cpu
   for ext in ply glb; do
     run build 'omni_{face}.exr' --light omni.json --out "omni_static.$ext"
     run build 'omni_{face}.exr' --light omni.json --out "omni_adaptive.$ext" --adaptive --max-error 0.05
   done
 
   # A CPU shadow map of the bundled scene.
-  run shadowmap "$data/sponza_crop.ply" --light "$data/sponza_spot.json" --size 96 --out spot_shadow.exr --cpu
+  run shadowmap "data/sponza_crop.ply" --light "data/sponza_spot.json" --size 96 --out spot_shadow.exr --cpu
 
   # Reports.
-  "$exe" stats "$data/synthetic_256.exr" --light "$data/spot_light.json" --max-error 0.001,0.01 --json --quiet \
+  "$exe" stats "data/synthetic_256.exr" --light "data/spot_light.json" --max-error 0.001,0.01 --json --quiet \
     | strip_json > stats.json
   "$exe" stats 'omni_{face}.exr' --light omni.json --max-error 0.05 --json --quiet | strip_json > stats_omni.json
-  "$exe" check static.ply --light "$data/spot_light.json" --json --quiet | strip_json > check.json
+  "$exe" check static.ply --light "data/spot_light.json" --json --quiet | strip_json > check.json
   "$exe" check adaptive.off --json --quiet | strip_json > check_nolight.json
 
   # Renders of the bundled scene from a small camera: the CPU reference and the volume method.
-  run build spot_shadow.exr --light "$data/sponza_spot.json" --out sponza_static.ply
+  run build spot_shadow.exr --light "data/sponza_spot.json" --out sponza_static.ply
   python3 -c '
 import json, sys
 cam = json.load(open(sys.argv[1])); cam["width"], cam["height"] = 64, 48
-json.dump(cam, open("cam.json", "w"))' "$data/sponza_camera.json"
-  run shadowmap "$data/sponza_crop.ply" --camera cam.json --out camdepth.exr --cpu
+json.dump(cam, open("cam.json", "w"))' "data/sponza_camera.json"
+  run shadowmap "data/sponza_crop.ply" --camera cam.json --out camdepth.exr --cpu
   for method in reference volume; do
-    run render sponza_static.ply --light "$data/sponza_spot.json" --camera cam.json \
-      --depth camdepth.exr --medium "$data/sponza_medium.json" --shadow-map spot_shadow.exr \
+    run render sponza_static.ply --light "data/sponza_spot.json" --camera cam.json \
+      --depth camdepth.exr --medium "data/sponza_medium.json" --shadow-map spot_shadow.exr \
       --method $method --out "render_$method.exr"
   done
 } 2> errors.txt || { cat errors.txt >&2; exit 1; }
 
 for f in $(ls | sort); do
-  case "$f" in errors.txt|hashes.txt|cam.json|omni.json) continue ;; esac
+  case "$f" in errors.txt|hashes.txt|cam.json|omni.json|data) continue ;; esac
   case "$f" in
     # OpenEXR files carry the time they were written (DateTime): hash the rest of the header
     # and the pixels (OpenImageIO's SHA-1 of the pixel data).

@@ -15,7 +15,7 @@
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/light/light.h>
-#include <lightvol/render/bvh.h>
+#include <lightvol/scene/bvh.h>
 #include <lightvol/scene/raycast.h>
 #include <lightvol/scene/scene.h>
 #include <lightvol/scene/shadowmap.h>

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/core/mesh.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/test_support.h"

@@ -38,4 +38,8 @@ Bounds bounding_box(const Mesh& mesh);
 // a closed mesh oriented outward; meaningless for an open one.
 double signed_volume(const Mesh& mesh);
 
+// Welds vertices with bit-identical positions (STL files, Draco decodes): returns the mesh with
+// each position once, in order of first use, and the triangles re-indexed. O(n log n) on any input.
+Mesh weld_identical_positions(const Mesh& mesh);
+
 }  // namespace lightvol

@@ -5,14 +5,10 @@
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
+#include <lightvol/io/mesh_format.h>
 #include <lightvol/light/light.h>
 
 namespace lightvol {
-
-enum class MeshFormat { ply, obj, off, stl, drc, glb };
-
-// The format a path's extension names (case-insensitive), or an Error listing the known ones.
-Result<MeshFormat> mesh_format_from_path(const std::string& path);
 
 struct ExportOptions {
   bool ascii = false;   // PLY: ASCII instead of binary little-endian; STL: ASCII instead of binary

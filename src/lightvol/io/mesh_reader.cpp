@@ -13,14 +13,13 @@
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 
-#include <lightvol/check/detail/topology.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
-#include <lightvol/export/export.h>
 #include <lightvol/io/detail/draco_mesh.h>
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
 #include <lightvol/io/detail/ply_reader.h>
+#include <lightvol/io/mesh_format.h>
 #include <lightvol/io/mesh_reader.h>
 
 namespace lightvol {

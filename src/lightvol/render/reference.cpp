@@ -6,8 +6,8 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
-#include <lightvol/render/bvh.h>
 #include <lightvol/render/reference.h>
+#include <lightvol/scene/bvh.h>
 
 namespace lightvol {
 

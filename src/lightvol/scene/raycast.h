@@ -7,7 +7,7 @@
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/light/light.h>
-#include <lightvol/render/bvh.h>
+#include <lightvol/scene/bvh.h>
 
 namespace lightvol {
 

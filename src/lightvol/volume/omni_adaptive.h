@@ -15,7 +15,7 @@
 #include <lightvol/core/result.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/light/light.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 namespace lightvol {

@@ -9,10 +9,6 @@
 
 namespace lightvol {
 
-// Welds vertices with bit-identical positions (STL files, Draco decodes): returns the mesh with
-// each position once, in order of first use, and the triangles re-indexed.
-Mesh weld_identical_positions(const Mesh& mesh);
-
 // Closed, edge-manifold and consistently oriented: every undirected edge is used by exactly two
 // triangles, once in each direction. Also: indices in range, no triangle repeating a vertex
 // (collapsed), no zero-area triangle, and a positive signed volume (outward). The Error names

@@ -7,7 +7,6 @@
 #include <draco/compression/decode.h>
 #include <draco/mesh/mesh.h>
 
-#include <lightvol/check/detail/topology.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/io/detail/draco_mesh.h>

@@ -6,7 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
-#include <lightvol/tessellate/adaptive_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/closing.h>
 
 namespace lightvol {

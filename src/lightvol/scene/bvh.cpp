@@ -3,7 +3,7 @@
 #include <limits>
 
 #include <lightvol/core/check.h>
-#include <lightvol/render/bvh.h>
+#include <lightvol/scene/bvh.h>
 
 namespace lightvol {
 
