@@ -16,14 +16,16 @@ src/, cli/ and tests/ keeps to it:
 
 Each break is printed as FILE:LINE: the include and the rule it breaks.
 Usage: tools/check_includes.py [REPO_ROOT]
+       tools/check_includes.py --self-test   (plants each kind of break in a scratch tree and
+                                              fails unless every one is reported)
 """
 import os
 import re
 import sys
 
-ROOT = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), ".."))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
-STAGE_ROW = re.compile(r"^\|\s*`([a-z_]+)`\s*\|([^|]*)\|")
+STAGE_ROW = re.compile(r"^\|\s*`([a-z_0-9]+)`\s*\|([^|]*)\|")
 GL_HEADERS = re.compile(r"^(GL|EGL|KHR)/")
 
 
@@ -37,7 +39,7 @@ def read_table():
                 continue
             m = STAGE_ROW.match(line) if in_graph else None
             if m:
-                allowed[m.group(1)] = set(re.findall(r"`([a-z_]+)`", m.group(2)))
+                allowed[m.group(1)] = set(re.findall(r"`([a-z_0-9]+)`", m.group(2)))
     if not allowed:
         sys.exit(f"{path}: no stage table under '## Stage graph'")
     return allowed
@@ -108,7 +110,7 @@ def main():
                     if top == "src" and quoted:
                         errors.append(f"{where}: the library includes rooted paths only (<lightvol/...>)")
                         continue
-                    target = re.match(r"lightvol/([a-z_]+)/(detail/)?", name)
+                    target = re.match(r"lightvol/([a-z_0-9]+)/(detail/)?", name)
                     if target:
                         t_stage, t_detail = target.group(1), bool(target.group(2))
                         if t_stage not in allowed:
@@ -133,5 +135,64 @@ def main():
     return 0
 
 
+SELF_TEST_TABLE = """## Stage graph
+| stage | may include | what it holds |
+|---|---|---|
+| `core` | | |
+| `light` | `core` | |
+| `gl` | `core` | |
+"""
+
+# Each planted file and the words its break must be reported with; the first two are clean.
+SELF_TEST_FILES = {
+    "src/lightvol/core/a.h": ("#include <vector>\n", None),
+    "src/lightvol/light/b.cpp": ("#include <lightvol/core/a.h>\n#include <lightvol/core/detail/x.h>\n", None),
+    "src/lightvol/core/c.cpp": ("#include <lightvol/light/b.h>\n", "stage 'core' may not include stage 'light'"),
+    "src/lightvol/gl/d.cpp": ("#include <lightvol/light/detail/y.h>\n", "is internal to stage 'light'"),
+    "src/lightvol/light/e.h": ("#include <nlohmann/json.hpp>\n", "a public header includes a private dependency"),
+    "src/lightvol/light/f.h": ("#include <lightvol/light/detail/y.h>\n", "a public header includes an internal one"),
+    "src/lightvol/light/g.cpp": ('#include "b.h"\n', "rooted paths only"),
+    "src/lightvol/extra/h.cpp": ("\n", "a folder that docs/architecture.md's stage graph does not list"),
+    "cli/i.cpp": ("#include <lightvol/core/detail/x.h>\n", "is internal to stage 'core'"),
+}
+
+
+def self_test():
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as root:
+        os.makedirs(os.path.join(root, "docs"))
+        with open(os.path.join(root, "docs", "architecture.md"), "w") as f:
+            f.write(SELF_TEST_TABLE)
+        for rel, (text, _) in SELF_TEST_FILES.items():
+            os.makedirs(os.path.dirname(os.path.join(root, rel)), exist_ok=True)
+            with open(os.path.join(root, rel), "w") as f:
+                f.write(text)
+        os.makedirs(os.path.join(root, "tools"))
+        script = os.path.join(root, "tools", "check_includes.py")
+        with open(__file__) as src, open(script, "w") as dst:
+            dst.write(src.read())
+        run = subprocess.run([sys.executable, script], capture_output=True, text=True)
+        failures = []
+        if run.returncode != 1:
+            failures.append(f"exit status {run.returncode}, expected 1")
+        for rel, (_, words) in SELF_TEST_FILES.items():
+            lines = [l for l in run.stdout.splitlines()
+                     if l.startswith(rel) or l.startswith(os.path.dirname(rel) + "/:")]
+            if words and not any(words in l for l in lines):
+                failures.append(f"{rel}: not reported as '{words}'")
+            if not words and lines:
+                failures.append(f"{rel}: reported though it keeps the graph: {lines}")
+        with open(os.path.join(root, "docs", "architecture.md"), "a") as f:
+            f.write("| `cycle` | `cycle2` | |\n| `cycle2` | `cycle` | |\n")
+        run = subprocess.run([sys.executable, script], capture_output=True, text=True)
+        if "the stage graph has a cycle: cycle -> cycle2 -> cycle" not in run.stdout:
+            failures.append("a cycle in the table was not reported: " + run.stdout)
+    for f in failures:
+        print("self-test:", f)
+    print("check_includes self-test:", "failed" if failures else f"all {len(SELF_TEST_FILES) + 1} cases as expected")
+    return 1 if failures else 0
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(self_test() if sys.argv[1:] == ["--self-test"] else main())
