@@ -123,7 +123,7 @@ int run_render(const RenderOptions& o) {
         frame_seconds.push_back(s);
       }
     } else {
-      // Omni maps: six files, one path with {face}, or one W x 6W strip (DESIGN §2).
+      // Omni maps: six files, one path with {face}, or one W x 6W strip (docs/design.md §2).
       std::vector<std::string> paths = o.shadow_maps;
       if (scene.light.type == LightType::omni && paths.size() == 1 &&
           paths[0].find("{face}") != std::string::npos) {

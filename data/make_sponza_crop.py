@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Makes data/sponza_crop.ply, the demo's scene: the middle of the Dabrovic Sponza atrium.
 
-Usage: python3 data/make_sponza_crop.py ../shared/scenes/sponza/sponza.obj data/sponza_crop.ply
+Usage: python3 data/make_sponza_crop.py sponza.obj data/sponza_crop.ply
+
+sponza.obj is the whole atrium (66,454 triangles); where it comes from is in data/README.md.
 
 Keeps every triangle of sponza.obj that reaches into the slab |x| <= 6 (its x extent overlaps
 [-6, 6]): the atrium's middle with both arcades, their columns and arches, the upper gallery,

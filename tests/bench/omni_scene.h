@@ -12,7 +12,7 @@ namespace lightvol::bench {
 // {"type": "omni", "position": [0.3, 1.6, -0.4], "near": 0.05, "far": 30, "depth": "window"}
 std::string omni_scene_light_json();
 
-// The six W×W window-depth faces of the scene (+X −X +Y −Y +Z −Z, DESIGN §2 face frames).
+// The six W×W window-depth faces of the scene (+X −X +Y −Y +Z −Z, docs/design.md §2 face frames).
 CubeFaces omni_scene(int width);
 
 }  // namespace lightvol::bench

@@ -10,8 +10,9 @@
 #                pass at the camera's size (GPU = llvmpipe here)
 # Prints markdown tables. Usage:
 #   tests/bench/sponza_bench.sh BUILD_DIR [SCENE] [MAX_ERROR] [SIZES] [OMNI_SIZES]
-# BUILD_DIR holds the `lightvol` binary; SCENE defaults to ../shared/scenes/sponza/sponza.obj next to
-# the repository. Needs about 2.5 GB of free space in $TMPDIR for the 4096² PLY files.
+# BUILD_DIR holds the `lightvol` binary; SCENE (the full Dabrovic Sponza OBJ, see data/README.md)
+# defaults to ../shared/scenes/sponza/sponza.obj next to the repository. Needs about 2.5 GB of
+# free space in $TMPDIR for the 4096² PLY files.
 set -euo pipefail
 build=$(realpath "${1:?usage: sponza_bench.sh BUILD_DIR [SCENE] [MAX_ERROR] [SIZES] [OMNI_SIZES]}")
 repo=$(cd "$(dirname "$0")/../.." && pwd)

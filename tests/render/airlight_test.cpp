@@ -1,5 +1,5 @@
-// The airlight maths of DESIGN §6 against direct numerical integration, and the medium and camera
-// descriptions' parsing.
+// The airlight maths of docs/design.md §6 against direct numerical integration, and the medium and
+// camera descriptions' parsing.
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -41,7 +41,7 @@ TEST(Phase, IsNormalizedOverTheSphere) {
   }
 }
 
-// La(0, t) by brute force in s, straight from the integrand of DESIGN §6.
+// La(0, t) by brute force in s, straight from the integrand of docs/design.md §6.
 double point_brute(const Light& light, const Medium& m, const Ray& ray, double t) {
   return midpoint(
       [&](double s) {

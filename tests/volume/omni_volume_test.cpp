@@ -221,7 +221,7 @@ TEST(OmniVolume, MismatchedFacesAreErrorsNamingTheFace) {
 
 // ---- the face convention and the adjacency, against the geometry of the texel rays -------------
 
-// DESIGN §2, written out independently of light.cpp: look and up of each face.
+// docs/design.md §2, written out independently of light.cpp: look and up of each face.
 const Vec3d kLook[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 const Vec3d kUp[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
 

@@ -1,5 +1,5 @@
-// Single-scattering airlight in a homogeneous medium (DESIGN §6), in double precision, and the
-// medium and camera descriptions that `lightvol render` reads.
+// Single-scattering airlight in a homogeneous medium (docs/design.md §6), in double precision, and
+// the medium and camera descriptions that `lightvol render` reads.
 //
 // A ray leaves the eye E along the unit direction ω; La(0, t) is the light scattered toward the eye
 // from its first t world units. Summed with signs over a light volume's fragments along the ray
@@ -35,7 +35,7 @@ struct Phase {
 
 // ---- spotlight profile --------------------------------------------------------------------------
 
-// The soft-edged spotlight of seed 002, beyond the paper: the intensity is scaled by
+// The soft-edged spotlight of docs/design.md §6, beyond the paper: the intensity is scaled by
 // smoothstep(cos outer, cos inner, cos α), α the angle between the light's direction and the
 // direction from the light to the point. Angles from the axis, in degrees; off when outer_deg is 0.
 struct SpotProfile {
@@ -67,9 +67,9 @@ Result<Medium> load_medium(const std::string& path);
 
 // ---- camera -------------------------------------------------------------------------------------
 
-// A camera is a light description (DESIGN §2, "type" defaults to "spot"; a directional type gives
-// an orthographic camera) plus the image size. Its "depth" key is the encoding of the camera depth
-// image that `lightvol render --depth` reads.
+// A camera is a light description (docs/design.md §2, "type" defaults to "spot"; a directional type
+// gives an orthographic camera) plus the image size. Its "depth" key is the encoding of the camera
+// depth image that `lightvol render --depth` reads.
 struct Camera {
   Light view;  // position, direction, projection, near/far, depth encoding, flip_y
   int width = 0;
@@ -100,7 +100,7 @@ Result<std::vector<double>> surface_distances(const Camera& camera, const std::v
 double sun_f(double u, double v);
 
 // ∫ from a to b of p(cos 2ξ)·exp(−u tan ξ) dξ (0 ≤ a, b ≤ π/2), composite Gauss–Legendre to
-// about 1e-12 relative. The point-light integrand of DESIGN §6.
+// about 1e-12 relative. The point-light integrand of docs/design.md §6.
 double phase_integral(const Phase& phase, double u, double a, double b);
 
 // La(0, t) along one ray for one light and medium, in double precision.

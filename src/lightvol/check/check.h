@@ -1,5 +1,6 @@
-// Validating a light volume (DESIGN §4): is it closed, edge-manifold, consistently oriented,
-// outward, free of degenerate faces, T-junctions and self-intersections, and non-self-nesting?
+// Validating a light volume (docs/design.md §4): is it closed, edge-manifold, consistently
+// oriented, outward, free of degenerate faces, T-junctions and self-intersections, and
+// non-self-nesting?
 //
 // Two ways to prove non-self-nesting (winding number 1 inside, 0 outside), which is what makes
 // the signed airlight sum exact:

@@ -1,4 +1,4 @@
-// Omni-light depth input (DESIGN §2): six square faces in the order +X −X +Y −Y +Z −Z.
+// Omni-light depth input (docs/design.md §2): six square faces in the order +X −X +Y −Y +Z −Z.
 //
 // Three forms on disk: six files in that order; one path containing `{face}`, expanded to
 // px nx py ny pz nz; or one vertical strip W × 6W with the faces stacked top to bottom in that

@@ -9,8 +9,8 @@
 
 namespace lightvol {
 
-// One channel of depths, row-major, first stored row first (DESIGN §2: the top of the light's view
-// unless flip_y). Values are as stored; their meaning is the light's `depth` encoding.
+// One channel of depths, row-major, first stored row first (docs/design.md §2: the top of the
+// light's view unless flip_y). Values are as stored; their meaning is the light's `depth` encoding.
 struct DepthImage {
   int width = 0;
   int height = 0;

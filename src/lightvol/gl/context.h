@@ -1,4 +1,4 @@
-// Headless OpenGL 4.5 core through EGL, with no display and no window (DESIGN §7).
+// Headless OpenGL 4.5 core through EGL, with no display and no window (docs/design.md §7).
 //
 // On a machine without a GPU this runs on Mesa's llvmpipe. Everything a renderer needs fits in a
 // few calls:

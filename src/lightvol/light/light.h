@@ -1,4 +1,5 @@
-// The light description (LIGHT.json, DESIGN §2) and the mapping from shadow-map texels to points.
+// The light description (LIGHT.json, docs/design.md §2) and the mapping from shadow-map texels
+// to points.
 //
 // Frames: *world*; the light's *eye* space (OpenGL: the light looks down its −Z, +Y up); *NDC*
 // after the projection; *window depth* d in [0, 1] with z_ndc = 2d − 1. The first stored image row
@@ -50,7 +51,7 @@ Result<Light> load_light(const std::string& path);
 // Omni faces in the order +X −X +Y −Y +Z −Z, and their file-name tags (px nx py ny pz nz).
 inline constexpr int kOmniFaces = 6;
 std::string_view omni_face_tag(int face);
-// World → eye of omni face `face`: a 90° camera at the light position with DESIGN §2's look/up.
+// World → eye of omni face `face`: a 90° camera at the light with the look/up of docs/design.md §2.
 Mat4d omni_face_view(const Light& light, int face);
 
 // Output frame of a volume.

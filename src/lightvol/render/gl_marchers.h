@@ -1,13 +1,14 @@
-// The classic alternatives to light volumes, on the GPU, for comparison (DESIGN §6):
+// The classic alternatives to light volumes, on the GPU, for comparison (docs/design.md §6):
 //
 // raymarch — Tóth & Umenhoffer 2009: N steps per pixel from the eye to the visible surface (within
 //   the light's frustum bounds), each step's point looked up in the shadow map(s). Interleaved
 //   sampling: within each M×M pixel block every pixel offsets its steps by a different fraction
 //   (k + ½)/M² of a step, and a separable M-wide box gather (horizontal, then vertical) averages
 //   the block, so each pixel sees M²·N distinct samples for the price of N. M = 1 is the plain
-//   marcher of seed 002. The shadow test interpolates the map's window depth over the same two
-//   triangles per texel quad as the static volume, so the marcher converges to the volume's exact
-//   airlight. Spot and directional lights take one map; omni lights six faces (+X −X +Y −Y +Z −Z).
+//   marcher of the blog post "Volumetric lighting 1 – A naive approach". The shadow test
+//   interpolates the map's window depth over the same two triangles per texel quad as the static
+//   volume, so the marcher converges to the volume's exact airlight. Spot and directional lights
+//   take one map; omni lights six faces (+X −X +Y −Y +Z −Z).
 // radial — Mitchell 2007 (GPU Gems 3, ch. 13): an occlusion pre-pass from the camera depth (pixels
 //   whose surface lies beyond the light, weighted by the unshadowed glow around the light,
 //   σs·I·p(θ)·e^(−σt·D)/max(h, D/50), h the light's distance from the pixel ray) blurred

@@ -37,7 +37,7 @@ uniform float phase_param;     // g or k
 uniform sampler2D f_table;
 uniform float f_u_max;
 
-uniform int profile_enabled;   // seed 002's soft-edged spot: smoothstep(cos outer, cos inner, cos α)
+uniform int profile_enabled;   // soft-edged spot, docs/design.md §6: smoothstep(cos outer, cos inner, cos α)
 uniform float profile_cos_inner;
 uniform float profile_cos_outer;
 

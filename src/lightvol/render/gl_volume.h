@@ -1,5 +1,6 @@
 // The paper's method on the GPU: a light volume rasterized with additive float blending, each
-// fragment adding or subtracting the airlight from the eye to it (DESIGN §6, method `volume`).
+// fragment adding or subtracting the airlight from the eye to it (docs/design.md §6, method
+// `volume`).
 //
 // Float precision. A fragment's La(0, t) can be much larger than the pixel's net airlight (the
 // differences of large values the paper warns about). The renderer therefore
@@ -17,10 +18,10 @@
 // Isotropic media read Sun et al.'s F(u, v) from a 2D float texture (u = σt·h on a square-root axis
 // up to u_max = 32, v on [0, π/2]; bilinear interpolation in the shader with float weights);
 // Henyey–Greenstein and Schlick phases, u beyond the table, and spot lights with a soft-edged
-// profile (Medium::profile, seed 002) use 8-point Gauss–Legendre panels (8 per fragment with a
-// profile, whose smoothstep edge is only C¹).
-// Fragments beyond the visible surface clamp their t to the camera depth (a texture); depth test
-// and clipping are off (GL_DEPTH_CLAMP) so no fragment of the closed volume is lost.
+// profile (Medium::profile, docs/design.md §6) use 8-point Gauss–Legendre panels (8 per fragment
+// with a profile, whose smoothstep edge is only C¹). Fragments beyond the visible surface clamp
+// their t to the camera depth (a texture); depth test and clipping are off (GL_DEPTH_CLAMP) so no
+// fragment of the closed volume is lost.
 #pragma once
 
 #include <memory>

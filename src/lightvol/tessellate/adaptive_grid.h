@@ -1,4 +1,5 @@
-// Adaptive tessellation of one depth image's texel grid (DESIGN §3 "Adaptive"; paper §4.1).
+// Adaptive tessellation of one depth image's texel grid (docs/design.md §3 "Adaptive"; the
+// paper, Billeter et al. 2010, §4.1).
 //
 // The grid's vertices are texels (col, row); a quadtree of cells covers the (W−1)×(H−1) quads.
 // A cell of level L spans 2^L quads per side, clipped at the far edges of a grid whose size is not

@@ -1,5 +1,6 @@
-// The adaptive light volume (DESIGN §3 "Adaptive"): the adaptive grid of one depth image, closed
-// like the static volume (spot fan, directional walls and cap) through exactly its border vertices.
+// The adaptive light volume (docs/design.md §3 "Adaptive"): the adaptive grid of one depth image,
+// closed like the static volume (spot fan, directional walls and cap) through exactly its border
+// vertices.
 #pragma once
 
 #include <cstdint>

@@ -1,5 +1,5 @@
-// Closing a grid surface into a volume (DESIGN §3): the spot fan to the light position, or the
-// directional walls down to the near plane and the cap there. Shared by the static and the
+// Closing a grid surface into a volume (docs/design.md §3): the spot fan to the light position, or
+// the directional walls down to the near plane and the cap there. Shared by the static and the
 // adaptive volumes, so both close exactly the border vertices their grids use.
 #pragma once
 

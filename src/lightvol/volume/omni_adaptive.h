@@ -1,6 +1,7 @@
-// The adaptive omni volume (DESIGN §3 "Adaptive", omni): each cube face tessellated adaptively
-// (tessellate/adaptive_grid.h) under one bound, the faces' border vertices made to agree across
-// every cube edge, then joined by seam strips and corner triangles like the static omni volume.
+// The adaptive omni volume (docs/design.md §3 "Adaptive", omni): each cube face tessellated
+// adaptively (tessellate/adaptive_grid.h) under one bound, the faces' border vertices made to agree
+// across every cube edge, then joined by seam strips and corner triangles like the static omni
+// volume.
 //
 // Across a cube edge both faces carry exactly the same border vertices (each side is forced to
 // take the other's, repeated until neither changes; the quadtrees' 2:1 balance propagates the

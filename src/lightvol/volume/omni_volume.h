@@ -1,5 +1,5 @@
-// The static light volume of an omni light (DESIGN §2, §3): six cube-face grids, the twelve cube
-// edges joined by seam strips, the eight cube corners closed by one triangle each.
+// The static light volume of an omni light (docs/design.md §2, §3): six cube-face grids, the twelve
+// cube edges joined by seam strips, the eight cube corners closed by one triangle each.
 //
 // For six W×W faces: 6W² vertices (face f's texel (col, row) is vertex f·W² + row·W + col; no
 // vertex at the light) and 12W² − 4 triangles, in this order: the six face grids (2(W−1)² each,

@@ -1,4 +1,4 @@
-// The static light volume (DESIGN §3): one vertex per texel, closed to the light.
+// The static light volume (docs/design.md §3): one vertex per texel, closed to the light.
 #pragma once
 
 #include <cstdint>
