@@ -1,10 +1,13 @@
 // lightvol build: depth image(s) + light description → closed light volume on disk.
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/airlight/airlight.h>
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
@@ -30,6 +33,7 @@ struct BuildOptions {
   std::string channel;
   std::string space = "world";
   std::string report_path;
+  std::string medium_path;  // --medium: recorded in a GLB's light node
   bool ascii = false;
   bool draco = false;
   int draco_bits = 16;
@@ -56,6 +60,8 @@ int run_build(const BuildOptions& o) {
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
   if (!format) return fail(format.error().message);
   if (o.draco && *format != MeshFormat::glb) return fail("--draco: applies to .glb output only");
+  if (!o.medium_path.empty() && *format != MeshFormat::glb)
+    return fail("--medium: applies to .glb output only (the file records it beside the light)");
   if (o.ascii && *format != MeshFormat::ply && *format != MeshFormat::stl)
     return fail("--ascii: applies to .ply and .stl output only");
 
@@ -74,6 +80,18 @@ int run_build(const BuildOptions& o) {
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
   progress.end();
+  std::string medium_json;
+  if (!o.medium_path.empty()) {
+    if (Result<Medium> medium = load_medium(o.medium_path); !medium)
+      return fail(medium.error().message);
+    std::ifstream in(o.medium_path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    // load_medium accepted it: a JSON object; recorded without its formatting.
+    const nlohmann::json medium = nlohmann::json::parse(text.str(), nullptr, false);
+    if (medium.is_discarded()) return fail(o.medium_path + ": changed while being read");
+    medium_json = medium.dump();
+  }
   // Omni: six faces (six paths, one {face} path or one W x 6W strip), read as a cube.
   const bool omni = light->type == LightType::omni;
   Result<CubeFaces> cube = Error{""};
@@ -136,6 +154,12 @@ int run_build(const BuildOptions& o) {
   eo.draco = o.draco;
   eo.draco_bits = o.draco_bits;
   if (!o.no_check) eo.light = &frame_light;  // a lossy encoding must stay sound seen from the light
+  // A GLB carries its light, in the volume's frame: in light space the light's eye space is the
+  // frame itself (omni: world axes at the light), so its view is the identity.
+  Light glb_light = frame_light;
+  if (vo.space == Space::light) glb_light.view = Mat4d::identity();
+  eo.glb.light = &glb_light;
+  eo.glb.medium_json = medium_json;
   if (Status s = write_mesh(o.out_path, *mesh, eo); !s) return fail(s.error().message);
   progress.end();
 
@@ -226,6 +250,10 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_option("--draco-bits", o->draco_bits, "Position quantization bits for .drc and --draco")
       ->check(CLI::Range(1, 30))
       ->capture_default_str();
+  cmd->add_option(
+      "--medium", o->medium_path,
+      "Medium JSON to record in a .glb beside the light (its intensity becomes the glTF "
+      "light's)");
   cmd->add_option("--report", o->report_path,
                   "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");

@@ -1,6 +1,10 @@
 // Every export format, read back with an independent reader and compared with what was written.
+#include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <sstream>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -8,9 +12,11 @@
 #include <draco/compression/decode.h>
 #include <draco/io/gltf_decoder.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
+#include <lightvol/io/mesh_reader.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/test_support.h"
@@ -155,6 +161,123 @@ TEST(Export, GlbPlainAndDracoCompressed) {
     EXPECT_TRUE(test::is_closed_and_oriented(back));
     if (!compressed) {
       EXPECT_EQ(triangle_soup(back), triangle_soup(m));
+    }
+  }
+}
+
+// The JSON chunk of a GLB file's bytes.
+nlohmann::json glb_json(const std::string& bytes) {
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  return nlohmann::json::parse(bytes.substr(20, length));
+}
+
+// Rotates v by the unit quaternion q = (x, y, z, w).
+Vec3d rotate(const nlohmann::json& q, Vec3d v) {
+  const Vec3d u{q[0].get<double>(), q[1].get<double>(), q[2].get<double>()};
+  const double w = q[3].get<double>();
+  return 2 * dot(u, v) * u + (w * w - dot(u, u)) * v + 2 * w * cross(u, v);
+}
+
+TEST(Export, GlbCarriesItsLightAndBufferTargets) {
+  test::TempDir dir;
+  const Mesh m = sample_volume();
+  const Light spot = test::light_from_json(test::spot_json("linear", 1.2));
+  for (bool compressed : {false, true}) {
+    SCOPED_TRACE(compressed ? "draco" : "plain");
+    ExportOptions o;
+    o.draco = compressed;
+    o.glb.light = &spot;
+    o.glb.medium_json = R"({"scattering": 0.1, "intensity": 7.5})";
+    const std::string path = dir.file(compressed ? "c.glb" : "p.glb");
+    ASSERT_TRUE(write_mesh(path, m, o).ok());
+    const nlohmann::json doc = glb_json(slurp(path));
+
+    // Every buffer view an accessor reads: vertices ARRAY_BUFFER, indices ELEMENT_ARRAY_BUFFER.
+    const nlohmann::json& primitive = doc["meshes"][0]["primitives"][0];
+    if (!compressed) {
+      const auto view_of = [&](int accessor) {
+        return doc["bufferViews"][doc["accessors"][accessor]["bufferView"].get<int>()];
+      };
+      EXPECT_EQ(view_of(primitive["attributes"]["POSITION"])["target"], 34962);
+      EXPECT_EQ(view_of(primitive["indices"])["target"], 34963);
+    }
+
+    // The light: a spot whose cones are inscribed in (half of fov_y = 30°, the narrower side) and
+    // circumscribe (to the corner: atan(√(tan²30° + (1.2 tan 30°)²))) the 1.2:1 frustum.
+    ASSERT_EQ(doc["extensionsUsed"].back(), "KHR_lights_punctual");
+    const nlohmann::json& light = doc["extensions"]["KHR_lights_punctual"]["lights"][0];
+    EXPECT_EQ(light["type"], "spot");
+    const double t30 = std::tan(std::numbers::pi / 6);
+    EXPECT_NEAR(light["spot"]["innerConeAngle"].get<double>(), std::numbers::pi / 6, 1e-12);
+    EXPECT_NEAR(light["spot"]["outerConeAngle"].get<double>(),
+                std::atan(std::hypot(t30, 1.2 * t30)), 1e-12);
+    EXPECT_EQ(light["intensity"], 7.5);
+
+    // The node at the light's pose, in the default scene: its −Z is the light's direction (−Y),
+    // its +Y the light's up (−Z).
+    const nlohmann::json& scene_nodes = doc["scenes"][doc.value("scene", 0)]["nodes"];
+    const int n = scene_nodes.back().get<int>();
+    const nlohmann::json& node = doc["nodes"][n];
+    EXPECT_EQ(node["extensions"]["KHR_lights_punctual"]["light"], 0);
+    EXPECT_EQ(node["translation"], nlohmann::json({0.0, 4.0, 0.0}));
+    const Vec3d forward = rotate(node["rotation"], {0, 0, -1}),
+                up = rotate(node["rotation"], {0, 1, 0});
+    EXPECT_NEAR(length(forward - Vec3d{0, -1, 0}), 0, 1e-12);
+    EXPECT_NEAR(length(up - Vec3d{0, 0, -1}), 0, 1e-12);
+
+    // extras: lightvol reads the light back as the same light; the medium as given.
+    const nlohmann::json& extras = node["extras"]["lightvol"];
+    Result<Light> back = parse_light(extras["light"].dump(), "extras");
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->type, spot.type);
+    EXPECT_EQ(back->depth, spot.depth);
+    EXPECT_EQ(back->view.m, spot.view.m);
+    EXPECT_EQ(back->projection.m, spot.projection.m);
+    EXPECT_EQ(extras["medium"]["scattering"], 0.1);
+
+    // The mesh reads back as before: the light node adds no geometry.
+    Result<Mesh> mesh = read_mesh(path);
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    EXPECT_EQ(mesh->num_triangles(), m.num_triangles());
+    if (!compressed) {
+      EXPECT_EQ(triangle_soup(*mesh), triangle_soup(m));
+    }
+  }
+}
+
+TEST(Export, GlbLightTypes) {
+  test::TempDir dir;
+  const Mesh m = sample_volume();
+  const Light directional = test::light_from_json(test::directional_json());
+  const Light omni =
+      test::light_from_json(R"({"type": "omni", "position": [1, 2, 3], "near": 0.5, "far": 10})");
+  for (const Light* light : {&directional, &omni}) {
+    ExportOptions o;
+    o.glb.light = light;
+    const std::string path = dir.file("l.glb");
+    std::filesystem::remove(path);
+    ASSERT_TRUE(write_mesh(path, m, o).ok());
+    const nlohmann::json doc = glb_json(slurp(path));
+    const nlohmann::json& punctual = doc["extensions"]["KHR_lights_punctual"]["lights"][0];
+    const nlohmann::json& node = doc["nodes"][doc["nodes"].size() - 1];
+    Result<Light> back = parse_light(node["extras"]["lightvol"]["light"].dump(), "extras");
+    ASSERT_TRUE(back.ok()) << back.error().message;
+    EXPECT_EQ(back->type, light->type);
+    EXPECT_FALSE(node["extras"]["lightvol"].contains("medium"));
+    EXPECT_EQ(punctual["intensity"], 1.0);
+    if (light == &omni) {
+      EXPECT_EQ(punctual["type"], "point");
+      EXPECT_NEAR(punctual["range"].get<double>(), 10 * std::sqrt(3.0), 1e-12);
+      EXPECT_EQ(node["translation"], nlohmann::json({1.0, 2.0, 3.0}));
+      EXPECT_FALSE(node.contains("rotation"));
+      EXPECT_EQ(back->position.x, 1);
+      EXPECT_EQ(back->far, 10);
+    } else {
+      EXPECT_EQ(punctual["type"], "directional");
+      EXPECT_FALSE(punctual.contains("range"));
+      EXPECT_NEAR(length(rotate(node["rotation"], {0, 0, -1}) - Vec3d{0, -1, 0}), 0, 1e-12);
+      EXPECT_EQ(back->projection.m, directional.projection.m);
     }
   }
 }

@@ -7,7 +7,6 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 #include <draco/compression/encode.h>
-#include <draco/io/gltf_encoder.h>
 #include <draco/mesh/mesh.h>
 
 #include <lightvol/check/check.h>
@@ -15,6 +14,7 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/check.h>
 #include <lightvol/export/detail/flat_exporter.h>
+#include <lightvol/export/detail/glb_writer.h>
 #include <lightvol/export/detail/ply_writer.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/detail/draco_mesh.h>
@@ -23,34 +23,6 @@
 namespace lightvol {
 
 namespace {
-
-// Our flat mesh as a Draco mesh: one point per vertex, positions only.
-std::unique_ptr<draco::Mesh> to_draco(const Mesh& mesh) {
-  auto out = std::make_unique<draco::Mesh>();
-  const std::size_t nv = mesh.num_vertices(), nt = mesh.num_triangles();
-  out->set_num_points(static_cast<std::uint32_t>(nv));
-  draco::GeometryAttribute position;
-  position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false,
-                sizeof(float) * 3, 0);
-  const int id = out->AddAttribute(position, true, static_cast<std::uint32_t>(nv));
-  draco::PointAttribute* attribute = out->attribute(id);
-  for (std::size_t v = 0; v < nv; ++v)
-    attribute->SetAttributeValue(draco::AttributeValueIndex(static_cast<std::uint32_t>(v)),
-                                 &mesh.positions[3 * v]);
-  out->SetNumFaces(nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    draco::Mesh::Face face;
-    for (int k = 0; k < 3; ++k) face[k] = draco::PointIndex(mesh.indices[3 * t + k]);
-    out->SetFace(draco::FaceIndex(static_cast<std::uint32_t>(t)), face);
-  }
-  return out;
-}
-
-Status check_bits(int bits) {
-  if (bits < 1 || bits > 30)
-    return Error{"--draco-bits: must lie in 1..30, got " + std::to_string(bits)};
-  return {};
-}
 
 // What a lossy encoding must preserve: the same number of faces, and a sound volume, proved with
 // the light when there is one, allowing for the quantization step (as `check` does on the file).
@@ -108,32 +80,14 @@ Status write_with_openmesh(const std::string& path, const std::string& temp, Mes
 }  // namespace
 
 Result<std::string> encode_draco(const Mesh& mesh, int bits) {
-  if (Status s = check_bits(bits); !s) return s.error();
-  const auto dm = to_draco(mesh);
+  if (Status s = detail::check_draco_bits(bits); !s) return s.error();
+  const auto dm = detail::to_draco(mesh);
   draco::Encoder encoder;
   encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, bits);
   encoder.SetSpeedOptions(5, 5);
   draco::EncoderBuffer buffer;
   const draco::Status status = encoder.EncodeMeshToBuffer(*dm, &buffer);
   if (!status.ok()) return Error{"Draco encoding failed: " + status.error_msg_string()};
-  return std::string(buffer.data(), buffer.size());
-}
-
-Result<std::string> encode_glb(const Mesh& mesh, bool draco, int bits) {
-  if (draco) {
-    if (Status s = check_bits(bits); !s) return s.error();
-  }
-  auto dm = to_draco(mesh);
-  if (draco) {
-    draco::DracoCompressionOptions compression;
-    compression.quantization_position.SetQuantizationBits(bits);
-    dm->SetCompressionEnabled(true);
-    dm->SetCompressionOptions(compression);
-  }
-  draco::GltfEncoder encoder;
-  draco::EncoderBuffer buffer;
-  const draco::Status status = encoder.EncodeToBuffer(*dm, &buffer);
-  if (!status.ok()) return Error{"glTF encoding failed: " + status.error_msg_string()};
   return std::string(buffer.data(), buffer.size());
 }
 
@@ -152,7 +106,7 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       return write_bytes_atomically(path, *bytes);
     }
     case MeshFormat::glb: {
-      Result<std::string> bytes = encode_glb(mesh, options.draco, options.draco_bits);
+      Result<std::string> bytes = encode_glb(mesh, options.draco, options.draco_bits, options.glb);
       if (!bytes) return Error{path + ": " + bytes.error().message};
       if (options.draco) {
         const Result<detail::DracoMesh> back = detail::read_glb(*bytes, path);

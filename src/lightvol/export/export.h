@@ -10,6 +10,19 @@
 
 namespace lightvol {
 
+// What a GLB records beside the mesh. With a light (in the mesh's frame): KHR_lights_punctual on a
+// node named "light" at the light's pose (glTF lights shine down their node's −Z): a spot light as
+// a spot whose outer cone circumscribes its frustum and whose inner cone is inscribed in it, a
+// directional light as directional, an omni light as point; range = the distance to the farthest
+// point the light's frustum reaches. The node's extras hold {"lightvol": {"light": L, "medium":
+// M}}: L is the light as `parse_light` reads it back (view and projection matrices; omni: position,
+// near, far), M the medium JSON given here (omitted when empty), whose intensity is the glTF
+// light's.
+struct GlbContent {
+  const Light* light = nullptr;
+  std::string medium_json;  // a medium description (JSON object text), or empty
+};
+
 struct ExportOptions {
   bool ascii = false;   // PLY: ASCII instead of binary little-endian; STL: ASCII instead of binary
   int draco_bits = 16;  // DRC and compressed GLB: position quantization bits, 1..30
@@ -17,6 +30,7 @@ struct ExportOptions {
   // The volume's light, in the mesh's frame: a lossy encoding must then pass the light's
   // non-self-nesting proof too (check_volume_linear), as `lightvol check --light` will test it.
   const Light* light = nullptr;
+  GlbContent glb;  // GLB: the light (and medium) to record in the file
 };
 
 // Writes `mesh` to `path` atomically, in the format of its extension. Lossy encodings (DRC,
@@ -27,7 +41,9 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
 
 // Encodes `mesh` as Draco bytes (edgebreaker, `bits` position quantization).
 Result<std::string> encode_draco(const Mesh& mesh, int bits);
-// Encodes `mesh` as a GLB (glTF 2.0 binary) file's bytes, optionally Draco-compressed.
-Result<std::string> encode_glb(const Mesh& mesh, bool draco, int bits);
+// Encodes `mesh` as a GLB (glTF 2.0 binary) file's bytes, optionally Draco-compressed, with
+// `bufferView.target` set and the light of `content`, if any.
+Result<std::string> encode_glb(const Mesh& mesh, bool draco, int bits,
+                               const GlbContent& content = {});
 
 }  // namespace lightvol
