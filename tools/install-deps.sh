@@ -9,7 +9,11 @@ packages=(
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev clang-format
+  chromium  # the web viewer's browser test (headless, SwiftShader's WebGL2)
 )
+# Node.js for the web viewer's tests (Khronos' glTF validator, puppeteer-core): Debian's, unless a
+# node is installed already (e.g. from NodeSource, whose nodejs package brings its own npm).
+command -v node >/dev/null || packages+=(nodejs npm)
 sudo=""
 [ "$(id -u)" -eq 0 ] || sudo="sudo"
 missing=()
@@ -20,4 +24,13 @@ if [ ${#missing[@]} -gt 0 ]; then
   echo "installing: ${missing[*]}"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The npm packages of web/ (package-lock.json): three.js, Khronos' glTF validator, puppeteer-core.
+# Installed as the invoking user, again only when the lock file is newer than what is installed.
+web="$(cd "$(dirname "$0")/.." && pwd)/web"
+if [ ! -f "$web/node_modules/.package-lock.json" ] ||
+   [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+  echo "installing web/'s npm packages (npm ci)"
+  (cd "$web" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
 fi
