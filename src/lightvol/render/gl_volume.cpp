@@ -5,6 +5,7 @@
 #include <string>
 
 #include <lightvol/core/check.h>
+#include <lightvol/render/detail/airlight_glsl.h>
 #include <lightvol/render/gl_volume.h>
 
 namespace lightvol {
@@ -13,137 +14,16 @@ using namespace gl;
 
 // ---- shared GLSL --------------------------------------------------------------------------------
 
-const char* const kGlslCommon = R"(
-const float PI = 3.14159265358979;
-const float HALF_PI_BELOW = 1.5707960;  // largest float below π/2: tan stays positive
-
-uniform mat4 inv_projection;   // camera clip -> camera eye
-uniform mat3 eye_to_world;     // camera eye -> world rotation
-uniform vec3 camera_position;  // world: the eye (perspective) or the eye-space origin (ortho)
-uniform int perspective;
-uniform vec2 viewport;
-uniform int flip_y;
-
-uniform int light_type;        // 0 point (spot, omni), 1 directional
-uniform vec3 light_position;
-uniform vec3 light_direction;
-uniform float light_near;
-uniform float sigma_s;
-uniform float sigma_t;
-uniform float intensity;
-uniform int phase_type;        // 0 isotropic, 1 Henyey-Greenstein, 2 Schlick
-uniform float phase_param;     // g or k
-
-uniform sampler2D f_table;
-uniform float f_u_max;
-
-uniform int profile_enabled;   // soft-edged spot, docs/design.md §6: smoothstep(cos outer, cos inner, cos α)
-uniform float profile_cos_inner;
-uniform float profile_cos_outer;
-
-// The current ray, set by point_setup(), for integrands that depend on the point x(ξ).
-vec3 g_origin;
-vec3 g_dir;
-float g_h;
-float g_s0;
-
-float profile(vec3 to_x) {
-  if (profile_enabled == 0) return 1.0;
-  return smoothstep(profile_cos_outer, profile_cos_inner, dot(normalize(to_x), light_direction));
+// shaders/airlight.glsl, embedded at build time (cmake/embed_shader.cmake): the volume pass, the
+// resolve pass and the functions they share, compiled one stage at a time by a #define.
+namespace {
+std::string stage_source(const char* stage) {
+  return std::string("#version 450 core\n#define ") + stage + "\n" + detail::kAirlightGlsl;
 }
+const std::string kCommonSource = std::string("#define LIGHTVOL_COMMON\n") + detail::kAirlightGlsl;
+}  // namespace
 
-// The world-space ray of this fragment's pixel centre.
-void pixel_ray(out vec3 origin, out vec3 dir) {
-  vec2 ndc = 2.0 * gl_FragCoord.xy / viewport - 1.0;
-  if (flip_y == 1) ndc.y = -ndc.y;
-  vec4 n = inv_projection * vec4(ndc, -1.0, 1.0);
-  vec3 near_eye = n.xyz / n.w;
-  if (perspective == 1) {
-    origin = camera_position;
-    dir = normalize(eye_to_world * near_eye);
-  } else {
-    origin = camera_position + eye_to_world * near_eye;
-    dir = normalize(eye_to_world * vec3(0.0, 0.0, -1.0));
-  }
-}
-
-float phase(float c) {
-  const float inv4pi = 1.0 / (4.0 * PI);
-  if (phase_type == 1) {
-    float g = phase_param;
-    float d = 1.0 + g * g - 2.0 * g * c;
-    return inv4pi * (1.0 - g * g) / (d * sqrt(d));
-  }
-  if (phase_type == 2) {
-    float k = phase_param;
-    float d = 1.0 - k * c;
-    return inv4pi * (1.0 - k * k) / (d * d);
-  }
-  return inv4pi;
-}
-
-// Point light seen along a ray: distance h of the light from the ray's line, parameter s0 of the
-// closest point, and the Sun et al. optical thickness u = σt·h.
-void point_setup(vec3 origin, vec3 dir, out float h, out float s0) {
-  vec3 to_light = light_position - origin;
-  s0 = dot(to_light, dir);
-  h = max(length(cross(dir, to_light)), 1e-6 * max(1.0, length(to_light)));
-  g_origin = origin;
-  g_dir = dir;
-  g_h = h;
-  g_s0 = s0;
-}
-
-const float GL_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
-                               0.9602898564975363);
-const float GL_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
-                               0.1012285362903763);
-
-float integrand(float xi, float u) {
-  float f = phase(cos(2.0 * xi)) * exp(-u * tan(xi));
-  if (profile_enabled == 1) {
-    float s = g_s0 - g_h / tan(2.0 * xi);  // the point x(ξ) on the ray
-    f *= profile(g_origin + s * g_dir - light_position);
-  }
-  return f;
-}
-
-// ∫ from a to b of p(cos 2ξ)·exp(−u tan ξ) dξ, `panels` 8-point Gauss–Legendre panels.
-float quadrature(float a, float b, float u, int panels) {
-  a = min(a, HALF_PI_BELOW);
-  b = min(b, HALF_PI_BELOW);
-  float width = (b - a) / float(panels);
-  float half_width = 0.5 * width;
-  float sum = 0.0;
-  for (int p = 0; p < panels; ++p) {
-    float mid = a + (float(p) + 0.5) * width;
-    for (int i = 0; i < 4; ++i) {
-      float dx = half_width * GL_X[i];
-      sum += GL_W[i] * (integrand(mid - dx, u) + integrand(mid + dx, u));
-    }
-  }
-  return sum * half_width;
-}
-
-// Sun et al.'s F(u, v) from the table: bilinear with float weights (texelFetch, no filtering).
-float sun_f(float u, float v) {
-  ivec2 size = textureSize(f_table, 0);
-  vec2 p = vec2(clamp(v, 0.0, 0.5 * PI) / (0.5 * PI) * float(size.x - 1),
-                sqrt(u / f_u_max) * float(size.y - 1));
-  ivec2 i = min(ivec2(p), size - 2);
-  vec2 f = p - vec2(i);
-  float f00 = texelFetch(f_table, i, 0).r;
-  float f10 = texelFetch(f_table, i + ivec2(1, 0), 0).r;
-  float f01 = texelFetch(f_table, i + ivec2(0, 1), 0).r;
-  float f11 = texelFetch(f_table, i + ivec2(1, 1), 0).r;
-  return mix(mix(f00, f10, f.x), mix(f01, f11, f.x), f.y);
-}
-
-float angular_integral(float a, float b, float u, int panels) {
-  if (phase_type == 0 && u <= f_u_max && profile_enabled == 0) return (sun_f(u, b) - sun_f(u, a)) * (1.0 / (4.0 * PI));
-  return quadrature(a, b, u, panels);
-}
-)";
+const char* const kGlslCommon = kCommonSource.c_str();
 
 void set_scene_uniforms(const Program& program, const RenderScene& scene) {
   const Camera& cam = scene.camera;
@@ -256,82 +136,7 @@ Image image_from_gl(const RenderScene& scene, const std::vector<float>& top_firs
 
 // ---- the renderer -------------------------------------------------------------------------------
 
-namespace {
-
-const char* const kVolumeVs = R"(#version 450 core
-layout(location = 0) in vec3 position;
-uniform mat4 view_projection;
-out vec3 world;
-void main() {
-  world = position;
-  gl_Position = view_projection * vec4(position, 1.0);
-}
-)";
-
-const char* const kVolumeFs = R"(
-in vec3 world;
-layout(location = 0) out vec2 result;  // (signed angular integral, signed fragment count)
-uniform sampler2D surface;
-uniform int baseline;
-uniform int panels;
-uniform float facing_sign;
-void main() {
-  vec3 origin, dir;
-  pixel_ray(origin, dir);
-  float t_surface = texelFetch(surface, ivec2(gl_FragCoord.xy), 0).r;
-  float t = clamp(dot(world - origin, dir), 0.0, t_surface);
-  float s = (gl_FrontFacing ? -1.0 : 1.0) * facing_sign;
-  if (light_type == 1) {
-    float rate = sigma_t * (1.0 + dot(dir, light_direction));
-    float x = rate * t;
-    float v = abs(x) < 1e-3 ? t * (1.0 - 0.5 * x + x * x / 6.0) : (1.0 - exp(-x)) / rate;
-    result = vec2(s * v, s);
-    return;
-  }
-  float h, s0;
-  point_setup(origin, dir, h, s0);
-  float xi = 0.25 * PI + 0.5 * atan((t - s0) / h);
-  float from = baseline == 1 ? 0.25 * PI : 0.5 * atan(h, s0);
-  result = vec2(s * angular_integral(from, xi, sigma_t * h, panels), s);
-}
-)";
-
-const char* const kResolveVs = R"(#version 450 core
-void main() {
-  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
-  gl_Position = vec4(p, 0.0, 1.0);
-}
-)";
-
-const char* const kResolveFs = R"(
-layout(location = 0) out float airlight;
-uniform sampler2D accumulated;
-uniform int baseline;
-void main() {
-  vec2 a = texelFetch(accumulated, ivec2(gl_FragCoord.xy), 0).rg;
-  vec3 origin, dir;
-  pixel_ray(origin, dir);
-  if (light_type == 1) {
-    float k = dot(dir, light_direction);
-    float z = dot(origin - light_position, light_direction) - light_near;
-    airlight = sigma_s * intensity * phase(-k) * exp(-sigma_t * z) * a.r;
-    return;
-  }
-  float h, s0;
-  point_setup(origin, dir, h, s0);
-  float c = 2.0 * sigma_s * intensity * exp(-sigma_t * s0) / h;
-  float base = 0.0;
-  if (baseline == 1 && a.g != 0.0)
-    base = angular_integral(0.5 * atan(h, s0), 0.25 * PI, sigma_t * h, profile_enabled == 1 ? 32 : 8);
-  airlight = c * (a.r + a.g * base);
-}
-)";
-
-std::string fragment_source(const char* body) {
-  return std::string("#version 450 core\n") + kGlslCommon + body;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 struct GlVolumeRenderer::State {
   RenderScene scene;
@@ -355,10 +160,12 @@ Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderS
   State& s = *r->state_;
   s.scene = scene;
   s.options = options;
-  Result<Program> volume = Program::compile(kVolumeVs, fragment_source(kVolumeFs), "volume");
+  Result<Program> volume = Program::compile(stage_source("LIGHTVOL_VOLUME_VERTEX"),
+                                            stage_source("LIGHTVOL_VOLUME_FRAGMENT"), "volume");
   if (!volume) return volume.error();
   s.volume = std::move(*volume);
-  Result<Program> resolve = Program::compile(kResolveVs, fragment_source(kResolveFs), "resolve");
+  Result<Program> resolve = Program::compile(stage_source("LIGHTVOL_RESOLVE_VERTEX"),
+                                             stage_source("LIGHTVOL_RESOLVE_FRAGMENT"), "resolve");
   if (!resolve) return resolve.error();
   s.resolve = std::move(*resolve);
   const int w = scene.camera.width, h = scene.camera.height;
