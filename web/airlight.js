@@ -1,0 +1,295 @@
+// lightvol's airlight in WebGL2 through three.js: the passes of shaders/airlight.glsl (the file
+// itself, fetched and compiled with the WebGL2 prefix of docs/engines.md), the F(u, v) table, and
+// lightvol's light, camera and medium descriptions turned into its uniforms.
+import * as THREE from 'three';
+
+// docs/engines.md: the WebGL2 version of shaders/airlight.glsl is the file behind this prefix and
+// one #define naming the stage (three.js adds "#version 300 es" for GLSL3 raw shader materials).
+const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
+export function stageSource(glsl, stage) {
+  return `${PREFIX}#define ${stage}\n${glsl}`;
+}
+
+// ---- lightvol's matrices (row-major arrays of 16, as in src/lightvol/core/math.cpp) -----------
+
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const normalize = (a) => { const l = Math.sqrt(dot(a, a)); return [a[0] / l, a[1] / l, a[2] / l]; };
+
+export function lookAt(eye, direction, up) {
+  const f = normalize(direction), s = normalize(cross(f, up)), u = cross(s, f);
+  return [s[0], s[1], s[2], -dot(s, eye), u[0], u[1], u[2], -dot(u, eye),
+          -f[0], -f[1], -f[2], dot(f, eye), 0, 0, 0, 1];
+}
+export function perspective(fovYDeg, aspect, near, far) {
+  const f = 1 / Math.tan(fovYDeg * Math.PI / 360);
+  return [f / aspect, 0, 0, 0, 0, f, 0, 0,
+          0, 0, (far + near) / (near - far), 2 * far * near / (near - far), 0, 0, -1, 0];
+}
+export function orthographic(l, r, b, t, near, far) {
+  return [2 / (r - l), 0, 0, -(r + l) / (r - l), 0, 2 / (t - b), 0, -(t + b) / (t - b),
+          0, 0, -2 / (far - near), -(far + near) / (far - near), 0, 0, 0, 1];
+}
+const rowsToArray = (rows) => (rows.length === 4 ? rows.flat() : rows.slice());
+export const toMatrix4 = (m) => new THREE.Matrix4().set(...m);
+
+// A light or camera description (lightvol's JSON: geometric keys, or "view" and "projection")
+// as {type, view, projection (THREE.Matrix4), position, direction, near, flip_y}.
+export function parseFrame(json) {
+  const type = json.type ?? 'spot';
+  let view, projection;
+  if (json.view) {
+    view = toMatrix4(rowsToArray(json.view));
+    projection = toMatrix4(rowsToArray(json.projection));
+  } else if (type === 'omni') {
+    const p = json.position;
+    view = toMatrix4([1, 0, 0, -p[0], 0, 1, 0, -p[1], 0, 0, 1, -p[2], 0, 0, 0, 1]);
+    projection = toMatrix4(perspective(90, 1, json.near, json.far));
+  } else {
+    view = toMatrix4(lookAt(json.position, json.direction, json.up));
+    projection = toMatrix4(type === 'directional'
+        ? orthographic(...json.ortho, json.near, json.far)
+        : perspective(json.fov_y_deg, json.aspect ?? 1, json.near, json.far));
+  }
+  const inv = view.clone().invert();
+  const position = new THREE.Vector3(0, 0, 0).applyMatrix4(inv);
+  const direction = new THREE.Vector3(0, 0, -1).transformDirection(inv);
+  const p = projection.elements;  // column-major: P[row][col] = p[col * 4 + row]
+  const p22 = p[10], p23 = p[14];
+  const perspectiveProjection = p[11] !== 0;
+  const near = perspectiveProjection ? p23 / (p22 - 1) : (p23 + 1) / p22;
+  return { type, view, projection, position, direction, near, perspective: perspectiveProjection,
+           flipY: !!json.flip_y, width: json.width, height: json.height };
+}
+
+// ---- Sun et al.'s F(u, v) table, as sun_table() in src/lightvol/render/gl_volume.cpp ---------
+
+export const TABLE = { rows: 512, cols: 1024, uMax: 32 };
+export function sunTable() {
+  const { rows, cols, uMax } = TABLE;
+  const values = new Float32Array(rows * cols);
+  const x = [0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363];
+  const w = [0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763];
+  const dv = 0.5 * Math.PI / (cols - 1);
+  for (let i = 0; i < rows; ++i) {
+    const a = i / (rows - 1), u = uMax * a * a;
+    let sum = 0;
+    for (let j = 1; j < cols; ++j) {
+      const lo = (j - 1) * dv;
+      for (let q = 0; q < 2; ++q) {
+        const mid = lo + (q + 0.5) * 0.5 * dv, half = 0.25 * dv;
+        for (let k = 0; k < 4; ++k)
+          sum += half * w[k] * (Math.exp(-u * Math.tan(mid - half * x[k])) +
+                                Math.exp(-u * Math.tan(mid + half * x[k])));
+      }
+      values[i * cols + j] = sum;
+    }
+  }
+  const texture = new THREE.DataTexture(values, cols, rows, THREE.RedFormat, THREE.FloatType);
+  texture.minFilter = texture.magFilter = THREE.NearestFilter;
+  texture.needsUpdate = true;
+  return texture;
+}
+
+// ---- the renderer ---------------------------------------------------------------------------
+
+const PHASES = { isotropic: 0, hg: 1, schlick: 2 };
+
+function floatTarget(width, height, format, depth) {
+  const target = new THREE.WebGLRenderTarget(width, height, {
+    type: THREE.FloatType, format, depthBuffer: depth, stencilBuffer: false,
+    minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false,
+  });
+  return target;
+}
+
+// Renders the airlight of a light volume for one camera, as `lightvol render --method volume`:
+// the scene's distances along the pixel rays (surface pass), the volume with additive float
+// blending (RG32F), the resolve (R32F).
+export class AirlightRenderer {
+  constructor(renderer, glsl, { width, height }) {
+    this.renderer = renderer;
+    this.width = width;
+    this.height = height;
+    const gl = renderer.getContext();
+    this.gl = gl;
+    for (const name of ['EXT_color_buffer_float', 'EXT_float_blend'])
+      if (!gl.getExtension(name)) throw new Error(`WebGL2 lacks ${name}: no float blending`);
+    this.depthClamp = gl.getExtension('EXT_depth_clamp');
+    this.table = sunTable();
+    this.surfaceTarget = floatTarget(width, height, THREE.RedFormat, true);
+    this.accumulateTarget = floatTarget(width, height, THREE.RGFormat, false);
+    this.airlightTarget = floatTarget(width, height, THREE.RedFormat, false);
+    this.common = {
+      inv_projection: { value: new THREE.Matrix4() },
+      eye_to_world: { value: new THREE.Matrix3() },
+      camera_position: { value: new THREE.Vector3() },
+      perspective: { value: 1 },
+      viewport: { value: new THREE.Vector2(width, height) },
+      flip_y: { value: 0 },
+      light_type: { value: 0 },
+      light_position: { value: new THREE.Vector3() },
+      light_direction: { value: new THREE.Vector3() },
+      light_near: { value: 0 },
+      sigma_s: { value: 0 },
+      sigma_t: { value: 0 },
+      intensity: { value: 1 },
+      phase_type: { value: 0 },
+      phase_param: { value: 0 },
+      f_table: { value: this.table },
+      f_u_max: { value: TABLE.uMax },
+      profile_enabled: { value: 0 },
+      profile_cos_inner: { value: 1 },
+      profile_cos_outer: { value: 1 },
+      view_projection: { value: new THREE.Matrix4() },
+    };
+    const material = (stage, extra, options) => new THREE.RawShaderMaterial({
+      glslVersion: THREE.GLSL3,
+      vertexShader: stageSource(glsl, `LIGHTVOL_${stage}_VERTEX`),
+      fragmentShader: stageSource(glsl, `LIGHTVOL_${stage}_FRAGMENT`),
+      uniforms: { ...this.common, ...extra },
+      ...options,
+    });
+    this.surfaceMaterial = material('SURFACE', { view_projection: { value: new THREE.Matrix4() } },
+                                    { side: THREE.DoubleSide });
+    this.volumeMaterial = material('VOLUME', {
+      surface: { value: this.surfaceTarget.texture },
+      baseline: { value: 1 },
+      panels: { value: 2 },
+      facing_sign: { value: -1 },
+    }, {
+      side: THREE.DoubleSide, depthTest: false, depthWrite: false, transparent: true,
+      blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
+      blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor,
+      blendEquationAlpha: THREE.AddEquation, blendSrcAlpha: THREE.OneFactor,
+      blendDstAlpha: THREE.OneFactor,
+    });
+    this.resolveMaterial = material('RESOLVE', {
+      accumulated: { value: this.accumulateTarget.texture },
+      baseline: { value: 1 },
+    }, { depthTest: false, depthWrite: false });
+    // Three vertices, positions unused: the resolve's full-screen triangle comes from gl_VertexID.
+    const triangle = new THREE.BufferGeometry();
+    triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+    this.resolveScene = new THREE.Scene();
+    const resolveMesh = new THREE.Mesh(triangle, this.resolveMaterial);
+    resolveMesh.frustumCulled = false;
+    this.resolveScene.add(resolveMesh);
+    this.volumeScene = new THREE.Scene();
+    this.surfaceScene = new THREE.Scene();
+    this.dummyCamera = new THREE.Camera();
+  }
+
+  setVolume(geometry) {
+    this.volumeScene.clear();
+    const mesh = new THREE.Mesh(geometry, this.volumeMaterial);
+    mesh.frustumCulled = false;
+    this.volumeScene.add(mesh);
+  }
+
+  setScene(geometries) {
+    this.surfaceScene.clear();
+    for (const g of geometries) {
+      const mesh = new THREE.Mesh(g, this.surfaceMaterial);
+      mesh.frustumCulled = false;
+      this.surfaceScene.add(mesh);
+    }
+  }
+
+  // light: parseFrame() of the GLB's extras; medium: lightvol's medium JSON.
+  setLight(light) {
+    const u = this.common;
+    u.light_type.value = light.type === 'directional' ? 1 : 0;
+    u.light_position.value.copy(light.position);
+    u.light_direction.value.copy(light.direction);
+    u.light_near.value = light.near;
+    this.light = light;
+  }
+
+  setMedium(medium) {
+    const u = this.common;
+    const scattering = medium.scattering ?? 0.05, absorption = medium.absorption ?? 0;
+    u.sigma_s.value = scattering;
+    u.sigma_t.value = scattering + absorption;
+    u.intensity.value = medium.intensity ?? 1;
+    const phase = medium.phase ?? { type: 'isotropic' };
+    u.phase_type.value = PHASES[phase.type] ?? 0;
+    u.phase_param.value = phase.type === 'hg' ? phase.g ?? 0 : phase.type === 'schlick' ? phase.k ?? 0 : 0;
+    const profile = medium.profile;
+    const useProfile = !!profile && this.light && this.light.type === 'spot';
+    u.profile_enabled.value = useProfile ? 1 : 0;
+    u.profile_cos_inner.value = useProfile ? Math.cos(profile.inner_deg * Math.PI / 180) : 1;
+    u.profile_cos_outer.value = useProfile ? Math.cos(profile.outer_deg * Math.PI / 180) : 1;
+    this.volumeMaterial.uniforms.panels.value = useProfile ? 8 : 2;
+  }
+
+  // camera: {view, projection (THREE.Matrix4), flipY}.
+  setCamera(camera) {
+    const u = this.common;
+    const invView = camera.view.clone().invert();
+    u.inv_projection.value.copy(camera.projection).invert();
+    u.eye_to_world.value.setFromMatrix4(invView);
+    u.camera_position.value.set(0, 0, 0).applyMatrix4(invView);
+    u.perspective.value = camera.projection.elements[11] !== 0 ? 1 : 0;
+    u.flip_y.value = camera.flipY ? 1 : 0;
+    this.surfaceMaterial.uniforms.view_projection.value.multiplyMatrices(camera.projection,
+                                                                         camera.view);
+    let projection = camera.projection;
+    if (!this.depthClamp && u.perspective.value === 1) {
+      // No depth clamping: a near plane 1000 times closer and the far plane at infinity, so that
+      // no part of the volume in front of the scene is clipped (x, y and w are unchanged).
+      projection = camera.projection.clone();
+      const e = projection.elements, near = e[14] / (e[10] - 1) * 1e-3;
+      e[10] = -1;
+      e[14] = -2 * near;
+    }
+    const vp = new THREE.Matrix4().multiplyMatrices(projection, camera.view);
+    u.view_projection.value.copy(vp);
+    // A mirroring camera turns counter-clockwise front faces into back faces.
+    const e = vp.elements;
+    const det3 = e[0] * (e[5] * e[10] - e[9] * e[6]) - e[4] * (e[1] * e[10] - e[9] * e[2]) +
+                 e[8] * (e[1] * e[6] - e[5] * e[2]);
+    this.volumeMaterial.uniforms.facing_sign.value = det3 < 0 ? 1 : -1;
+  }
+
+  render() {
+    const { renderer, gl } = this;
+    const previousTarget = renderer.getRenderTarget();
+    renderer.setRenderTarget(this.surfaceTarget);
+    gl.clearBufferfv(gl.COLOR, 0, new Float32Array([3e38, 0, 0, 0]));
+    gl.clearBufferfi(gl.DEPTH_STENCIL, 0, 1, 0);
+    renderer.render(this.surfaceScene, this.dummyCamera);
+
+    renderer.setRenderTarget(this.accumulateTarget);
+    gl.clearBufferfv(gl.COLOR, 0, new Float32Array([0, 0, 0, 0]));
+    if (this.depthClamp) gl.enable(this.depthClamp.DEPTH_CLAMP_EXT);
+    renderer.render(this.volumeScene, this.dummyCamera);
+    if (this.depthClamp) gl.disable(this.depthClamp.DEPTH_CLAMP_EXT);
+
+    renderer.setRenderTarget(this.airlightTarget);
+    renderer.render(this.resolveScene, this.dummyCamera);
+    renderer.setRenderTarget(previousTarget);
+  }
+
+  // The airlight, width × height floats, top row first (as lightvol writes images).
+  readAirlight() { return this.read(this.airlightTarget); }
+  // The surface pass: distance along each pixel's ray to the scene (3e38: nothing), top row first.
+  readSurface() { return this.read(this.surfaceTarget); }
+
+  read(target) {
+    const { renderer, gl, width, height } = this;
+    const previousTarget = renderer.getRenderTarget();
+    renderer.setRenderTarget(target);
+    const rgba = new Float32Array(width * height * 4);
+    gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, rgba);
+    renderer.setRenderTarget(previousTarget);
+    const out = new Float32Array(width * height);
+    const flip = this.common.flip_y.value === 1;
+    for (let r = 0; r < height; ++r) {
+      const src = flip ? r : height - 1 - r;  // GL row 0 is the bottom (NDC y = -1)
+      for (let c = 0; c < width; ++c) out[r * width + c] = rgba[(src * width + c) * 4];
+    }
+    return out;
+  }
+}
