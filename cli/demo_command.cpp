@@ -5,12 +5,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/check/check.h>
+#include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
@@ -202,6 +206,33 @@ class DepthPasses {
 #endif
 };
 
+// What the web viewer (web/) needs beside the demo's other outputs: the volumes as GLBs carrying
+// their light and the medium, the scene as a GLB, the camera (at the demo's image size) and the
+// medium.
+Status write_viewer_inputs(const std::string& data, const std::string& dir, const Mesh& scene,
+                           const Light& light, const Camera& camera,
+                           const std::vector<std::pair<std::string, const Mesh*>>& volumes) {
+  const auto slurp = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string medium_text = slurp(data + "/sponza_medium.json");
+  nlohmann::json camera_json =
+      nlohmann::json::parse(slurp(data + "/sponza_camera.json"), nullptr, false);
+  if (camera_json.is_discarded()) return Error{data + "/sponza_camera.json: not JSON"};
+  camera_json["width"] = camera.width;
+  camera_json["height"] = camera.height;
+  ExportOptions options;
+  options.glb.light = &light;
+  options.glb.medium_json = nlohmann::json::parse(medium_text, nullptr, false).dump();
+  for (const auto& [name, mesh] : volumes)
+    if (Status s = write_mesh(dir + "/volume_" + name + ".glb", *mesh, options); !s) return s;
+  if (Status s = write_mesh(dir + "/scene.glb", scene); !s) return s;
+  if (Status s = write_bytes_atomically(dir + "/camera.json", camera_json.dump(2) + "\n"); !s)
+    return s;
+  return write_bytes_atomically(dir + "/medium.json", medium_text);
+}
+
 int run_demo(const DemoOptions& o) {
   const std::string data = find_data_dir(o.data_dir);
   std::error_code ec;
@@ -295,6 +326,14 @@ int run_demo(const DemoOptions& o) {
           error_text);
   volumes.push_back({"adaptive", std::move(*coarse)});
 
+  progress.begin("web viewer inputs");
+  if (Status st = write_viewer_inputs(
+          data, o.out_dir, *scene, *light, *camera,
+          {{volumes[0].name, &volumes[0].mesh}, {volumes[1].name, &volumes[1].mesh}});
+      !st)
+    return fail(st.error().message);
+  add_row("web viewer inputs", "volume_static.glb", "", "+ adaptive, scene, camera, medium");
+
   bool all_valid = true;
   for (const Volume& v : volumes) {
     progress.begin("check " + v.name);
@@ -384,6 +423,14 @@ int run_demo(const DemoOptions& o) {
         "outputs in %s/ (scene: Sponza atrium by Marko Dabrovic, the middle of the atrium)\n",
         o.out_dir.c_str());
   }
+  const fs::path serve = fs::path(data).parent_path() / "web" / "serve.mjs";
+  if (!o.quiet && fs::exists(serve))
+    std::printf(
+        "view it in a browser: node %s %s\n  then open "
+        "http://127.0.0.1:8000/web/"
+        "index.html?volume=/data/volume_static.glb&camera=/data/camera.json&medium=/data/"
+        "medium.json&scene=/data/scene.glb\n",
+        serve.string().c_str(), o.out_dir.c_str());
   if (!all_valid) return fail("a demo volume failed its checks (see the table)");
   return 0;
 }

@@ -277,7 +277,12 @@ export class AirlightRenderer {
   // The surface pass: distance along each pixel's ray to the scene (3e38: nothing), top row first.
   readSurface() { return this.read(this.surfaceTarget); }
 
-  read(target) {
+  // Per pixel, back faces minus front faces the volume pass counted (pass 1's second channel), top
+  // row first: 0 or 1 for a closed volume (1 when the camera is inside), unless the rasterizer
+  // dropped or doubled a fragment.
+  readFaceCounts() { return this.read(this.accumulateTarget, 1); }
+
+  read(target, channel = 0) {
     const { renderer, gl, width, height } = this;
     const previousTarget = renderer.getRenderTarget();
     renderer.setRenderTarget(target);
@@ -288,7 +293,7 @@ export class AirlightRenderer {
     const flip = this.common.flip_y.value === 1;
     for (let r = 0; r < height; ++r) {
       const src = flip ? r : height - 1 - r;  // GL row 0 is the bottom (NDC y = -1)
-      for (let c = 0; c < width; ++c) out[r * width + c] = rgba[(src * width + c) * 4];
+      for (let c = 0; c < width; ++c) out[r * width + c] = rgba[(src * width + c) * 4 + channel];
     }
     return out;
   }

@@ -5,7 +5,8 @@
 // it over the lit scene. The first frame is exactly the given camera; then document.title becomes
 // 'lightvol:done' and window.lightvolAirlight() returns that frame's airlight (Float32Array,
 // width × height, top row first, linear; window.lightvolSurface(): its distances along the pixel
-// rays to the scene, 3e38 where none). The orbit camera and the sliders re-render.
+// rays to the scene, 3e38 where none; window.lightvolFaceCounts(): back minus front faces per
+// pixel). The orbit camera and the sliders re-render.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -268,9 +269,10 @@ async function main() {
   });
 
   draw();
-  const first = frame.slice(), surface = airlight.readSurface();
+  const first = frame.slice(), surface = airlight.readSurface(), counts = airlight.readFaceCounts();
   window.lightvolAirlight = () => first;
   window.lightvolSurface = () => surface;
+  window.lightvolFaceCounts = () => counts;
   window.lightvolCurrentAirlight = () => frame;
   say('');
   document.title = 'lightvol:done';

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/airlight/airlight.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/io/mesh_reader.h>
 #include <lightvol/render/image_io.h>
@@ -46,6 +47,27 @@ TEST(Demo, RunsOnTheBundledSceneAtSize64) {
   EXPECT_LT(adaptive->num_triangles(), fixed->num_triangles());
   EXPECT_TRUE(test::is_closed_and_oriented(*adaptive));
   EXPECT_GT(signed_volume(*adaptive), 0);
+
+  // What the web viewer needs: the volumes as GLBs (the same meshes), the scene, camera, medium,
+  // and the command that serves them.
+  for (const char* name : {"volume_static", "volume_adaptive"}) {
+    Result<Mesh> ply = read_mesh(dir.file(std::string(name) + ".ply"));
+    Result<Mesh> glb = read_mesh(dir.file(std::string(name) + ".glb"));
+    ASSERT_TRUE(ply && glb) << name;
+    EXPECT_EQ(glb->positions, ply->positions) << name;
+    EXPECT_EQ(glb->indices, ply->indices) << name;
+  }
+  Result<Mesh> scene = read_mesh(dir.file("scene.glb"));
+  ASSERT_TRUE(scene) << scene.error().message;
+  EXPECT_EQ(scene->num_triangles(), 27336u);
+  Result<Camera> viewer_camera = load_camera(dir.file("camera.json"));
+  ASSERT_TRUE(viewer_camera) << viewer_camera.error().message;
+  EXPECT_EQ(viewer_camera->width, 60);
+  EXPECT_EQ(viewer_camera->height, 45);
+  EXPECT_TRUE(load_medium(dir.file("medium.json")).ok());
+  EXPECT_NE(r.out.find("web/serve.mjs " + dir.path()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("web/index.html?volume=/data/volume_static.glb"), std::string::npos)
+      << r.out;
 
   for (const char* png : {"shadow_map.png", "camera_depth.png"})
     EXPECT_TRUE(std::filesystem::exists(dir.file(png))) << png;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every kind of GLB lightvol writes (static, adaptive, Draco-compressed and omni volumes; spot,
-# directional and omni lights; light space; with a medium) passes Khronos' glTF
+# directional and omni lights; light space; with a medium; the demo's volumes and scene) passes Khronos' glTF
 # validator with 0 errors and 0 warnings. Usage: validate_glbs.sh PATH/TO/lightvol
 # Needs node and web/node_modules (tools/install-deps.sh runs `npm ci` in web/).
 set -euo pipefail
@@ -30,5 +30,7 @@ run shadowmap "$data/sponza_crop.ply" --light omni.json --size 32 --out 'omni_{f
 run build 'omni_{face}.exr' --light omni.json --out omni.glb
 run build 'omni_{face}.exr' --light omni.json --out omni_adaptive.glb --adaptive --max-error 0.05
 run build 'omni_{face}.exr' --light omni.json --out omni_draco.glb --draco
-files=(*.glb)
+# The demo's GLBs for the web viewer: its volumes with light and medium, and the scene.
+run demo --out demo --size 32 > /dev/null
+files=(*.glb demo/volume_static.glb demo/volume_adaptive.glb demo/scene.glb)
 node "$root/web/tests/validate_glb.mjs" "${files[@]}"
