@@ -166,6 +166,34 @@ try {
                 `(${reference.width}x${reference.height}, left out: ${disagree} pixels whose scene surfaces differ, ${cracks} whose face count is not 0 or 1; ${info}; page ${((Date.now() - started) / 1000).toFixed(1)} s)` +
                 (ok ? '' : '  FAILED'));
     if (!ok) failed = true;
+    if (c.name === 'static') {
+      // The controls: the airlight is linear in the intensity, so doubling the slider doubles the
+      // frame; the wireframe toggle and an orbit drag re-render without an error.
+      const after = await page.evaluate(() => {
+        const slider = document.getElementById('intensity');
+        slider.value = String(2 * Number(slider.value));
+        slider.dispatchEvent(new Event('input'));
+        const doubled = Array.from(window.lightvolCurrentAirlight());
+        const box = document.getElementById('wireframe');
+        box.checked = true;
+        box.dispatchEvent(new Event('change'));
+        return doubled;
+      });
+      const twice = airlight.map((x) => 2 * x);
+      const linear = relativeL2(Float32Array.from(after), twice, new Uint8Array(twice.length));
+      const canvas = await page.$('#view');
+      const b = await canvas.boundingBox();
+      await page.mouse.move(b.x + b.width / 2, b.y + b.height / 2);
+      await page.mouse.down();
+      await page.mouse.move(b.x + b.width / 2 + 1, b.y + b.height / 2, { steps: 1 });
+      await page.mouse.up();
+      const orbited = Float32Array.from(await page.evaluate(() => Array.from(window.lightvolCurrentAirlight())));
+      const moved = relativeL2(orbited, Float32Array.from(after), new Uint8Array(twice.length));
+      const controlsOk = linear <= 1e-5 && moved > 1e-3 && messages.every((m) => !/error/i.test(m));
+      console.log(`${c.name} controls: intensity x2 gives the airlight x2 within ${linear.toExponential(1)}; ` +
+                  `an orbit drag changes it by ${(100 * moved).toFixed(1)} %` + (controlsOk ? '' : '  FAILED'));
+      if (!controlsOk) failed = true;
+    }
     if (screenshot && c.name === 'static') {
       const canvas = await page.$('body');
       await canvas.screenshot({ path: screenshot });
