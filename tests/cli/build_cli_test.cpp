@@ -1,5 +1,7 @@
 // `lightvol build` as a user runs it: exit codes, one-line errors, no partial or clobbered files.
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 
@@ -144,6 +146,30 @@ TEST(BuildCli, UsageErrorsAndHelp) {
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("--out"), std::string::npos);
   EXPECT_EQ(test::run_lightvol("--help").exit_code, 0);
+}
+
+TEST(BuildCli, GlbRecordsTheMediumGivenAndRefusesABadOne) {
+  Workspace w;
+  const std::string medium = w.dir.write(
+      "medium.json", R"({"scattering": 0.2, "intensity": 30, "phase": {"type": "hg", "g": 0.5}})");
+  const std::string out = w.dir.file("v.glb");
+  const test::CommandResult ok = w.build("--out " + q(out) + " --medium " + q(medium) + " --quiet");
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  const std::string bytes = slurp(out);
+  std::uint32_t length = 0;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  const nlohmann::json doc = nlohmann::json::parse(bytes.substr(20, length));
+  const nlohmann::json& node = doc["nodes"][doc["nodes"].size() - 1];
+  EXPECT_EQ(node["extras"]["lightvol"]["medium"]["phase"]["g"], 0.5);
+  EXPECT_EQ(doc["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"], 30.0);
+
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --medium " + q(medium)),
+                     "--medium: applies to .glb output only");
+  const std::string bad = w.dir.write("bad.json", R"({"scattering": -1})");
+  expect_input_error(w.build("--out " + q(w.dir.file("w.glb")) + " --medium " + q(bad)),
+                     "bad.json");
+  EXPECT_FALSE(std::filesystem::exists(w.dir.file("w.glb")));
+  EXPECT_FALSE(std::filesystem::exists(w.dir.file("v.ply")));
 }
 
 }  // namespace
