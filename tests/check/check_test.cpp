@@ -7,7 +7,6 @@
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
-#include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
 

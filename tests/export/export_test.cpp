@@ -14,7 +14,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <lightvol/check/detail/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/mesh_reader.h>
 #include <lightvol/volume/static_volume.h>

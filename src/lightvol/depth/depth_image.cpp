@@ -1,7 +1,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -9,8 +8,10 @@
 
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/path.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/detail/image_file.h>
+#include <lightvol/depth/image_channel.h>
 
 namespace lightvol {
 namespace {
@@ -78,7 +79,7 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
                    "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
     return channel;
   };
-  Result<detail::ImageChannel> read =
+  Result<ImageChannel> read =
       detail::read_image_channel(path, within_budget, select, "cannot read pixels");
   if (!read) return read.error();
   DepthImage image;
@@ -87,6 +88,24 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
   image.values = std::move(read->values);
   if (Status s = validate_depths(image, path); !s) return s.error();
   return image;
+}
+
+Result<ImageChannel> read_first_channel(const std::string& path,
+                                        const ChannelReadOptions& options) {
+  const auto within_budget = [&](const OIIO::ImageSpec& spec) {
+    const auto texels =
+        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
+    return check_memory(
+        texels * options.bytes_per_texel, path,
+        "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
+  };
+  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
+    if (!options.refuse_8_bit.empty() && (spec.format.basetype == OIIO::TypeDesc::UINT8 ||
+                                          spec.format.basetype == OIIO::TypeDesc::INT8))
+      return Error{path + ": " + options.refuse_8_bit};
+    return 0;
+  };
+  return detail::read_image_channel(path, within_budget, select, "cannot read image");
 }
 
 namespace {
@@ -106,17 +125,14 @@ Status write_pfm(const std::string& path, const DepthImage& image) {
 }  // namespace
 
 Status write_depth_image(const std::string& path, const DepthImage& image) {
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
-  if (extension == ".pfm") return write_pfm(path, image);
+  const std::string ext = lower_extension(path);
+  if (ext == ".pfm") return write_pfm(path, image);
   return write_file_atomically(path, [&](const std::string& temp_path) -> Status {
     auto out = OIIO::ImageOutput::create(path);
     if (!out)
       return Error{path +
                    ": cannot write images of this type: " + detail::oiio_message(OIIO::geterror())};
     OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
     if (ext == ".png") spec.set_format(OIIO::TypeDesc::UINT16);
     spec.channelnames = {ext == ".exr" ? "Z" : "Y"};
     if (!out->open(temp_path, spec) ||

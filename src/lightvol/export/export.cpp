@@ -10,15 +10,14 @@
 #include <draco/mesh/mesh.h>
 
 #include <lightvol/check/check.h>
-#include <lightvol/check/detail/topology.h>
+#include <lightvol/check/topology.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/check.h>
 #include <lightvol/export/detail/flat_exporter.h>
 #include <lightvol/export/detail/glb_writer.h>
 #include <lightvol/export/detail/ply_writer.h>
 #include <lightvol/export/export.h>
-#include <lightvol/io/detail/draco_mesh.h>
-#include <lightvol/io/detail/glb_reader.h>
+#include <lightvol/io/mesh_decode.h>
 
 namespace lightvol {
 
@@ -26,14 +25,15 @@ namespace {
 
 // What a lossy encoding must preserve: the same number of faces, and a sound volume, proved with
 // the light when there is one, allowing for the quantization step (as `check` does on the file).
-Status verify_decoded(const Mesh& original, const detail::DracoMesh& decoded,
-                      const std::string& what, const ExportOptions& options) {
+Status verify_decoded(const Mesh& original, const DecodedMesh& decoded, const std::string& what,
+                      const ExportOptions& options) {
   if (decoded.mesh.num_triangles() != original.num_triangles())
     return Error{what + ": " +
                  std::to_string(original.num_triangles() - decoded.mesh.num_triangles()) +
                  " faces were lost (collapsed by quantization); raise --draco-bits"};
   if (options.light) {
-    const CheckReport report = check_volume_linear(decoded.mesh, options.light, 1, decoded.step);
+    const CheckReport report =
+        check_volume_linear(decoded.mesh, options.light, 1, decoded.quantization_step);
     if (!report.valid())
       return Error{what + ": " + report.first_failure() + "; raise --draco-bits"};
     return {};
@@ -96,22 +96,17 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
   if (!format) return format.error();
 
   switch (*format) {
-    case MeshFormat::drc: {
-      Result<std::string> bytes = encode_draco(mesh, options.draco_bits);
-      if (!bytes) return Error{path + ": " + bytes.error().message};
-      const Result<detail::DracoMesh> back = detail::decode_draco(*bytes);
-      if (!back)
-        return Error{path + ": Draco cannot decode what it encoded: " + back.error().message};
-      if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
-      return write_bytes_atomically(path, *bytes);
-    }
+    case MeshFormat::drc:
     case MeshFormat::glb: {
-      Result<std::string> bytes = encode_glb(mesh, options.draco, options.draco_bits, options.glb);
+      const bool lossy = *format == MeshFormat::drc || options.draco;
+      Result<std::string> bytes =
+          *format == MeshFormat::drc
+              ? encode_draco(mesh, options.draco_bits)
+              : encode_glb(mesh, options.draco, options.draco_bits, options.glb);
       if (!bytes) return Error{path + ": " + bytes.error().message};
-      if (options.draco) {
-        const Result<detail::DracoMesh> back = detail::read_glb(*bytes, path);
-        if (!back)
-          return Error{path + ": cannot read the glTF just encoded: " + back.error().message};
+      if (lossy) {
+        const Result<DecodedMesh> back = decode_mesh_bytes(*bytes, *format, path);
+        if (!back) return Error{back.error().message + " (decoding what was just encoded)"};
         if (Status s = verify_decoded(mesh, *back, path + " (decoded)", options); !s) return s;
       }
       return write_bytes_atomically(path, *bytes);

@@ -1,15 +1,10 @@
-#include <algorithm>
-#include <cctype>
-#include <filesystem>
-
+#include <lightvol/core/path.h>
 #include <lightvol/io/mesh_format.h>
 
 namespace lightvol {
 
 Result<MeshFormat> mesh_format_from_path(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lower_extension(path);
   if (ext == ".ply") return MeshFormat::ply;
   if (ext == ".obj") return MeshFormat::obj;
   if (ext == ".off") return MeshFormat::off;

@@ -19,6 +19,7 @@
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
 #include <lightvol/io/detail/ply_reader.h>
+#include <lightvol/io/mesh_decode.h>
 #include <lightvol/io/mesh_format.h>
 #include <lightvol/io/mesh_reader.h>
 
@@ -201,6 +202,8 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
 // [C][N][ST]OFF keyword (counts may follow it), "V F [E]", V vertex lines (x y z first; normals,
 // colours and texture coordinates after them are ignored), F face lines "n i1 .. in" (colours
 // after them ignored), fan-triangulated. '#' starts a comment. Binary OFF is refused.
+// Long (over 80 lines) on purpose: a straight parse of the format (header, counts, vertices,
+// faces), each step with its own message.
 Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
   if (Status s = check_header(path, MeshFormat::off, size); !s) return s.error();
   std::ifstream in(path, std::ios::binary);
@@ -347,18 +350,27 @@ Result<Mesh> read_draco_or_glb(const std::string& path, MeshFormat format,
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) return Error{path + ": cannot read: " + std::strerror(errno)};
-  if (format == MeshFormat::glb && (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0))
-    return Error{path + ": not a GLB file (no 'glTF' magic)"};
-  Result<detail::DracoMesh> decoded =
-      format == MeshFormat::drc ? detail::decode_draco(bytes) : detail::read_glb(bytes, path);
-  if (!decoded)
-    return Error{format == MeshFormat::drc ? path + ": " + decoded.error().message
-                                           : decoded.error().message};
-  if (quantization_step) *quantization_step = decoded->step;
+  Result<DecodedMesh> decoded = decode_mesh_bytes(bytes, format, path);
+  if (!decoded) return decoded.error();
+  if (quantization_step) *quantization_step = decoded->quantization_step;
   return std::move(decoded->mesh);
 }
 
 }  // namespace
+
+Result<DecodedMesh> decode_mesh_bytes(std::string_view bytes, MeshFormat format,
+                                      const std::string& what) {
+  if (format != MeshFormat::drc && format != MeshFormat::glb)
+    return Error{what + ": only DRC and GLB bytes are decoded in memory"};
+  if (format == MeshFormat::glb && (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0))
+    return Error{what + ": not a GLB file (no 'glTF' magic)"};
+  Result<detail::DracoMesh> decoded =
+      format == MeshFormat::drc ? detail::decode_draco(bytes) : detail::read_glb(bytes, what);
+  if (!decoded)
+    return Error{format == MeshFormat::drc ? what + ": " + decoded.error().message
+                                           : decoded.error().message};
+  return DecodedMesh{std::move(decoded->mesh), decoded->step};
+}
 
 Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
   if (quantization_step) *quantization_step = 0;

@@ -4,21 +4,13 @@
 #include <OpenImageIO/imageio.h>
 
 #include <lightvol/core/atomic_file.h>
-#include <lightvol/core/limits.h>
-#include <lightvol/depth/detail/image_file.h>
+#include <lightvol/core/path.h>
+#include <lightvol/depth/image_channel.h>
 #include <lightvol/render/image_io.h>
 
 namespace lightvol {
 
 namespace {
-
-std::string lower_extension(const std::string& path) {
-  const auto dot = path.find_last_of('.');
-  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
-}
 
 double srgb(double x) {
   return x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1.0 / 2.4) - 0.055;
@@ -29,7 +21,7 @@ double srgb(double x) {
 Status write_image(const std::string& path, const Image& image, double exposure) {
   const std::string ext = lower_extension(path);
   const bool eight_bit =
-      ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "bmp" || ext == "tga";
+      ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tga";
   const std::size_t n = image.values.size();
   return write_file_atomically(path, [&](const std::string& temp) -> Status {
     auto out = OIIO::ImageOutput::create(temp);
@@ -73,28 +65,15 @@ Status write_image(const std::string& path, const Image& image, double exposure)
 }
 
 Result<Image> read_image(const std::string& path) {
-  // A float per texel while reading, and the image's own values.
-  const auto within_budget = [&](const OIIO::ImageSpec& spec) {
-    const auto texels =
-        static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
-    return check_memory(
-        texels * (sizeof(float) + sizeof(double)), path,
-        "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
-  };
-  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
-    if (spec.format.basetype == OIIO::TypeDesc::UINT8 ||
-        spec.format.basetype == OIIO::TypeDesc::INT8)
-      return Error{path + ": an 8-bit image holds no linear airlight; compare against an .exr"};
-    return 0;
-  };
-  const Result<detail::ImageChannel> read =
-      detail::read_image_channel(path, within_budget, select, "cannot read image");
+  ChannelReadOptions options;
+  options.bytes_per_texel = sizeof(float) + sizeof(double);  // a float while reading, then ours
+  options.refuse_8_bit = "an 8-bit image holds no linear airlight; compare against an .exr";
+  const Result<ImageChannel> read = read_first_channel(path, options);
   if (!read) return read.error();
   Image image;
   image.width = read->width;
   image.height = read->height;
-  const std::vector<float>& pixels = read->values;
-  image.values.assign(pixels.begin(), pixels.end());
+  image.values.assign(read->values.begin(), read->values.end());
   return image;
 }
 

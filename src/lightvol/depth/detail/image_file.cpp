@@ -10,6 +10,7 @@
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/path.h>
 #include <lightvol/depth/detail/image_file.h>
 
 namespace lightvol::detail {
@@ -226,9 +227,7 @@ Result<std::string> image_format(const std::string& path, const std::string& mag
     return std::string("pnm");
   if (starts("#?RADIANCE"sv) || starts("#?RGBE"sv)) return std::string("hdr");
   if (starts("\x2f\x08\x67\xab"sv) || starts("\xab\x67\x08\x2f"sv)) return std::string("zfile");
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = lower_extension(path);
   static const std::map<std::string, std::string> kByExtension = {
       {".exr", "openexr"}, {".tif", "tiff"},   {".tiff", "tiff"}, {".png", "png"},
       {".pfm", "pnm"},     {".pgm", "pnm"},    {".ppm", "pnm"},   {".pnm", "pnm"},
@@ -257,6 +256,8 @@ Result<ImageFile> check_image_file(const std::string& path) {
   return ImageFile{*format, magic};
 }
 
+// Long (over 80 lines) on purpose: OpenImageIO's open, then each check of the header it read,
+// in order, each with its own message.
 Result<OpenImage> open_checked_image(
     const std::string& path, const ImageFile& file,
     const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {

@@ -1,6 +1,6 @@
 // Opening image files through OpenImageIO for input a user or a script may have forged. Internal
-// to the library (it names OpenImageIO types): read_depth_image and read_image, through
-// read_image_channel, are the entry points.
+// to the depth stage (it names OpenImageIO types): read_depth_image and read_first_channel
+// (depth_image.h), through read_image_channel, are the entry points.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <lightvol/core/result.h>
+#include <lightvol/depth/image_channel.h>
 
 namespace lightvol::detail {
 
@@ -37,13 +38,6 @@ Result<ImageFile> check_image_file(const std::string& path);
 Result<OpenImage> open_checked_image(
     const std::string& path, const ImageFile& file,
     const std::function<Status(const OIIO::ImageSpec&)>& within_budget);
-
-// One channel of an image as floats, rows as stored.
-struct ImageChannel {
-  int width = 0;
-  int height = 0;
-  std::vector<float> values;  // width × height
-};
 
 // Opens the image at `path` (check_image_file, then open_checked_image), lets `select(spec)` pick
 // the channel to read (or refuse the image with an Error), and reads it as floats: all of it in a

@@ -75,6 +75,8 @@ std::vector<std::string_view> split(std::string_view line) {
 std::string quoted(std::string_view word) { return "'" + std::string(word.substr(0, 40)) + "'"; }
 
 // The header: every line is one the format allows, every count fits in the bytes after it.
+// Long (over 80 lines) on purpose: one pass over the header's lines, a case per keyword, each with
+// its own message; the cases share the line counter and the element being declared.
 Result<Header> read_header(const std::string& path, std::uintmax_t size) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};

@@ -1,0 +1,114 @@
+// check_volume_linear: the linear-time checks in report order (edges.cpp, faces.cpp,
+// light_proof.cpp hold them), and check_closed_outward on top of it.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <lightvol/check/check.h>
+#include <lightvol/check/detail/linear_checks.h>
+#include <lightvol/check/topology.h>
+
+namespace lightvol {
+
+using detail::degenerate_check;
+using detail::edge_checks;
+using detail::EdgeResults;
+using detail::nesting_check_directional;
+using detail::nesting_check_point;
+using detail::passed;
+using detail::skipped;
+using detail::t_junction_check;
+
+// Long (over 80 lines) on purpose: the checks in report order, each one's result pushed as it
+// is made; a straight sequence with the skip rules between them.
+CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders,
+                                double quantization_step) {
+  CheckReport report;
+  report.vertices = mesh.num_vertices();
+  report.triangles = mesh.num_triangles();
+  report.bounds = bounding_box(mesh);
+  report.quantization_step = quantization_step;
+
+  // Indices first: nothing else can look at a face that names a missing vertex.
+  CheckResult indices;
+  indices.name = kCheckIndices;
+  const std::size_t nv = mesh.num_vertices();
+  const bool too_big = mesh.num_triangles() >= (std::size_t{1} << 31);
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const auto [a, b, c] = mesh.triangle(t);
+    if (a >= nv || b >= nv || c >= nv) {
+      if (indices.count++ < static_cast<std::uint64_t>(max_offenders)) {
+        Offender o;
+        o.faces = {static_cast<std::int64_t>(t)};
+        indices.offenders.push_back(o);
+      }
+    }
+  }
+  indices.status = indices.count == 0 && !too_big && mesh.num_triangles() > 0 ? CheckStatus::passed
+                                                                              : CheckStatus::failed;
+  indices.detail = mesh.num_triangles() == 0 ? "the mesh has no triangles"
+                   : too_big                 ? "more than 2^31 triangles"
+                             : std::to_string(indices.count) + " faces name a vertex beyond the " +
+                                   std::to_string(nv) + " vertices";
+  report.checks.push_back(indices);
+  if (indices.status != CheckStatus::passed) {
+    for (std::string_view name : {kCheckClosed, kCheckManifold, kCheckOriented, kCheckOutward,
+                                  kCheckDegenerate, kCheckTJunctions, kCheckNesting})
+      report.checks.push_back(skipped(name, "the faces' indices are invalid"));
+    return report;
+  }
+
+  double max_abs = 0;
+  for (float x : mesh.positions) max_abs = std::max(max_abs, static_cast<double>(std::abs(x)));
+  if (light) {
+    for (int k = 0; k < 3; ++k) max_abs = std::max(max_abs, std::abs(light->position[k]));
+  }
+  // The rounding of a coordinate to float: half an ulp of the largest, doubled for safety.
+  const double eps_pos = std::ldexp(max_abs, -23);
+
+  EdgeResults edges = edge_checks(mesh, max_offenders);
+  report.checks.push_back(edges.closed);
+  report.checks.push_back(edges.manifold);
+  report.checks.push_back(edges.oriented);
+  report.volume = signed_volume(mesh);
+  const bool topology = passed(report, kCheckClosed) && passed(report, kCheckManifold) &&
+                        passed(report, kCheckOriented);
+  if (topology) {
+    CheckResult outward;
+    outward.name = kCheckOutward;
+    outward.status = report.volume > 0 ? CheckStatus::passed : CheckStatus::failed;
+    outward.count = report.volume > 0 ? 0 : 1;
+    std::ostringstream detail;
+    detail.precision(9);
+    detail << "signed volume " << report.volume
+           << (report.volume > 0 ? "" : ": the faces point inward");
+    outward.detail = detail.str();
+    report.checks.push_back(outward);
+  } else {
+    report.checks.push_back(skipped(kCheckOutward, "needs a closed, edge-manifold, oriented mesh"));
+  }
+  report.checks.push_back(degenerate_check(mesh, max_offenders));
+  report.checks.push_back(t_junction_check(mesh, edges, eps_pos, max_offenders));
+
+  if (!light) {
+    report.checks.push_back(skipped(kCheckNesting, "no light given (CGAL's proof runs in check)"));
+  } else if (!topology) {
+    report.checks.push_back(skipped(kCheckNesting, "needs a closed, edge-manifold, oriented mesh"));
+  } else if (light->type == LightType::directional) {
+    report.checks.push_back(nesting_check_directional(mesh, *light, eps_pos, quantization_step,
+                                                      max_offenders, &report));
+  } else {
+    report.checks.push_back(
+        nesting_check_point(mesh, *light, eps_pos, quantization_step, max_offenders, &report));
+  }
+  return report;
+}
+
+Status check_closed_outward(const Mesh& mesh, const std::string& what) {
+  const CheckReport report = check_volume_linear(mesh, nullptr, 1);
+  for (const CheckResult& c : report.checks)
+    if (c.status == CheckStatus::failed) return Error{what + ": " + report.first_failure()};
+  return {};
+}
+
+}  // namespace lightvol
