@@ -10,6 +10,7 @@
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/json_keys.h>
+#include <lightvol/light/texel.h>
 
 namespace lightvol {
 
@@ -164,9 +165,8 @@ Result<Camera> load_camera(const std::string& path) {
 
 Ray pixel_ray(const Camera& camera, int col, int row) {
   // Pixel centre in NDC, sampled as Unprojector samples texels.
-  const double x = 2.0 * (col + 0.5) / camera.width - 1.0;
-  const double y_down = 2.0 * (row + 0.5) / camera.height - 1.0;
-  const double y = camera.view.flip_y ? y_down : -y_down;
+  const double x = texel_ndc_x(col, camera.width);
+  const double y = texel_ndc_y(row, camera.height, camera.view.flip_y);
   bool ok = false;
   const Mat4d inv = inverse(camera.view.projection * camera.view.view, &ok);
   LV_CHECK(ok);

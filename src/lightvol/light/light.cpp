@@ -8,6 +8,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/json_keys.h>
 #include <lightvol/light/light.h>
+#include <lightvol/light/texel.h>
 
 namespace lightvol {
 
@@ -147,6 +148,8 @@ Status parse_matrices(const KeyReader& keys, Light* light) {
 
 }  // namespace
 
+// Long (over 80 lines) on purpose: one check per key of LIGHT.json, in the order they are
+// documented, each with its own message naming the key; a straight sequence.
 Result<Light> parse_light(std::string_view json_text, const std::string& source) {
   Result<json> parsed = parse_json_object(json_text, source, "a light");
   if (!parsed) return parsed.error();
@@ -312,10 +315,14 @@ Unprojector::Unprojector(const Light& light, int width, int height, int face, Sp
   }
 }
 
+Error unreachable_radial_depth(const std::string& source, int col, int row, double depth) {
+  return Error{source + ": pixel (" + std::to_string(col) + ", " + std::to_string(row) +
+               "): radial depth " + std::to_string(depth) +
+               " is shorter than the texel ray's distance from the light position"};
+}
+
 Vec3d Unprojector::ndc(int col, int row) const {
-  const double x = 2.0 * (col + 0.5) / width_ - 1.0;
-  const double y_down = 2.0 * (row + 0.5) / height_ - 1.0;
-  return {x, flip_y_ ? y_down : -y_down, 0};
+  return {texel_ndc_x(col, width_), texel_ndc_y(row, height_, flip_y_), 0};
 }
 
 Vec3d Unprojector::eye_near(int col, int row) const {

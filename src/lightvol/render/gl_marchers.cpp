@@ -220,6 +220,8 @@ struct GlMarcher::State {
 
 GlMarcher::~GlMarcher() = default;
 
+// Long (over 80 lines) on purpose: it checks the inputs, then compiles the marcher's programs and
+// sets their textures and uniforms in the order GL needs them; a straight sequence.
 Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
                                                      const std::vector<DepthImage>& maps,
                                                      const std::vector<std::string>& sources,

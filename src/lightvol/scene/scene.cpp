@@ -5,6 +5,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/io/mesh_reader.h>
+#include <lightvol/light/texel.h>
 #include <lightvol/scene/scene.h>
 
 namespace lightvol {
@@ -59,11 +60,10 @@ DepthImage encode(const Light& light, int width, int height, const std::vector<T
   const Mat4d inv_projection = inverse(light.projection, &ok);
   LV_CHECK(ok);
   for (int row = 0; row < height; ++row) {
-    const double y_down = 2.0 * (row + 0.5) / height - 1.0;
-    const double y = light.flip_y ? y_down : -y_down;
+    const double y = texel_ndc_y(row, height, light.flip_y);
     for (int col = 0; col < width; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * width + col;
-      const double x = 2.0 * (col + 0.5) / width - 1.0;
+      const double x = texel_ndc_x(col, width);
       const double d = std::clamp(static_cast<double>(window[i]), 0.0, 1.0);
       const Vec3d p = inv_projection.transform_point({x, y, 2 * d - 1});
       double value = light.depth == DepthEncoding::linear ? -p.z : length(p);

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/light/texel.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/closing.h>
 
@@ -63,9 +64,8 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
                       }
                     });
   if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
-    return Error{source + ": pixel (" + std::to_string(bad % w) + ", " + std::to_string(bad / w) +
-                 "): radial depth " + std::to_string(depth.values[bad]) +
-                 " is shorter than the texel ray's distance from the light position"};
+    return unreachable_radial_depth(source, static_cast<int>(bad % w), static_cast<int>(bad / w),
+                                    depth.values[bad]);
   }
   mesh.indices.reserve(3 * counts.triangles);
   mesh.indices.insert(mesh.indices.end(), grid.indices.begin(), grid.indices.end());

@@ -81,6 +81,9 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   return refinement->build(bound, options.measure, report, detail);
 }
 
+// Long (over 80 lines) on purpose: the six faces' tessellation rounds (seam vertices forced across
+// faces until no face adds any) and the assembly share the per-face state; split, it would pass
+// that state around without making a step readable on its own.
 Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
                            OmniAdaptiveDetail* detail) const {
   const CubeFaces& cube = *cube_;

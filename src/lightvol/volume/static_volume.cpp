@@ -6,6 +6,7 @@
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
+#include <lightvol/light/texel.h>
 #include <lightvol/volume/closing.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -73,9 +74,8 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
     }
   });
   if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
-    return Error{source + ": pixel (" + std::to_string(bad % w) + ", " + std::to_string(bad / w) +
-                 "): radial depth " + std::to_string(depth.values[bad]) +
-                 " is shorter than the texel ray's distance from the light position"};
+    return unreachable_radial_depth(source, static_cast<int>(bad % w), static_cast<int>(bad / w),
+                                    depth.values[bad]);
   }
 
   // Grid triangles: two per texel quad, wound to face away from the light.

@@ -1,0 +1,98 @@
+// The lattice machinery shared by the adaptive tessellator's files: lattice points, the quadtree's
+// cell geometry, a cell's triangles per edge-split configuration, and the error kernels
+// (error_kernels.cpp) that measure a triangle or an unsplit cell against the texels. Internal to
+// the tessellate stage.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+
+#include <lightvol/tessellate/adaptive_grid.h>
+
+namespace lightvol::detail {
+
+// A texel, as a lattice point (col, row).
+struct Pt {
+  int x = 0, y = 0;
+};
+
+// Cell geometry of a grid of cw × ch quads (W−1 × H−1).
+struct Quadtree {
+  int cw = 0, ch = 0, top = 0;
+
+  Quadtree(int width, int height) : cw(width - 1), ch(height - 1) {
+    while ((1 << top) < std::max(cw, ch)) ++top;
+  }
+  int nx(int level) const { return (cw + (1 << level) - 1) >> level; }
+  int ny(int level) const { return (ch + (1 << level) - 1) >> level; }
+  std::size_t cells(int level) const {
+    return static_cast<std::size_t>(nx(level)) * static_cast<std::size_t>(ny(level));
+  }
+  struct Box {
+    int x0, y0, x1, y1;
+  };
+  Box box(int level, int i, int j) const {
+    const int s = 1 << level;
+    return {i * s, j * s, std::min(i * s + s, cw), std::min(j * s + s, ch)};
+  }
+};
+
+// The largest error (TexelDepths::error) over the texels (lattice points) of the closed triangle
+// (a, b, c), whose window depth is the plane through its corners' depths: exactly what the
+// emitted flat triangle gives along each texel ray. Large triangles split their rows across
+// threads. The triangle must have nonzero area.
+double triangle_error(const TexelDepths& t, Pt a, Pt b, Pt c);
+
+// The largest error over the texels of an unsplit cell `b` (both triangles of
+// cell_triangles(config 0)), rows [y_begin, y_end) only.
+double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end);
+
+// `e` rounded up to a float (a pyramid value never understates the error it stands for).
+float round_up(double e);
+
+// Edge-split bits of a cell's configuration.
+enum : unsigned { kSplitTop = 1, kSplitRight = 2, kSplitBottom = 4, kSplitLeft = 8 };
+
+// The triangles of a cell in configuration `config`, positively oriented in (col, row) (the
+// static grid's standard winding): the diagonal runs from the top-right to the bottom-left corner
+// like the static grid's quads, and each split edge fans its midpoint to the opposite corner of its
+// half. Returns the count (2 + number of split edges).
+inline int cell_triangles(const Quadtree::Box& b, int half, unsigned config,
+                          std::array<Pt, 3>* out) {
+  const Pt a{b.x0, b.y0}, bb{b.x1, b.y0}, c{b.x0, b.y1}, d{b.x1, b.y1};
+  const Pt mt{b.x0 + half, b.y0}, mr{b.x1, b.y0 + half}, mb{b.x0 + half, b.y1},
+      ml{b.x0, b.y0 + half};
+  int n = 0;
+  const bool top = config & kSplitTop, right = config & kSplitRight, bottom = config & kSplitBottom,
+             left = config & kSplitLeft;
+  // Upper-left half (a, b, c): top and left edges.
+  if (top && left) {
+    out[n++] = {a, mt, ml}, out[n++] = {mt, bb, ml}, out[n++] = {ml, bb, c};
+  } else if (top) {
+    out[n++] = {a, mt, c}, out[n++] = {mt, bb, c};
+  } else if (left) {
+    out[n++] = {a, bb, ml}, out[n++] = {ml, bb, c};
+  } else {
+    out[n++] = {a, bb, c};
+  }
+  // Lower-right half (b, d, c): right and bottom edges.
+  if (right && bottom) {
+    out[n++] = {mr, d, mb}, out[n++] = {bb, mr, mb}, out[n++] = {bb, mb, c};
+  } else if (right) {
+    out[n++] = {bb, mr, c}, out[n++] = {mr, d, c};
+  } else if (bottom) {
+    out[n++] = {bb, d, mb}, out[n++] = {bb, mb, c};
+  } else {
+    out[n++] = {bb, d, c};
+  }
+  return n;
+}
+
+inline double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace lightvol::detail

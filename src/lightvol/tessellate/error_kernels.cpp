@@ -1,0 +1,164 @@
+// The error kernels: the largest texel error over a triangle of the lattice or an unsplit cell,
+// row by row (the inner loops vectorize: -fopenmp-simd).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <lightvol/core/check.h>
+#include <lightvol/tessellate/detail/lattice.h>
+
+namespace lightvol::detail {
+namespace {
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
+  return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
+
+// The largest error over the texels (lattice points) of the closed triangle (a, b, c), rows
+// [y_begin, y_end) only. The triangle's window depth is the plane through its corners' depths:
+// exactly what the emitted flat triangle gives along each texel ray.
+template <bool kUniform>
+double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, int y_end) {
+  std::int64_t area2 =
+      std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
+  if (area2 < 0) {
+    std::swap(b, c);
+    area2 = -area2;
+  }
+  LV_CHECK(area2 > 0);
+  const double da = t.window_depth(a.x, a.y), db = t.window_depth(b.x, b.y),
+               dc = t.window_depth(c.x, c.y);
+  const double inv = 1.0 / static_cast<double>(area2);
+  const double gx = ((db - da) * (c.y - a.y) - (dc - da) * (b.y - a.y)) * inv;
+  const double gy = ((dc - da) * (b.x - a.x) - (db - da) * (c.x - a.x)) * inv;
+  const Pt v[3] = {a, b, c};
+  double worst = 0;
+  for (int y = y_begin; y < y_end; ++y) {
+    // Each directed edge p→q keeps the points with cross(q − p, x − p) ≥ 0: A·x + C ≥ 0.
+    std::int64_t lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
+    for (int k = 0; k < 3; ++k) {
+      const Pt p = v[k], q = v[(k + 1) % 3];
+      const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
+      const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
+      if (A > 0) {
+        lo = std::max(lo, ceil_div(-C, A));
+      } else if (A < 0) {
+        hi = std::min(hi, floor_div(C, -A));
+      } else if (C < 0) {
+        lo = 1, hi = 0;
+      }
+    }
+    if (lo > hi) continue;
+    const int x0 = static_cast<int>(lo), x1 = static_cast<int>(hi);
+    const double* dt = t.depth_row(y);
+    const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
+    double m = 0;
+    if constexpr (kUniform) {
+#pragma omp simd reduction(max : m)
+      for (int x = x0; x <= x1; ++x) {
+        const double e = std::abs(base + gx * (x - x0) - dt[x]);
+        m = m > e ? m : e;
+      }
+    } else {
+      const double* k = t.scale_row(y);
+      const double w0 = t.w0(x0, y), dw = t.w0_dc(), w1 = t.w1();
+#pragma omp simd reduction(max : m)
+      for (int x = x0; x <= x1; ++x) {
+        const double d = base + gx * (x - x0);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0 + dw * (x - x0) + d * w1);
+        m = m > e ? m : e;
+      }
+    }
+    worst = std::max(worst, m);
+  }
+  if constexpr (kUniform) worst *= t.uniform_scale();
+  return worst;
+}
+
+// The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
+// triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
+// general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
+template <bool kUniform>
+double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
+  const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
+               dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
+  const double g1x = (db - da) / wx, g1y = (dc - da) / wy;  // a + g1·(p − a)
+  const double g2x = (dd - dc) / wx, g2y = (dd - db) / wy;  // d + g2·(p − d)
+  double worst = 0;
+  for (int y = y_begin; y < y_end; ++y) {
+    const int s = y - b.y0;
+    const int xs =
+        b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
+    const double* dt = t.depth_row(y);
+    const double base1 = da + g1y * s, base2 = dd + g2y * (y - b.y1);
+    double m = 0;
+    if constexpr (kUniform) {
+#pragma omp simd reduction(max : m)
+      for (int x = b.x0; x <= xs; ++x) {
+        const double e = std::abs(base1 + g1x * (x - b.x0) - dt[x]);
+        m = m > e ? m : e;
+      }
+#pragma omp simd reduction(max : m)
+      for (int x = xs + 1; x <= b.x1; ++x) {
+        const double e = std::abs(base2 + g2x * (x - b.x1) - dt[x]);
+        m = m > e ? m : e;
+      }
+    } else {
+      const double* k = t.scale_row(y);
+      const double w1 = t.w1();
+      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
+#pragma omp simd reduction(max : m)
+      for (int x = b.x0; x <= xs; ++x) {
+        const double d = base1 + g1x * (x - b.x0);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+      }
+#pragma omp simd reduction(max : m)
+      for (int x = xs + 1; x <= b.x1; ++x) {
+        const double d = base2 + g2x * (x - b.x1);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+      }
+    }
+    worst = std::max(worst, m);
+  }
+  if constexpr (kUniform) worst *= t.uniform_scale();
+  return worst;
+}
+
+}  // namespace
+
+double triangle_error(const TexelDepths& t, Pt a, Pt b, Pt c) {
+  const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y}) + 1;
+  const int x0 = std::min({a.x, b.x, c.x}), x1 = std::max({a.x, b.x, c.x}) + 1;
+  const auto rows = [&](int ya, int yb) {
+    return t.uniform() ? triangle_error_rows<true>(t, a, b, c, ya, yb)
+                       : triangle_error_rows<false>(t, a, b, c, ya, yb);
+  };
+  // Large triangles (the top of the pyramid) split their rows across threads.
+  if (static_cast<std::int64_t>(y1 - y0) * (x1 - x0) < (1 << 16)) return rows(y0, y1);
+  return tbb::parallel_reduce(
+      tbb::blocked_range<int>(y0, y1, 16), 0.0,
+      [&](const tbb::blocked_range<int>& r, double m) {
+        return std::max(m, rows(r.begin(), r.end()));
+      },
+      [](double p, double q) { return std::max(p, q); });
+}
+
+float round_up(double e) {
+  float f = static_cast<float>(e);
+  if (static_cast<double>(f) < e) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+  return t.uniform() ? box_error_rows_t<true>(t, b, y_begin, y_end)
+                     : box_error_rows_t<false>(t, b, y_begin, y_end);
+}
+
+}  // namespace lightvol::detail

@@ -1,0 +1,208 @@
+// The error pyramid: each quadtree cell's own measure (max_error or laplacian), maxed with its
+// children's, built once per grid; and the measure of a tessellated grid on its triangles.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/detail/lattice.h>
+
+namespace lightvol {
+
+using detail::box_error_rows;
+using detail::Pt;
+using detail::Quadtree;
+using detail::round_up;
+using detail::seconds_since;
+using detail::triangle_error;
+
+namespace {
+
+// Builds the pyramid's values, level by level; the steps run in the order the constructor calls
+// them. value[L][cell] (L ≥ 1, cells row-major) ends as the max of the cell's own measure and its
+// children's values.
+class PyramidBuilder {
+ public:
+  PyramidBuilder(const TexelDepths& texels, Refinement refinement,
+                 std::vector<std::vector<float>>* value)
+      : t_(texels), refinement_(refinement), q_(texels.width(), texels.height()), value_(*value) {
+    value_.resize(static_cast<std::size_t>(q_.top) + 1);
+    for (int level = 1; level <= q_.top; ++level) value_[level].assign(q_.cells(level), 0.0f);
+  }
+
+  int top() const { return q_.top; }
+
+  // Laplacian mode: the edge map of window depth (neighbours clamped at the border).
+  void edge_map();
+
+  // Levels 1..`tile` tile by tile: a level-`tile` cell's texels stay in cache while its whole
+  // sub-pyramid is computed.
+  void lower_levels(int tile);
+
+  // max_error, the levels above `tile`: their cells' own measures in one sweep over the rows. Each
+  // row adds its texels to the own measure of its cell at every upper level (partial maxima per
+  // chunk of rows, joined by max: exact and deterministic), so the texels are read once more, not
+  // once per level.
+  void upper_own_measures(int tile);
+
+  // The levels above `tile`: the max of each cell's own measure (in place) with its children's.
+  void upper_maxima(int tile);
+
+ private:
+  // One cell: its own measure (max_error: over both triangles of its unsplit configuration;
+  // laplacian, level 1: the edge map over its texels), then the max with its children.
+  void compute(int level, int i, int j);
+
+  const TexelDepths& t_;
+  const Refinement refinement_;
+  const Quadtree q_;
+  std::vector<std::vector<float>>& value_;
+  std::vector<float> edges_;  // laplacian: |Laplacian| per texel, rounded up
+};
+
+void PyramidBuilder::edge_map() {
+  const int w = t_.width(), h = t_.height();
+  edges_.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c < w; ++c) {
+        const auto at = [&](int cc, int rr) {
+          return t_.window_depth(std::clamp(cc, 0, w - 1), std::clamp(rr, 0, h - 1));
+        };
+        const double lap = at(c - 1, r) + at(c + 1, r) + at(c, r - 1) + at(c, r + 1) - 4 * at(c, r);
+        edges_[static_cast<std::size_t>(r) * w + c] = round_up(std::abs(lap));
+      }
+  });
+}
+
+void PyramidBuilder::compute(int level, int i, int j) {
+  const Quadtree::Box b = q_.box(level, i, j);
+  float v = 0;
+  if (refinement_ == Refinement::max_error && level == 1 && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+    // A whole level-1 cell: five texels, each halfway along an edge or the diagonal.
+    const int x = b.x0, y = b.y0;
+    const double da = t_.window_depth(x, y), db = t_.window_depth(x + 2, y),
+                 dc = t_.window_depth(x, y + 2), dd = t_.window_depth(x + 2, y + 2);
+    const double e =
+        std::max({t_.error(x + 1, y, 0.5 * (da + db)), t_.error(x, y + 1, 0.5 * (da + dc)),
+                  t_.error(x + 1, y + 1, 0.5 * (db + dc)), t_.error(x + 2, y + 1, 0.5 * (db + dd)),
+                  t_.error(x + 1, y + 2, 0.5 * (dc + dd))});
+    v = round_up(e);
+  } else if (refinement_ == Refinement::max_error) {
+    v = round_up(box_error_rows(t_, b, b.y0, b.y1 + 1));
+  } else if (level == 1) {
+    const int w = t_.width();
+    for (int y = b.y0; y <= b.y1; ++y)
+      for (int x = b.x0; x <= b.x1; ++x)
+        v = std::max(v, edges_[static_cast<std::size_t>(y) * w + x]);
+  }
+  if (level > 1) {
+    const std::vector<float>& below = value_[level - 1];
+    const int nxb = q_.nx(level - 1), nyb = q_.ny(level - 1);
+    for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
+      for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
+        v = std::max(v, below[static_cast<std::size_t>(cj) * nxb + ci]);
+  }
+  value_[level][static_cast<std::size_t>(j) * q_.nx(level) + i] = v;
+}
+
+void PyramidBuilder::lower_levels(int tile) {
+  const int ntx = q_.nx(tile);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q_.cells(tile)),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t t = range.begin(); t != range.end(); ++t) {
+                        const int ti = static_cast<int>(t % ntx), tj = static_cast<int>(t / ntx);
+                        for (int level = 1; level <= tile; ++level) {
+                          const int span = 1 << (tile - level);
+                          const int i1 = std::min((ti + 1) * span, q_.nx(level)),
+                                    j1 = std::min((tj + 1) * span, q_.ny(level));
+                          for (int j = tj * span; j < j1; ++j)
+                            for (int i = ti * span; i < i1; ++i) compute(level, i, j);
+                        }
+                      }
+                    });
+}
+
+void PyramidBuilder::upper_own_measures(int tile) {
+  const int top = q_.top;
+  using Own = std::vector<std::vector<double>>;  // per upper level, per cell
+  Own empty(static_cast<std::size_t>(top) + 1);
+  for (int level = tile + 1; level <= top; ++level) empty[level].assign(q_.cells(level), 0.0);
+  const Own own = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, t_.height(), 16), empty,
+      [&](const tbb::blocked_range<int>& rows, Own acc) {
+        for (int y = rows.begin(); y != rows.end(); ++y)
+          for (int level = tile + 1; level <= top; ++level) {
+            const int nx = q_.nx(level), ny = q_.ny(level), j = y >> level;
+            for (int cj : {j - 1, j}) {
+              if (cj < 0 || cj >= ny) continue;
+              if (cj == j - 1 && (y & ((1 << level) - 1)) != 0) continue;  // not its bottom edge
+              for (int i = 0; i < nx; ++i) {
+                double& m = acc[level][static_cast<std::size_t>(cj) * nx + i];
+                m = std::max(m, box_error_rows(t_, q_.box(level, i, cj), y, y + 1));
+              }
+            }
+          }
+        return acc;
+      },
+      [](Own a, const Own& b) {
+        for (std::size_t l = 0; l < a.size(); ++l)
+          for (std::size_t c = 0; c < a[l].size(); ++c) a[l][c] = std::max(a[l][c], b[l][c]);
+        return a;
+      });
+  for (int level = tile + 1; level <= top; ++level)
+    for (std::size_t c = 0; c < own[level].size(); ++c) value_[level][c] = round_up(own[level][c]);
+}
+
+void PyramidBuilder::upper_maxima(int tile) {
+  for (int level = tile + 1; level <= q_.top; ++level) {
+    const int nx = q_.nx(level), nxb = q_.nx(level - 1), nyb = q_.ny(level - 1);
+    for (std::size_t cell = 0; cell < q_.cells(level); ++cell) {
+      const int i = static_cast<int>(cell % nx), j = static_cast<int>(cell / nx);
+      float v = value_[level][cell];
+      for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
+        for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
+          v = std::max(v, value_[level - 1][static_cast<std::size_t>(cj) * nxb + ci]);
+      value_[level][cell] = v;
+    }
+  }
+}
+
+}  // namespace
+
+RefinementPyramid::RefinementPyramid(TexelDepths texels, Refinement refinement)
+    : texels_(std::move(texels)), refinement_(refinement) {
+  const auto start = std::chrono::steady_clock::now();
+  PyramidBuilder builder(texels_, refinement_, &value_);
+  top_ = builder.top();
+  if (refinement_ == Refinement::laplacian) builder.edge_map();
+  const int tile = std::min(top_, 6);
+  if (tile >= 1) builder.lower_levels(tile);
+  if (top_ > tile && refinement_ == Refinement::max_error) builder.upper_own_measures(tile);
+  builder.upper_maxima(tile);
+  seconds_ = seconds_since(start);
+}
+
+double RefinementPyramid::measure(const AdaptiveGrid& grid) const {
+  const std::uint32_t w = static_cast<std::uint32_t>(grid.width);
+  const auto pt = [&](std::uint32_t v) {
+    const std::uint32_t id = grid.vertices[v];
+    return Pt{static_cast<int>(id % w), static_cast<int>(id / w)};
+  };
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, grid.num_triangles(), 256), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double m) {
+        for (std::size_t t = r.begin(); t != r.end(); ++t)
+          m = std::max(m, triangle_error(texels_, pt(grid.indices[3 * t]),
+                                         pt(grid.indices[3 * t + 1]), pt(grid.indices[3 * t + 2])));
+        return m;
+      },
+      [](double a, double b) { return std::max(a, b); });
+}
+
+}  // namespace lightvol

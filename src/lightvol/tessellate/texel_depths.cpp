@@ -1,0 +1,126 @@
+// TexelDepths: the texel error metric, the window depth of every texel and the world distance
+// along its ray between two window depths.
+#include <sys/mman.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <lightvol/core/check.h>
+#include <lightvol/light/texel.h>
+#include <lightvol/tessellate/adaptive_grid.h>
+
+namespace lightvol {
+
+namespace {
+
+// An array of n doubles left uninitialized (the caller's parallel loop is the first touch),
+// advised onto transparent huge pages when large: fewer page faults. Advice only.
+std::unique_ptr<double[]> uninitialized_array(std::size_t n) {
+  auto a = std::make_unique_for_overwrite<double[]>(n);
+  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+  const auto begin = reinterpret_cast<std::uintptr_t>(a.get());
+  const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
+  const std::uintptr_t end = (begin + n * sizeof(double)) & ~(kHuge - 1);
+  if (end > aligned + 4 * kHuge)
+    ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
+  return a;
+}
+
+}  // namespace
+
+// Long (over 80 lines) on purpose: the per-texel loop converts each encoding to window depth and
+// the error scale in one pass over the texels (one read of the image, written once), with the
+// projection's constants set up before it.
+Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& image, int face,
+                                        const std::string& source) {
+  const int w = image.width, h = image.height;
+  LV_CHECK(w >= 2 && h >= 2);
+  TexelDepths t;
+  t.width_ = w;
+  t.height_ = h;
+  const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  t.depth_ = uninitialized_array(n);
+
+  // clip → world. A texel's homogeneous point at window depth d is h0 + d·h1 with
+  // h0 = M·(x_ndc, y_ndc, −1, 1) and h1 = 2·M·e_z; two points of one ray lie
+  // |d1 − d2|·|h1.xyz·h0.w − h0.xyz·h1.w| / |w(d1)·w(d2)| apart.
+  const Mat4d view = light.type == LightType::omni ? omni_face_view(light, face) : light.view;
+  bool ok = false;
+  const Mat4d inv_view = inverse(view, &ok);
+  LV_CHECK(ok);
+  const Mat4d inv_proj = inverse(light.projection, &ok);
+  LV_CHECK(ok);
+  const Mat4d m = inv_view * inv_proj;
+  const double h1[4] = {2 * m(0, 2), 2 * m(1, 2), 2 * m(2, 2), 2 * m(3, 2)};
+  const double sy = light.flip_y ? 1.0 : -1.0;
+  const auto xn = [w](int c) { return texel_ndc_x(c, w); };
+  const auto yn = [h, &light](int r) { return texel_ndc_y(r, h, light.flip_y); };
+  t.w0_dc_ = m(3, 0) * 2.0 / w;
+  t.w0_dr_ = m(3, 1) * sy * 2.0 / h;
+  t.w0_c_ = m(3, 0) * xn(0) + m(3, 1) * yn(0) - m(3, 2) + m(3, 3);
+  t.w1_ = h1[3];
+  t.uniform_ = m(3, 0) == 0 && m(3, 1) == 0 && h1[3] == 0;
+  if (t.uniform_) {
+    t.uniform_scale_ = std::sqrt(h1[0] * h1[0] + h1[1] * h1[1] + h1[2] * h1[2]) / std::abs(t.w0_c_);
+  } else {
+    t.scale_ = uninitialized_array(n);
+  }
+
+  const bool window = light.depth == DepthEncoding::window;
+  const Mat4d& pj = light.projection;
+  const bool linear_fast = light.depth == DepthEncoding::linear && pj(2, 0) == 0 && pj(2, 1) == 0 &&
+                           pj(3, 0) == 0 && pj(3, 1) == 0;
+  const double pz = pj(2, 2), pzc = pj(2, 3), pw = pj(3, 2), pwc = pj(3, 3);
+  const Unprojector unproject(light, w, h, face, Space::world);
+  std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
+  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      for (int c = 0; c < w; ++c) {
+        const std::size_t v = t.index(c, r);
+        const double stored = image.values[v];
+        double d = 0;
+        if (window) {
+          d = std::clamp(stored, 0.0, 1.0);
+        } else if (linear_fast) {
+          // The projection's z and w rows see only the eye depth z = −stored.
+          const double z = -std::clamp(stored, light.near, light.far);
+          d = std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
+        } else {
+          Vec3d p;
+          if (!unproject.point(c, r, stored, &p)) {
+            std::size_t seen = first_bad.load();
+            while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
+            }
+            p = unproject.near_point(c, r);
+          }
+          const Vec3d e = view.transform_point(p);
+          const Mat4d& pr = light.projection;
+          const double z = pr(2, 0) * e.x + pr(2, 1) * e.y + pr(2, 2) * e.z + pr(2, 3);
+          const double ww = pr(3, 0) * e.x + pr(3, 1) * e.y + pr(3, 2) * e.z + pr(3, 3);
+          d = std::clamp(0.5 * (z / ww + 1.0), 0.0, 1.0);
+        }
+        t.depth_[v] = d;
+        if (!t.uniform_) {
+          const double x = xn(c), y = yn(r);
+          double h0[4];
+          for (int k = 0; k < 4; ++k) h0[k] = m(k, 0) * x + m(k, 1) * y - m(k, 2) + m(k, 3);
+          const Vec3d g{h1[0] * h0[3] - h0[0] * h1[3], h1[1] * h0[3] - h0[1] * h1[3],
+                        h1[2] * h0[3] - h0[2] * h1[3]};
+          t.scale_[v] = length(g) / std::abs(h0[3] + d * h1[3]);
+        }
+      }
+    }
+  });
+  if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
+    return unreachable_radial_depth(source, static_cast<int>(bad % w), static_cast<int>(bad / w),
+                                    image.values[bad]);
+  }
+  return t;
+}
+
+}  // namespace lightvol
