@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "omni_scene.h"
+#include "support/omni_scene.h"
 
 int main(int argc, char** argv) {
   if (argc != 3) {
@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string out = argv[2];
-  const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
+  const lightvol::CubeFaces cube = lightvol::test::omni_scene(w);
   if (out.find("{face}") == std::string::npos) {
     if (lightvol::Status s = lightvol::write_depth_image(out, lightvol::stack_cube_faces(cube));
         !s) {
@@ -35,6 +35,6 @@ int main(int argc, char** argv) {
       }
     }
   }
-  std::printf("%s\n", lightvol::bench::omni_scene_light_json().c_str());
+  std::printf("%s\n", lightvol::test::omni_scene_light_json().c_str());
   return 0;
 }

@@ -8,15 +8,15 @@
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
-#include "omni_scene.h"
+#include "support/omni_scene.h"
 
 namespace {
 
 void BM_StaticOmniBuild(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
   const lightvol::Light light =
-      *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
-  const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
+      *lightvol::parse_light(lightvol::test::omni_scene_light_json(), "bench");
+  const lightvol::CubeFaces cube = lightvol::test::omni_scene(w);
   std::size_t triangles = 0;
   for (auto _ : state) {
     lightvol::Result<lightvol::Mesh> mesh = lightvol::build_omni_volume(light, cube, {});
@@ -38,8 +38,8 @@ BENCHMARK(BM_StaticOmniBuild)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond
 void BM_AdaptiveOmniBuild(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0));
   const lightvol::Light light =
-      *lightvol::parse_light(lightvol::bench::omni_scene_light_json(), "bench");
-  const lightvol::CubeFaces cube = lightvol::bench::omni_scene(w);
+      *lightvol::parse_light(lightvol::test::omni_scene_light_json(), "bench");
+  const lightvol::CubeFaces cube = lightvol::test::omni_scene(w);
   lightvol::AdaptiveOptions options;
   options.max_error = static_cast<double>(state.range(1)) / 1000;
   lightvol::AdaptiveReport report;

@@ -25,7 +25,7 @@
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
-#include "render/analytic_scene.h"
+#include "support/analytic_scene.h"
 #include "support/test_support.h"
 
 using namespace lightvol;

@@ -7,6 +7,7 @@
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
+#include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -14,8 +15,6 @@
 
 namespace lightvol {
 namespace {
-
-using test::TempDir;
 
 // A 9×7 spot map: floor at window depth 0.98 (≈ 4.3 below the light) with a 3×3 occluder at
 // 0.95 (≈ 1.9 below it).
@@ -521,66 +520,33 @@ TEST(CgalHubs, TwoShellsSharingOneVertexAreNotASurfaceMesh) {
       << si->detail;
 }
 
-// ---- the command line ------------------------------------------------------------------------
+// ---- check_closed_outward: the same linear checks as one answer -----------------------------
 
-TEST(CheckCommand, ExitCodesAndReports) {
-  TempDir dir;
-  const std::string light = dir.write("light.json", test::spot_json());
+TEST(ClosedOutward, SoundVolumePassesAndEachBreakIsNamed) {
   const Mesh sound = sound_spot_volume();
-  ASSERT_TRUE(write_mesh(dir.file("sound.ply"), sound).ok());
+  EXPECT_TRUE(check_closed_outward(sound, "v").ok());
+
+  Mesh open = sound;
+  open.indices.resize(open.indices.size() - 3);
+  Status s = check_closed_outward(open, "open.drc");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message.rfind("open.drc: closed: ", 0), 0u) << s.error().message;
+
+  Mesh inverted = sound;
+  for (std::size_t t = 0; t < inverted.num_triangles(); ++t)
+    std::swap(inverted.indices[3 * t + 1], inverted.indices[3 * t + 2]);
+  s = check_closed_outward(inverted, "in.drc");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message.rfind("in.drc: outward: signed volume -", 0), 0u)
+      << s.error().message;
+
   Mesh flipped = sound;
   std::swap(flipped.indices[4], flipped.indices[5]);
-  ASSERT_TRUE(write_mesh(dir.file("flipped.obj"), flipped).ok());
+  s = check_closed_outward(flipped, "f.drc");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message.rfind("f.drc: oriented: ", 0), 0u) << s.error().message;
 
-  auto r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" + light + "'");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("valid"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("non-self-nesting"), std::string::npos) << r.out;
-
-  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --json");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("\"valid\": true"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("CGAL"), std::string::npos) << r.out;
-
-  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --light '" + light + "' --json");
-  EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_NE(r.out.find("\"valid\": false"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("\"first_failure\": \"oriented"), std::string::npos) << r.out;
-
-  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --quiet");
-  EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.out, "");
-  EXPECT_NE(r.err.find("oriented"), std::string::npos) << r.err;
-
-  // Unreadable input and bad usage: 2, with the file named.
-  const std::string junk = dir.write("junk.ply", "this is not a mesh\n");
-  r = test::run_lightvol("check '" + junk + "'");
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("junk.ply"), std::string::npos) << r.err;
-  r = test::run_lightvol("check '" + dir.file("missing.ply") + "'");
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("missing.ply: no such file"), std::string::npos) << r.err;
-  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" +
-                         dir.file("nolight.json") + "'");
-  EXPECT_EQ(r.exit_code, 2);
-  r = test::run_lightvol("check");
-  EXPECT_EQ(r.exit_code, 2);
-}
-
-TEST(BuildCommand, ChecksWhatItWrites) {
-  TempDir dir;
-  const std::string light = dir.write("light.json", test::spot_json());
-  ASSERT_TRUE(write_depth_image(dir.file("depth.exr"), occluded_depth()).ok());
-  auto r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light +
-                              "' --out '" + dir.file("v.ply") + "' --json");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("\"checking\""), std::string::npos) << r.out;
-  r = test::run_lightvol("check '" + dir.file("v.ply") + "' --light '" + light + "' -q");
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light + "' --out '" +
-                         dir.file("w.ply") + "' --no-check --json");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.find("\"checking\""), std::string::npos) << r.out;
+  EXPECT_FALSE(check_closed_outward(Mesh{}, "empty").ok());
 }
 
 }  // namespace

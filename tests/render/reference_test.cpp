@@ -7,7 +7,7 @@
 #include <lightvol/render/reference.h>
 #include <lightvol/volume/static_volume.h>
 
-#include "render/analytic_scene.h"
+#include "support/analytic_scene.h"
 #include "support/test_support.h"
 
 namespace lightvol {

@@ -22,7 +22,7 @@
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
-#include "render/gl_test_context.h"
+#include "support/gl_test_context.h"
 #include "support/test_support.h"
 
 namespace lightvol {

@@ -11,7 +11,7 @@
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
-#include "bench/omni_scene.h"
+#include "support/omni_scene.h"
 #include "support/test_support.h"
 
 namespace lightvol {
@@ -22,7 +22,7 @@ using test::is_closed_and_oriented;
 
 constexpr double kPi = 3.14159265358979323846;
 
-Light scene_light() { return test::light_from_json(bench::omni_scene_light_json()); }
+Light scene_light() { return test::light_from_json(test::omni_scene_light_json()); }
 
 Vec3d vertex(const Mesh& mesh, std::uint32_t v) {
   const auto p = mesh.vertex(v);
@@ -89,7 +89,7 @@ double largest_texel_error(const Mesh& mesh, const Light& light, const CubeFaces
 TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
   const Light light = scene_light();
   for (int w : {16, 37}) {
-    const CubeFaces cube = bench::omni_scene(w);
+    const CubeFaces cube = test::omni_scene(w);
     for (double bound : {0.002, 0.05, 0.5}) {
       SCOPED_TRACE("W = " + std::to_string(w) + ", max error " + std::to_string(bound));
       AdaptiveOptions options;
@@ -116,7 +116,7 @@ TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
 TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
   const Light light = scene_light();
   const int w = 64;
-  const CubeFaces cube = bench::omni_scene(w);
+  const CubeFaces cube = test::omni_scene(w);
   AdaptiveOptions options;
   options.max_error = 0.01;
   Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options);
@@ -129,7 +129,7 @@ TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
 
 TEST(OmniAdaptive, LaplacianRefinementAndLightSpaceAreClosedToo) {
   const Light light = scene_light();
-  const CubeFaces cube = bench::omni_scene(33);
+  const CubeFaces cube = test::omni_scene(33);
   AdaptiveOptions options;
   options.refinement = Refinement::laplacian;
   options.threshold = 0.001;
@@ -146,7 +146,7 @@ TEST(OmniAdaptive, FlipYFacesAreClosedToo) {
   light.flip_y = true;
   AdaptiveOptions options;
   options.max_error = 0.05;
-  Result<Mesh> mesh = build_adaptive_omni_volume(light, bench::omni_scene(20), {}, options);
+  Result<Mesh> mesh = build_adaptive_omni_volume(light, test::omni_scene(20), {}, options);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   EXPECT_TRUE(is_closed_and_oriented(*mesh));
   EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));

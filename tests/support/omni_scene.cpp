@@ -1,4 +1,4 @@
-#include "omni_scene.h"
+#include "support/omni_scene.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/light/light.h>
 
-namespace lightvol::bench {
+namespace lightvol::test {
 namespace {
 
 constexpr double kNear = 0.05, kFar = 30;
@@ -83,4 +83,4 @@ CubeFaces omni_scene(int width) {
   return cube;
 }
 
-}  // namespace lightvol::bench
+}  // namespace lightvol::test

@@ -6,7 +6,7 @@
 
 #include <lightvol/depth/depth_image.h>
 
-#include "render/gl_test_context.h"
+#include "support/gl_test_context.h"
 #include "support/test_support.h"
 
 namespace lightvol {

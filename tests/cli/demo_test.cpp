@@ -10,7 +10,7 @@
 #include <lightvol/io/mesh_reader.h>
 #include <lightvol/render/image_io.h>
 
-#include "render/gl_test_context.h"
+#include "support/gl_test_context.h"
 #include "support/test_support.h"
 
 namespace lightvol {

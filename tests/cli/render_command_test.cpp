@@ -13,8 +13,8 @@
 #include <lightvol/render/image_io.h>
 #include <lightvol/volume/static_volume.h>
 
-#include "render/analytic_scene.h"
-#include "render/gl_test_context.h"
+#include "support/analytic_scene.h"
+#include "support/gl_test_context.h"
 #include "support/test_support.h"
 
 namespace lightvol {

@@ -1,4 +1,4 @@
-#include "render/analytic_scene.h"
+#include "support/analytic_scene.h"
 
 #include <algorithm>
 #include <cmath>

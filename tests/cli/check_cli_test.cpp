@@ -1,0 +1,94 @@
+// lightvol check and build --check, end to end: exit codes, reports, what build writes passing
+// check.
+#include <string>
+#include <utility>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/export/export.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::TempDir;
+
+// A 9×7 spot map: floor at window depth 0.98 (≈ 4.3 below the light) with a 3×3 occluder at
+// 0.95 (≈ 1.9 below it).
+DepthImage occluded_depth() {
+  return test::make_depth(
+      9, 7, [](int c, int r) { return (c >= 3 && c <= 5 && r >= 2 && r <= 4) ? 0.95f : 0.98f; });
+}
+
+Mesh sound_spot_volume() {
+  Result<Mesh> mesh = build_static_volume(test::light_from_json(test::spot_json()),
+                                          occluded_depth(), {}, "test.exr");
+  EXPECT_TRUE(mesh.ok());
+  return *mesh;
+}
+
+TEST(CheckCommand, ExitCodesAndReports) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  const Mesh sound = sound_spot_volume();
+  ASSERT_TRUE(write_mesh(dir.file("sound.ply"), sound).ok());
+  Mesh flipped = sound;
+  std::swap(flipped.indices[4], flipped.indices[5]);
+  ASSERT_TRUE(write_mesh(dir.file("flipped.obj"), flipped).ok());
+
+  auto r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" + light + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("valid"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("non-self-nesting"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"valid\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("CGAL"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --light '" + light + "' --json");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.out.find("\"valid\": false"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"first_failure\": \"oriented"), std::string::npos) << r.out;
+
+  r = test::run_lightvol("check '" + dir.file("flipped.obj") + "' --quiet");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("oriented"), std::string::npos) << r.err;
+
+  // Unreadable input and bad usage: 2, with the file named.
+  const std::string junk = dir.write("junk.ply", "this is not a mesh\n");
+  r = test::run_lightvol("check '" + junk + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("junk.ply"), std::string::npos) << r.err;
+  r = test::run_lightvol("check '" + dir.file("missing.ply") + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.ply: no such file"), std::string::npos) << r.err;
+  r = test::run_lightvol("check '" + dir.file("sound.ply") + "' --light '" +
+                         dir.file("nolight.json") + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  r = test::run_lightvol("check");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(BuildCommand, ChecksWhatItWrites) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  ASSERT_TRUE(write_depth_image(dir.file("depth.exr"), occluded_depth()).ok());
+  auto r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light +
+                              "' --out '" + dir.file("v.ply") + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"checking\""), std::string::npos) << r.out;
+  r = test::run_lightvol("check '" + dir.file("v.ply") + "' --light '" + light + "' -q");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = test::run_lightvol("build '" + dir.file("depth.exr") + "' --light '" + light + "' --out '" +
+                         dir.file("w.ply") + "' --no-check --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("\"checking\""), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace lightvol

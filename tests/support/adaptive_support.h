@@ -1,0 +1,33 @@
+// Shared by the adaptive tessellation and adaptive volume tests: an independent measure of a
+// volume's error (every texel's ray cast against the mesh) and the depth maps they run on.
+#pragma once
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/depth/depth_image.h>
+#include <lightvol/light/light.h>
+
+namespace lightvol::test {
+
+struct RayErrors {
+  double max_error = 0;
+  int missed = 0;  // texels whose ray hits no grid triangle
+};
+
+// Projects each triangle of the volume into the light's texel space (through the light's own
+// matrices), drops the closing (vertices on the near plane or at the light), and intersects every
+// texel ray its footprint covers (Möller–Trumbore in double). The farthest hit along the ray is
+// the volume's surface there; its distance to the texel's true point is the texel's error. A
+// texel no triangle covers is a test failure (the first five are reported).
+RayErrors ray_errors(const Mesh& mesh, const Light& light, const DepthImage& depth);
+
+// Linear depth (world units along the view axis) of a scene under the test lights: a sloped floor,
+// box occluders with sharp edges, 1-texel bars, a sphere.
+DepthImage adaptive_scene(int w, int h, double floor_depth);
+
+// Window depths of the same kind of scene, for a window-encoded spot light.
+DepthImage window_scene(int w, int h);
+
+// Closed, oriented, no degenerate triangle, positive volume (as gtest expectations).
+void expect_valid_volume(const Mesh& mesh);
+
+}  // namespace lightvol::test
