@@ -21,7 +21,7 @@ max_error=${3:-0.01}
 sizes=${4:-1024 2048 4096}
 omni_sizes=${5:-128 512}
 if [[ ! -f $scene ]]; then
-  echo "sponza_bench: no scene at $scene (the Dabrovic Sponza OBJ; see ../shared/scenes/sponza/PROVENANCE.md)" >&2
+  echo "sponza_bench: no scene at $scene (the Dabrovic Sponza OBJ; data/README.md says where it comes from)" >&2
   exit 0
 fi
 lv=$build/lightvol

@@ -324,7 +324,7 @@ std::string sponza_path() {
 #define REQUIRE_SPONZA()                               \
   if (!std::filesystem::exists(sponza_path()))         \
   GTEST_SKIP() << "Sponza is not at " << sponza_path() \
-               << " (the Dabrovic Sponza OBJ; see ../shared/scenes/sponza/PROVENANCE.md)"
+               << " (the Dabrovic Sponza OBJ; data/README.md says where it comes from)"
 
 const Mesh& sponza() {
   static const Mesh mesh = [] {
