@@ -31,6 +31,11 @@ int fail(const std::string& message) {
   return 2;
 }
 
+int invalid(const std::string& message) {
+  fail(message);
+  return 1;
+}
+
 }  // namespace lightvol::cli
 
 int main(int argc, char** argv) {
