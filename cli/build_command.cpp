@@ -240,8 +240,10 @@ void add_build_command(CLI::App& app, Runner* run) {
       "or one W x 6W strip with the faces top to bottom.\n"
       "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file "
       "written.");
-  cmd->add_option("depth", o->depth_paths,
-                  "Depth image(s): EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+  cmd->add_option(
+         "depth", o->depth_paths,
+         "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
+         "{face} path or one W x 6W strip)")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")

@@ -211,10 +211,14 @@ void add_render_command(CLI::App& app, Runner* run) {
   auto o = std::make_shared<RenderOptions>();
   CLI::App* cmd = app.add_subcommand(
       "render",
-      "The OpenGL checker: render the single-scattering airlight of a light volume (signed\n"
-      "additive blending, --method volume), its CPU reference, or the ray-marching (from the "
-      "shadow\n"
-      "map) and radial-blur (from the camera depth) alternatives.");
+      "Render the airlight a light volume adds to a camera's picture (OpenGL), or a reference.");
+  cmd->footer(
+      "Example:\n  lightvol render volume.ply --light light.json --camera cam.json --depth "
+      "camdepth.exr \\\n      --medium medium.json --out airlight.png\n"
+      "Methods: volume (the light volume drawn with signed additive blending, OpenGL), reference\n"
+      "(the exact sum on the CPU, double precision), raymarch (steps through the shadow map,\n"
+      "--shadow-map) and radial (a radial blur of the camera depth), the last two for comparison.\n"
+      ".exr output keeps linear floats; .png is tone-mapped. Exit 2 on bad input.");
   cmd->add_option("MESH", o->mesh_path, "Light volume (world space), for volume and reference");
   cmd->add_option("--light", o->light_path, "Light description (JSON)")->required();
   cmd->add_option("--camera", o->camera_path, "Camera: a spot light description plus width, height")

@@ -219,8 +219,10 @@ void add_stats_command(CLI::App& app, Runner* run) {
       "For each bound E (world units along the texel rays): the triangles and vertices that\n"
       "'lightvol build --adaptive --max-error E' writes, the largest error actually reached over\n"
       "all texels, and the time of each stage (the error pyramid is built once).");
-  cmd->add_option("depth", o->depth_paths,
-                  "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+  cmd->add_option(
+         "depth", o->depth_paths,
+         "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
+         "{face} path or one W x 6W strip)")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
