@@ -1,5 +1,6 @@
 // A light's depth input, whatever its type: one depth image (spot, directional) or six cube faces
-// (omni). What `lightvol build`, `stats` and `render` read, and `shadowmap` writes.
+// (omni), in the forms of docs/design.md §2. What `lightvol build`, `stats` and `render` read, and
+// `shadowmap` writes.
 #pragma once
 
 #include <string>
