@@ -1,6 +1,7 @@
 // lightvol build: depth image(s) + light description → closed light volume on disk.
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -11,14 +12,10 @@
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
-#include <lightvol/depth/cube_faces.h>
-#include <lightvol/depth/depth_image.h>
+#include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
-#include <lightvol/volume/adaptive_volume.h>
-#include <lightvol/volume/omni_adaptive.h>
-#include <lightvol/volume/omni_volume.h>
-#include <lightvol/volume/static_volume.h>
+#include <lightvol/volume/build_volume.h>
 
 #include "commands.h"
 #include "progress.h"
@@ -26,7 +23,7 @@
 namespace lightvol::cli {
 namespace {
 
-struct BuildOptions {
+struct BuildCommandOptions {
   std::vector<std::string> depth_paths;
   std::string light_path;
   std::string out_path;
@@ -46,6 +43,48 @@ struct BuildOptions {
   bool no_check = false;
 };
 
+// Flag combinations that make no sense; "" when the flags agree.
+std::string conflicting_flags(const BuildCommandOptions& o, MeshFormat format) {
+  if (o.draco && format != MeshFormat::glb) return "--draco: applies to .glb output only";
+  if (!o.medium_path.empty() && format != MeshFormat::glb)
+    return "--medium: applies to .glb output only (the file records it beside the light)";
+  if (o.ascii && format != MeshFormat::ply && format != MeshFormat::stl)
+    return "--ascii: applies to .ply and .stl output only";
+  if (o.refine == "error" && o.adaptive && o.max_error < 0)
+    return "--adaptive: needs --max-error E (world units along the texel rays)";
+  if (o.refine == "error" && !o.adaptive && o.max_error >= 0)
+    return "--max-error: applies with --adaptive only";
+  if (o.refine == "laplacian" && o.threshold < 0) return "--refine laplacian: needs --threshold T";
+  if (o.refine == "laplacian" && o.max_error >= 0)
+    return "--max-error: does not apply to --refine laplacian (use --threshold)";
+  if (o.refine == "error" && o.threshold >= 0)
+    return "--threshold: applies with --refine laplacian only";
+  return "";
+}
+
+BuildVolumeOptions volume_options(const BuildCommandOptions& o) {
+  BuildVolumeOptions v;
+  v.space = o.space == "light" ? Space::light : Space::world;
+  const bool adaptive = o.adaptive || o.refine == "laplacian";
+  v.tessellation = adaptive ? Tessellation::adaptive : Tessellation::static_grid;
+  v.adaptive.refinement = o.refine == "laplacian" ? Refinement::laplacian : Refinement::max_error;
+  v.adaptive.max_error = o.max_error;
+  v.adaptive.threshold = o.threshold;
+  v.adaptive.measure = o.json || !o.report_path.empty();  // the reached error is for reports
+  return v;
+}
+
+// The --medium file as a GLB records it: checked by load_medium, without its formatting.
+Result<std::string> medium_json(const std::string& path) {
+  if (Result<Medium> medium = load_medium(path); !medium) return medium.error();
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  const nlohmann::json medium = nlohmann::json::parse(text.str(), nullptr, false);
+  if (medium.is_discarded()) return Error{path + ": changed while being read"};
+  return medium.dump();
+}
+
 nlohmann::json stage_json(const StageLog& log) {
   nlohmann::json stages = nlohmann::json::array();
   for (const StageRecord& s : log.stages())
@@ -54,101 +93,108 @@ nlohmann::json stage_json(const StageLog& log) {
   return stages;
 }
 
-int run_build(const BuildOptions& o) {
-  Progress progress(o.quiet);
+// The --report / --json report of a finished build.
+nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
+                            const ShadowMaps& maps, const Mesh& mesh,
+                            const AdaptiveReport* adaptive, const StageLog& log) {
+  const Bounds box = bounding_box(mesh);
+  nlohmann::json report = {
+      {"inputs", o.depth_paths},
+      {"light",
+       {{"path", o.light_path},
+        {"type", to_string(light.type)},
+        {"depth", to_string(light.depth)}}},
+      {"output", o.out_path},
+      {"space", o.space},
+      {"width", maps.width()},
+      {"height", maps.height()},
+      {"mode", adaptive ? "adaptive" : "static"},
+      {"vertices", mesh.num_vertices()},
+      {"triangles", mesh.num_triangles()},
+      {"bounds", {{"min", box.min}, {"max", box.max}}},
+      {"volume", signed_volume(mesh)},
+      {"stages", stage_json(log)},
+      {"total_seconds", log.total_seconds()},
+      {"peak_memory_bytes", peak_memory_bytes()},
+  };
+  if (!adaptive) return report;
+  const AdaptiveReport& a = *adaptive;
+  const bool laplacian = o.refine == "laplacian";
+  report["adaptive"] = {
+      {"refine", o.refine},
+      {"max_error", laplacian ? nlohmann::json(nullptr) : nlohmann::json(o.max_error)},
+      {"threshold", laplacian ? nlohmann::json(o.threshold) : nlohmann::json(nullptr)},
+      {"max_error_reached", a.max_error_reached},
+      {"grid_triangles", a.grid_triangles},
+      {"leaves", a.leaves},
+      {"fixup_rounds", a.fixup_rounds},
+      {"seconds",
+       {{"error_pyramid", a.pyramid_seconds},
+        {"balance", a.balance_seconds},
+        {"emit", a.emit_seconds},
+        {"measure", a.measure_seconds},
+        {"assemble", a.assemble_seconds}}}};
+  return report;
+}
 
+// Every file a build run writes is written here, and only here: the volume, then the --report
+// JSON, made by `report_of` once the volume is written (it records that step's time). Returns the
+// report, for --json.
+Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& mesh,
+                                     const ExportOptions& export_options, Progress& progress,
+                                     const std::function<nlohmann::json()>& report_of) {
+  progress.begin("writing " + o.out_path);
+  if (Status s = write_mesh(o.out_path, mesh, export_options); !s) return s.error();
+  progress.end();
+  nlohmann::json report = report_of();
+  if (!o.report_path.empty()) {
+    if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
+      return s.error();
+  }
+  return report;
+}
+
+int run_build(const BuildCommandOptions& o) {
+  Progress progress(o.quiet);
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
   if (!format) return fail(format.error().message);
-  if (o.draco && *format != MeshFormat::glb) return fail("--draco: applies to .glb output only");
-  if (!o.medium_path.empty() && *format != MeshFormat::glb)
-    return fail("--medium: applies to .glb output only (the file records it beside the light)");
-  if (o.ascii && *format != MeshFormat::ply && *format != MeshFormat::stl)
-    return fail("--ascii: applies to .ply and .stl output only");
-
-  if (o.refine == "error" && o.adaptive && o.max_error < 0)
-    return fail("--adaptive: needs --max-error E (world units along the texel rays)");
-  if (o.refine == "error" && !o.adaptive && o.max_error >= 0)
-    return fail("--max-error: applies with --adaptive only");
-  if (o.refine == "laplacian" && o.threshold < 0)
-    return fail("--refine laplacian: needs --threshold T");
-  if (o.refine == "laplacian" && o.max_error >= 0)
-    return fail("--max-error: does not apply to --refine laplacian (use --threshold)");
-  if (o.refine == "error" && o.threshold >= 0)
-    return fail("--threshold: applies with --refine laplacian only");
+  if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())
+    return fail(conflict);
+  const BuildVolumeOptions options = volume_options(o);
+  const bool adaptive = options.tessellation == Tessellation::adaptive;
 
   progress.begin("reading " + o.light_path);
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
   progress.end();
-  std::string medium_json;
-  if (!o.medium_path.empty()) {
-    if (Result<Medium> medium = load_medium(o.medium_path); !medium)
-      return fail(medium.error().message);
-    std::ifstream in(o.medium_path, std::ios::binary);
-    std::ostringstream text;
-    text << in.rdbuf();
-    // load_medium accepted it: a JSON object; recorded without its formatting.
-    const nlohmann::json medium = nlohmann::json::parse(text.str(), nullptr, false);
-    if (medium.is_discarded()) return fail(o.medium_path + ": changed while being read");
-    medium_json = medium.dump();
-  }
-  // Omni: six faces (six paths, one {face} path or one W x 6W strip), read as a cube.
+  Result<std::string> medium =
+      o.medium_path.empty() ? Result<std::string>(std::string()) : medium_json(o.medium_path);
+  if (!medium) return fail(medium.error().message);
+
   const bool omni = light->type == LightType::omni;
-  Result<CubeFaces> cube = Error{""};
-  if (omni) {
-    progress.begin("reading omni faces");
-    cube = read_cube_faces(o.depth_paths, {o.channel});
-    if (!cube) return fail(cube.error().message);
-    progress.end(std::to_string(cube->size()) + "x" + std::to_string(cube->size()) + " x 6");
-  } else if (o.depth_paths.size() != 1)
-    return fail("a " + std::string(to_string(light->type)) + " light takes one depth image, got " +
-                std::to_string(o.depth_paths.size()));
+  progress.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
+  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, {o.channel});
+  if (!maps) return fail(maps.error().message);
+  progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
 
-  const std::string& depth_path = o.depth_paths.front();
-  if (!omni) progress.begin("reading " + depth_path);
-  Result<DepthImage> depth =
-      omni ? Result<DepthImage>(DepthImage{}) : read_depth_image(depth_path, {o.channel});
-  if (!depth) return fail(depth.error().message);
-  if (!omni) progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
-
-  VolumeOptions vo;
-  vo.space = o.space == "light" ? Space::light : Space::world;
-  const bool adaptive = o.adaptive || o.refine == "laplacian";
+  progress.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
+                 (omni ? "omni " : "") + "volume");
   AdaptiveReport adaptive_report;
-  Result<Mesh> mesh = Error{""};
-  if (adaptive) {
-    AdaptiveOptions ao;
-    ao.refinement = o.refine == "laplacian" ? Refinement::laplacian : Refinement::max_error;
-    ao.max_error = o.max_error;
-    ao.threshold = o.threshold;
-    ao.measure = o.json || !o.report_path.empty();  // the reached error is for reports
-    progress.begin(omni ? "building adaptive omni volume" : "building adaptive volume");
-    mesh = omni ? build_adaptive_omni_volume(*light, *cube, vo, ao, &adaptive_report)
-                : build_adaptive_volume(*light, *depth, vo, ao, depth_path, &adaptive_report);
-  } else if (omni) {
-    progress.begin("building static omni volume");
-    mesh = build_omni_volume(*light, *cube, vo);
-  } else {
-    progress.begin("building static volume");
-    mesh = build_static_volume(*light, *depth, vo, depth_path);
-  }
+  Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
-  const Light frame_light = light_in_space(*light, vo.space);
+  const Light frame_light = light_in_space(*light, options.space);
   if (!o.no_check) {
     // The linear-time checks with the light: refuse to write a volume that is not sound.
     progress.begin("checking");
     const CheckReport check = check_volume_linear(*mesh, &frame_light);
-    if (!check.valid()) {
-      std::fprintf(stderr, "lightvol: %s: the built volume fails its checks, nothing written: %s\n",
-                   printable(o.out_path).c_str(), printable(check.first_failure()).c_str());
-      return 1;
-    }
+    if (!check.valid())
+      return invalid(o.out_path + ": the built volume fails its checks, nothing written: " +
+                     check.first_failure());
     progress.end("valid");
   }
 
-  progress.begin("writing " + o.out_path);
   ExportOptions eo;
   eo.ascii = o.ascii;
   eo.draco = o.draco;
@@ -157,62 +203,22 @@ int run_build(const BuildOptions& o) {
   // A GLB carries its light, in the volume's frame: in light space the light's eye space is the
   // frame itself (omni: world axes at the light), so its view is the identity.
   Light glb_light = frame_light;
-  if (vo.space == Space::light) glb_light.view = Mat4d::identity();
+  if (options.space == Space::light) glb_light.view = Mat4d::identity();
   eo.glb.light = &glb_light;
-  eo.glb.medium_json = medium_json;
-  if (Status s = write_mesh(o.out_path, *mesh, eo); !s) return fail(s.error().message);
-  progress.end();
+  eo.glb.medium_json = *medium;
+  Result<nlohmann::json> report = write_outputs(o, *mesh, eo, progress, [&] {
+    return build_report(o, *light, *maps, *mesh, adaptive ? &adaptive_report : nullptr,
+                        progress.log());
+  });
+  if (!report) return fail(report.error().message);
 
-  const Bounds box = bounding_box(*mesh);
-  const double volume = signed_volume(*mesh);
-  nlohmann::json report = {
-      {"inputs", o.depth_paths},
-      {"light",
-       {{"path", o.light_path},
-        {"type", to_string(light->type)},
-        {"depth", to_string(light->depth)}}},
-      {"output", o.out_path},
-      {"space", o.space},
-      {"width", omni ? cube->size() : depth->width},
-      {"height", omni ? cube->size() : depth->height},
-      {"mode", adaptive ? "adaptive" : "static"},
-      {"vertices", mesh->num_vertices()},
-      {"triangles", mesh->num_triangles()},
-      {"bounds", {{"min", box.min}, {"max", box.max}}},
-      {"volume", volume},
-      {"stages", stage_json(progress.log())},
-      {"total_seconds", progress.log().total_seconds()},
-      {"peak_memory_bytes", peak_memory_bytes()},
-  };
-  if (adaptive) {
-    const AdaptiveReport& a = adaptive_report;
-    report["adaptive"] = {{"refine", o.refine},
-                          {"max_error", o.refine == "laplacian" ? nlohmann::json(nullptr)
-                                                                : nlohmann::json(o.max_error)},
-                          {"threshold", o.refine == "laplacian" ? nlohmann::json(o.threshold)
-                                                                : nlohmann::json(nullptr)},
-                          {"max_error_reached", a.max_error_reached},
-                          {"grid_triangles", a.grid_triangles},
-                          {"leaves", a.leaves},
-                          {"fixup_rounds", a.fixup_rounds},
-                          {"seconds",
-                           {{"error_pyramid", a.pyramid_seconds},
-                            {"balance", a.balance_seconds},
-                            {"emit", a.emit_seconds},
-                            {"measure", a.measure_seconds},
-                            {"assemble", a.assemble_seconds}}}};
-  }
-  if (!o.report_path.empty()) {
-    if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
-      return fail(s.error().message);
-  }
   if (o.json) {
-    std::printf("%s\n", report.dump(2).c_str());
+    std::printf("%s\n", report->dump(2).c_str());
   } else if (!o.quiet) {
     std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
                 o.out_path.c_str(), thousands(mesh->num_triangles()).c_str(),
-                thousands(mesh->num_vertices()).c_str(), volume, progress.log().total_seconds(),
-                human_bytes(peak_memory_bytes()).c_str());
+                thousands(mesh->num_vertices()).c_str(), (*report)["volume"].get<double>(),
+                progress.log().total_seconds(), human_bytes(peak_memory_bytes()).c_str());
   }
   return 0;
 }
@@ -220,7 +226,7 @@ int run_build(const BuildOptions& o) {
 }  // namespace
 
 void add_build_command(CLI::App& app, Runner* run) {
-  auto o = std::make_shared<BuildOptions>();
+  auto o = std::make_shared<BuildCommandOptions>();
   CLI::App* cmd = app.add_subcommand(
       "build", "Build the closed light volume of a shadow map and write it as a mesh.");
   cmd->footer(
@@ -234,8 +240,10 @@ void add_build_command(CLI::App& app, Runner* run) {
       "or one W x 6W strip with the faces top to bottom.\n"
       "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file "
       "written.");
-  cmd->add_option("depth", o->depth_paths,
-                  "Depth image(s): EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+  cmd->add_option(
+         "depth", o->depth_paths,
+         "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
+         "{face} path or one W x 6W strip)")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")

@@ -67,7 +67,7 @@ nlohmann::json report_json(const CheckCommandOptions& o, const CheckReport& r) {
                                  : c.status == CheckStatus::failed ? "failed"
                                                                    : "skipped"},
                       {"count", c.count},
-                      {"detail", c.detail},
+                      {"detail", with_flags(c.detail)},
                       {"offenders", offenders}});
   }
   nlohmann::json j = {
@@ -83,7 +83,7 @@ nlohmann::json report_json(const CheckCommandOptions& o, const CheckReport& r) {
   };
   if (!o.light_path.empty())
     j["light"] = {{"path", o.light_path}, {"sum", r.light_sum}, {"expected", r.light_expected}};
-  if (!r.valid()) j["first_failure"] = r.first_failure();
+  if (!r.valid()) j["first_failure"] = with_flags(r.first_failure());
   return j;
 }
 
@@ -94,7 +94,7 @@ void print_table(const CheckCommandOptions& o, const CheckReport& r) {
   for (const CheckResult& c : r.checks) {
     const std::string note = c.status == CheckStatus::failed && !c.offenders.empty()
                                  ? offender_text(c.name, c.offenders.front())
-                                 : c.detail;
+                                 : with_flags(c.detail);
     std::printf("  %-22s %-7s %9s  %s\n", c.name.c_str(), std::string(to_string(c.status)).c_str(),
                 thousands(c.count).c_str(), note.c_str());
   }
@@ -107,7 +107,7 @@ void print_table(const CheckCommandOptions& o, const CheckReport& r) {
                 r.quantization_step);
   for (const CheckResult& c : r.checks)
     if (c.status == CheckStatus::failed)
-      std::printf("  %s: %s\n", c.name.c_str(), c.detail.c_str());
+      std::printf("  %s: %s\n", c.name.c_str(), with_flags(c.detail).c_str());
   std::printf("%s\n", r.valid() ? "valid" : "INVALID");
 }
 
@@ -138,13 +138,9 @@ int run_check(const CheckCommandOptions& o) {
   } else if (!o.quiet) {
     print_table(o, report);
   }
-  if (!report.valid()) {
-    if (o.quiet)
-      std::fprintf(stderr, "lightvol: %s: invalid: %s\n", printable(o.mesh_path).c_str(),
-                   printable(report.first_failure()).c_str());
-    return 1;
-  }
-  return 0;
+  if (report.valid()) return 0;
+  if (o.quiet) return invalid(o.mesh_path + ": invalid: " + report.first_failure());
+  return 1;
 }
 
 }  // namespace

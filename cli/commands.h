@@ -17,8 +17,16 @@ void add_demo_command(CLI::App& app, Runner* run);
 void add_shadowmap_command(CLI::App& app, Runner* run);  // with LIGHTVOL_HAS_SHADOWMAP
 void add_render_command(CLI::App& app, Runner* run);
 
-// Prints "lightvol: <message>" on stderr, one line, and returns 2 (bad usage or input).
+// A library message as this command line says it: the library names its own parameters
+// (ExportOptions::draco_bits, set_memory_budget(), ...); here each becomes the flag that sets it
+// (--draco-bits, --max-memory, ...).
+std::string with_flags(std::string message);
+
+// Prints "lightvol: <message>" on stderr, one line (printable, with_flags), and returns 2 (bad
+// usage or input).
 int fail(const std::string& message);
+// The same for an invalid volume: returns 1.
+int invalid(const std::string& message);
 
 // `text` safe for a terminal line: control characters (line breaks, escapes, NUL), which a
 // message may quote from a hostile file, are written as \xNN.

@@ -3,12 +3,36 @@
 #include <cstdio>
 #include <exception>
 #include <new>
+#include <string_view>
+#include <utility>
 
 #include <lightvol/core/limits.h>
 
 #include "commands.h"
 
 namespace lightvol::cli {
+
+namespace {
+
+// The library's names of the parameters a message may advise changing, and the flags that set
+// them here. The library's tests assert that its messages use these names.
+constexpr std::pair<std::string_view, std::string_view> kParameterFlags[] = {
+    {"DepthReadOptions::channel", "--channel"},
+    {"ExportOptions::draco_bits", "--draco-bits"},
+    {"CheckOptions::cgal_with_light", "--cgal"},
+    {"set_memory_budget()", "--max-memory"},
+    {"shadow_map_size(n)", "--size"},
+};
+
+}  // namespace
+
+std::string with_flags(std::string message) {
+  for (const auto& [parameter, flag] : kParameterFlags)
+    for (std::size_t at = message.find(parameter); at != std::string::npos;
+         at = message.find(parameter, at + flag.size()))
+      message.replace(at, parameter.size(), flag);
+  return message;
+}
 
 std::string printable(const std::string& text) {
   std::string out;
@@ -27,8 +51,13 @@ std::string printable(const std::string& text) {
 }
 
 int fail(const std::string& message) {
-  std::fprintf(stderr, "lightvol: %s\n", printable(message).c_str());
+  std::fprintf(stderr, "lightvol: %s\n", printable(with_flags(message)).c_str());
   return 2;
+}
+
+int invalid(const std::string& message) {
+  fail(message);
+  return 1;
 }
 
 }  // namespace lightvol::cli
@@ -77,7 +106,7 @@ int main(int argc, char** argv) {
   }
   if (!max_memory.empty()) {
     const lightvol::Result<std::uint64_t> budget = lightvol::parse_memory_size(max_memory);
-    if (!budget) return fail(budget.error().message);
+    if (!budget) return fail("--max-memory: " + budget.error().message);
     lightvol::set_memory_budget(*budget);
   }
   try {

@@ -22,6 +22,10 @@ void Progress::end(const std::string& detail) {
     std::fprintf(stderr, "%.2f s%s%s\n", r.seconds, detail.empty() ? "" : "  ", detail.c_str());
 }
 
+std::string size_text(int width, int height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
 std::string thousands(unsigned long long n) {
   std::string digits = std::to_string(n), out;
   for (std::size_t i = 0; i < digits.size(); ++i) {

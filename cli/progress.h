@@ -22,6 +22,8 @@ class Progress {
   StageLog log_;
 };
 
+// "1024x768".
+std::string size_text(int width, int height);
 // Formats 33538050 as "33,538,050".
 std::string thousands(unsigned long long n);
 // Formats bytes as "1.23 GiB", "512 MiB", ...

@@ -8,12 +8,10 @@
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
-#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
-#include <lightvol/gl/context.h>
+#include <lightvol/depth/shadow_maps.h>
 #include <lightvol/light/light.h>
-#include <lightvol/scene/bvh.h>
-#include <lightvol/scene/raycast.h>
+#include <lightvol/scene/depth_passes.h>
 #include <lightvol/scene/scene.h>
 #include <lightvol/scene/shadowmap.h>
 
@@ -34,41 +32,50 @@ struct ShadowmapOptions {
   bool quiet = false;
 };
 
-int run_shadowmap(const ShadowmapOptions& o) {
-  if (o.light_path.empty() == o.camera_path.empty())
-    return fail("give exactly one of --light LIGHT.json and --camera CAMERA.json");
-  const bool has_face = o.out_path.find("{face}") != std::string::npos;
-
-  // The view to render and its size.
+// The view to render (a light, or a camera's view) and its size; `what` names it in the summary.
+struct View {
   Light light;
   MapSize size;
   std::string what;
+};
+
+Result<View> load_view(const ShadowmapOptions& o) {
+  if (o.light_path.empty() == o.camera_path.empty())
+    return Error{"give exactly one of --light LIGHT.json and --camera CAMERA.json"};
+  View v;
   if (!o.light_path.empty()) {
     if (o.size == 0)
-      return fail("--size: required with --light (the shadow map's width in texels)");
-    Result<Light> l = load_light(o.light_path);
-    if (!l) return fail(l.error().message);
-    light = *l;
-    Result<MapSize> s = shadow_map_size(light, o.size, o.light_path);
-    if (!s) return fail(s.error().message);
-    size = *s;
-    what = std::string(to_string(light.type)) + " light";
+      return Error{"--size: required with --light (the shadow map's width in texels)"};
+    Result<Light> light = load_light(o.light_path);
+    if (!light) return light.error();
+    v.light = *light;
+    Result<MapSize> size = shadow_map_size(v.light, o.size, o.light_path);
+    if (!size) return size.error();
+    v.size = *size;
+    v.what = std::string(to_string(v.light.type)) + " light";
   } else {
-    if (o.size != 0) return fail("--size: the camera's \"width\" and \"height\" give the size");
+    if (o.size != 0) return Error{"--size: the camera's \"width\" and \"height\" give the size"};
     Result<Camera> camera = load_camera(o.camera_path);
-    if (!camera) return fail(camera.error().message);
-    light = camera->view;
-    size = {camera->width, camera->height};
-    what = "camera";
+    if (!camera) return camera.error();
+    v.light = camera->view;
+    v.size = {camera->width, camera->height};
+    v.what = "camera";
   }
-  if (has_face && light.type != LightType::omni)
-    return fail(o.out_path + ": {face} applies to omni lights only");
-  if (Status m = check_memory(
-          shadow_map_memory_bytes(size.width, size.height, pass_count(light)),
-          o.light_path.empty() ? o.camera_path : o.light_path,
-          "a " + std::to_string(size.width) + "x" + std::to_string(size.height) + " shadow map");
+  if (o.out_path.find("{face}") != std::string::npos && v.light.type != LightType::omni)
+    return Error{o.out_path + ": {face} applies to omni lights only"};
+  if (Status m =
+          check_memory(shadow_map_memory_bytes(v.size.width, v.size.height, pass_count(v.light)),
+                       o.light_path.empty() ? o.camera_path : o.light_path,
+                       "a " + size_text(v.size.width, v.size.height) + " shadow map");
       !m)
-    return fail(m.error().message);
+    return m.error();
+  return v;
+}
+
+int run_shadowmap(const ShadowmapOptions& o) {
+  Result<View> view = load_view(o);
+  if (!view) return fail(view.error().message);
+  const MapSize size = view->size;
 
   Progress progress(o.quiet);
   progress.begin("reading " + o.scene_path);
@@ -76,70 +83,28 @@ int run_shadowmap(const ShadowmapOptions& o) {
   if (!scene) return fail(scene.error().message);
   progress.end(std::to_string(scene->num_triangles()) + " triangles");
 
-  const int passes = pass_count(light);
-  std::vector<std::vector<float>> window(static_cast<std::size_t>(passes));
-  double gpu_seconds = 0;
+  const int passes = pass_count(view->light);
   progress.begin("rendering " + std::to_string(passes) + " depth pass" +
-                 (passes > 1 ? "es " : " ") + std::to_string(size.width) + "x" +
-                 std::to_string(size.height) + (o.cpu ? " (CPU ray casting)" : ""));
+                 (passes > 1 ? "es " : " ") + size_text(size.width, size.height) +
+                 (o.cpu ? " (CPU ray casting)" : ""));
+  std::unique_ptr<DepthPasses> renderer;
   if (o.cpu) {
-    const Bvh bvh(*scene);
-    for (int face = 0; face < passes; ++face) {
-      const std::vector<double> d = raycast_window_depth(bvh, light, size.width, size.height, face);
-      window[static_cast<std::size_t>(face)].assign(d.begin(), d.end());
-    }
+    renderer = cpu_depth_passes(*scene);
   } else {
-    Result<std::unique_ptr<gl::Context>> context = gl::Context::create();
-    if (!context)
-      return fail(context.error().message + " (--cpu renders by ray casting without OpenGL)");
-    Result<ShadowMapRenderer> renderer = ShadowMapRenderer::create(*scene);
-    if (!renderer) return fail(o.scene_path + ": " + renderer.error().message);
-    for (int face = 0; face < passes; ++face) {
-      double seconds = 0;
-      Result<std::vector<float>> d =
-          renderer->render_window_depth(light, size.width, size.height, face, &seconds);
-      if (!d) return fail(d.error().message);
-      window[static_cast<std::size_t>(face)] = std::move(*d);
-      gpu_seconds += seconds;
-    }
+    Result<std::unique_ptr<DepthPasses>> gl = gl_depth_passes(*scene, o.scene_path);
+    if (!gl) return fail(gl.error().message + " (--cpu renders by ray casting without OpenGL)");
+    renderer = std::move(*gl);
   }
+  Result<RenderedPasses> rendered = render_passes(*renderer, view->light, size);
+  if (!rendered) return fail(rendered.error().message);
   progress.end();
 
-  std::size_t hit = 0, total = 0;
-  for (const std::vector<float>& pass : window) {
-    for (const float d : pass) hit += d < 1.0f ? 1 : 0;
-    total += pass.size();
-  }
-
   progress.begin("writing " + o.out_path);
-  std::vector<std::string> written;
-  if (light.type == LightType::omni) {
-    CubeFaces cube;
-    for (int face = 0; face < kOmniFaces; ++face)
-      cube.faces[static_cast<std::size_t>(face)] =
-          encode_depth(light, size.width, size.height, window[static_cast<std::size_t>(face)]);
-    if (has_face) {
-      for (int face = 0; face < kOmniFaces; ++face) {
-        const std::string path = expand_face_pattern(o.out_path, face);
-        if (Status s = write_depth_image(path, cube.faces[static_cast<std::size_t>(face)]); !s)
-          return fail(s.error().message);
-        written.push_back(path);
-      }
-    } else {
-      if (Status s = write_depth_image(o.out_path, stack_cube_faces(cube)); !s)
-        return fail(s.error().message);
-      written.push_back(o.out_path);
-    }
-  } else {
-    if (Status s =
-            write_depth_image(o.out_path, encode_depth(light, size.width, size.height, window[0]));
-        !s)
-      return fail(s.error().message);
-    written.push_back(o.out_path);
-  }
+  Result<std::vector<std::string>> written = write_shadow_maps(o.out_path, rendered->maps);
+  if (!written) return fail(written.error().message);
   if (!o.preview_path.empty()) {
-    if (Status s = write_depth_image(o.preview_path,
-                                     depth_preview(light, size.width, size.height, window));
+    if (Status s = write_depth_image(
+            o.preview_path, depth_preview(view->light, size.width, size.height, rendered->window));
         !s)
       return fail(s.error().message);
   }
@@ -148,13 +113,14 @@ int run_shadowmap(const ShadowmapOptions& o) {
   if (!o.quiet) {
     std::printf(
         "wrote %s: %s %dx%d%s, %s depth, %.1f%% of texels hit, %s triangles%s\n",
-        written.size() > 1 ? (std::to_string(written.size()) + " files " + o.out_path).c_str()
-                           : written[0].c_str(),
-        what.c_str(), size.width, size.height, passes > 1 ? " x 6 faces" : "",
-        std::string(to_string(light.depth)).c_str(),
-        100.0 * static_cast<double>(hit) / static_cast<double>(total),
+        written->size() > 1 ? (std::to_string(written->size()) + " files " + o.out_path).c_str()
+                            : written->front().c_str(),
+        view->what.c_str(), size.width, size.height, passes > 1 ? " x 6 faces" : "",
+        std::string(to_string(view->light.depth)).c_str(), 100.0 * rendered->hit_fraction(),
         thousands(scene->num_triangles()).c_str(),
-        o.cpu ? "" : (", GPU " + std::to_string(gpu_seconds * 1e3).substr(0, 6) + " ms").c_str());
+        o.cpu ? ""
+              : (", GPU " + std::to_string(rendered->gpu_seconds * 1e3).substr(0, 6) + " ms")
+                    .c_str());
   }
   return 0;
 }

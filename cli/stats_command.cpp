@@ -1,6 +1,6 @@
 // lightvol stats: the triangle-count report. The static grid against the adaptive tessellation at
 // several error bounds, with the error actually reached and the time of each stage. The counts are
-// those `lightvol build --adaptive --max-error E` writes (same library calls).
+// those `lightvol build --adaptive --max-error E` writes (volume/volume_stats.h).
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -8,12 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include <lightvol/depth/cube_faces.h>
-#include <lightvol/depth/depth_image.h>
+#include <lightvol/depth/shadow_maps.h>
 #include <lightvol/light/light.h>
-#include <lightvol/volume/adaptive_volume.h>
-#include <lightvol/volume/omni_adaptive.h>
-#include <lightvol/volume/static_volume.h>
+#include <lightvol/volume/volume_stats.h>
 
 #include "commands.h"
 #include "progress.h"
@@ -30,13 +27,6 @@ struct StatsOptions {
   bool json = false;
   bool csv = false;
   bool quiet = false;
-};
-
-struct Row {
-  double max_error = 0;
-  std::uint64_t triangles = 0, vertices = 0, leaves = 0;
-  int fixup_rounds = 0;
-  double reached = 0, balance = 0, emit = 0, measure = 0;
 };
 
 // "0.001,0.01" → {0.001, 0.01}; errors name the flag and the bad item.
@@ -60,118 +50,122 @@ Result<std::vector<double>> parse_bounds(const std::string& text) {
   return out;
 }
 
-// Omni lights: the same table over the whole cube, with each bound's triangles per face and in the
-// seams (the twelve strips; the eight corner triangles are in the totals).
-int run_stats_omni(const StatsOptions& o, const Light& light, const std::vector<double>& bounds,
-                   Progress& progress) {
-  progress.begin("reading omni faces");
-  Result<CubeFaces> cube = read_cube_faces(o.depth_paths, {o.channel});
-  if (!cube) return fail(cube.error().message);
-  const int w = cube->size();
-  progress.end(std::to_string(w) + "x" + std::to_string(w) + " x 6");
-  progress.begin("error pyramids");
-  Result<OmniRefinement> refinement = OmniRefinement::create(
-      light, *cube, Refinement::max_error, o.space == "light" ? Space::light : Space::world);
-  if (!refinement) return fail(refinement.error().message);
-  progress.end();
+using Rows = std::vector<BoundStats>;
 
-  std::vector<Row> rows;
-  std::vector<OmniAdaptiveDetail> details;
-  for (const double e : bounds) {
-    progress.begin("tessellating at " + std::to_string(e));
-    AdaptiveReport report;
-    OmniAdaptiveDetail detail;
-    const Mesh mesh = refinement->build(e, true, &report, &detail);
-    Row r;
-    r.max_error = e;
-    r.triangles = report.triangles;
-    r.vertices = report.vertices;
-    r.leaves = report.leaves;
-    r.fixup_rounds = report.fixup_rounds;
-    r.reached = report.max_error_reached;
-    r.balance = report.balance_seconds;
-    r.emit = report.emit_seconds;
-    r.measure = report.measure_seconds;
-    rows.push_back(r);
-    details.push_back(detail);
-    progress.end(thousands(r.triangles) + " triangles");
-  }
-  const VolumeCounts st = static_volume_counts(LightType::omni, w, w);
-  const std::uint64_t static_face = 2ull * (w - 1) * (w - 1), static_seams = 24ull * (w - 1);
+double ratio(const BoundStats& r, const VolumeStats& stats) {
+  return double(r.triangles) / double(stats.static_counts().triangles);
+}
 
-  if (o.json) {
-    nlohmann::json adaptive = nlohmann::json::array();
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      const Row& r = rows[i];
+nlohmann::json report_json(const StatsOptions& o, const Light& light, const VolumeStats& stats,
+                           const Rows& rows) {
+  const VolumeCounts st = stats.static_counts();
+  nlohmann::json adaptive = nlohmann::json::array();
+  for (const BoundStats& r : rows) {
+    nlohmann::json row = {{"max_error", r.max_error},
+                          {"triangles", r.triangles},
+                          {"vertices", r.vertices},
+                          {"max_error_reached", r.max_error_reached},
+                          {"leaves", r.leaves},
+                          {"ratio_to_static", ratio(r, stats)},
+                          {"seconds",
+                           {{"balance", r.balance_seconds},
+                            {"emit", r.emit_seconds},
+                            {"measure", r.measure_seconds}}}};
+    if (stats.omni()) {
       nlohmann::json faces = nlohmann::json::object();
       for (int f = 0; f < kOmniFaces; ++f)
-        faces[std::string(omni_face_tag(f))] = details[i].face_triangles[f];
-      adaptive.push_back(
-          {{"max_error", r.max_error},
-           {"triangles", r.triangles},
-           {"vertices", r.vertices},
-           {"max_error_reached", r.reached},
-           {"leaves", r.leaves},
-           {"ratio_to_static", double(r.triangles) / double(st.triangles)},
-           {"face_triangles", faces},
-           {"seam_triangles", details[i].seam_triangles},
-           {"corner_triangles", 8},
-           {"seam_rounds", details[i].seam_rounds},
-           {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
+        faces[std::string(omni_face_tag(f))] = r.omni.face_triangles[f];
+      row["face_triangles"] = faces;
+      row["seam_triangles"] = r.omni.seam_triangles;
+      row["corner_triangles"] = 8;
+      row["seam_rounds"] = r.omni.seam_rounds;
+    } else {
+      row["fixup_rounds"] = r.fixup_rounds;
     }
-    const nlohmann::json report = {
-        {"inputs", o.depth_paths},
-        {"light", {{"path", o.light_path}, {"type", "omni"}, {"depth", to_string(light.depth)}}},
-        {"width", w},
-        {"height", w},
-        {"faces", 6},
-        {"static",
-         {{"triangles", st.triangles},
-          {"vertices", st.vertices},
-          {"face_triangles", static_face},
-          {"seam_triangles", static_seams},
-          {"corner_triangles", 8}}},
-        {"error_pyramid_seconds", refinement->seconds()},
-        {"adaptive", adaptive}};
-    std::printf("%s\n", report.dump(2).c_str());
-    return 0;
+    adaptive.push_back(row);
   }
-  if (o.csv) {
+  nlohmann::json report = {{"light",
+                            {{"path", o.light_path},
+                             {"type", to_string(light.type)},
+                             {"depth", to_string(light.depth)}}},
+                           {"width", stats.width()},
+                           {"height", stats.height()},
+                           {"static", {{"triangles", st.triangles}, {"vertices", st.vertices}}},
+                           {"error_pyramid_seconds", stats.pyramid_seconds()},
+                           {"adaptive", adaptive}};
+  if (!stats.omni()) {
+    report["input"] = o.depth_paths.front();
+    return report;
+  }
+  report["inputs"] = o.depth_paths;
+  report["faces"] = 6;
+  report["static"]["face_triangles"] = stats.static_face_triangles();
+  report["static"]["seam_triangles"] = stats.static_seam_triangles();
+  report["static"]["corner_triangles"] = 8;
+  return report;
+}
+
+void print_csv(const VolumeStats& stats, const Rows& rows) {
+  using ull = unsigned long long;
+  const VolumeCounts st = stats.static_counts();
+  if (!stats.omni()) {
     std::printf(
-        "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
-    std::printf("static,,%llu,%llu,0", static_cast<unsigned long long>(st.triangles),
-                static_cast<unsigned long long>(st.vertices));
-    for (int f = 0; f < kOmniFaces; ++f)
-      std::printf(",%llu", static_cast<unsigned long long>(static_face));
-    std::printf(",%llu,8\n", static_cast<unsigned long long>(static_seams));
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-      const Row& r = rows[i];
-      std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error,
-                  static_cast<unsigned long long>(r.triangles),
-                  static_cast<unsigned long long>(r.vertices), r.reached);
-      for (int f = 0; f < kOmniFaces; ++f)
-        std::printf(",%llu", static_cast<unsigned long long>(details[i].face_triangles[f]));
-      std::printf(",%llu,8\n", static_cast<unsigned long long>(details[i].seam_triangles));
-    }
-    return 0;
+        "mode,max_error,triangles,vertices,max_error_reached,error_pyramid_seconds,balance_seconds,"
+        "emit_seconds\n");
+    std::printf("static,,%llu,%llu,0,,,\n", ull(st.triangles), ull(st.vertices));
+    for (const BoundStats& r : rows)
+      std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f\n", r.max_error, ull(r.triangles),
+                  ull(r.vertices), r.max_error_reached, stats.pyramid_seconds(), r.balance_seconds,
+                  r.emit_seconds);
+    return;
   }
+  std::printf(
+      "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
+  std::printf("static,,%llu,%llu,0", ull(st.triangles), ull(st.vertices));
+  for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", ull(stats.static_face_triangles()));
+  std::printf(",%llu,8\n", ull(stats.static_seam_triangles()));
+  for (const BoundStats& r : rows) {
+    std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error, ull(r.triangles), ull(r.vertices),
+                r.max_error_reached);
+    for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", ull(r.omni.face_triangles[f]));
+    std::printf(",%llu,8\n", ull(r.omni.seam_triangles));
+  }
+}
+
+void print_table(const StatsOptions& o, const Light& light, const VolumeStats& stats,
+                 const Rows& rows) {
+  const VolumeCounts st = stats.static_counts();
+  const std::string depth(to_string(light.depth));
+  if (!stats.omni()) {
+    std::printf("%s: %dx%d, %s light, %s depth\n", o.depth_paths.front().c_str(), stats.width(),
+                stats.height(), std::string(to_string(light.type)).c_str(), depth.c_str());
+    std::printf("static grid: %s triangles, %s vertices\n", thousands(st.triangles).c_str(),
+                thousands(st.vertices).c_str());
+    std::printf("error pyramid: %.3f s (once for all bounds)\n\n", stats.pyramid_seconds());
+    std::printf("%12s %14s %14s %9s %14s %10s %10s\n", "max error", "triangles", "vertices",
+                "of static", "reached", "balance s", "emit s");
+    for (const BoundStats& r : rows)
+      std::printf("%12.6g %14s %14s %8.3f%% %14.6g %10.3f %10.3f\n", r.max_error,
+                  thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
+                  100.0 * ratio(r, stats), r.max_error_reached, r.balance_seconds, r.emit_seconds);
+    return;
+  }
+  const int w = stats.width();
   std::printf("%s: 6 faces of %dx%d, omni light, %s depth\n", o.depth_paths.front().c_str(), w, w,
-              std::string(to_string(light.depth)).c_str());
+              depth.c_str());
   std::printf("static: %s triangles (%s per face, %s in seams, 8 corners), %s vertices\n",
-              thousands(st.triangles).c_str(), thousands(static_face).c_str(),
-              thousands(static_seams).c_str(), thousands(st.vertices).c_str());
-  std::printf("error pyramids: %.3f s (once for all bounds)\n\n", refinement->seconds());
+              thousands(st.triangles).c_str(), thousands(stats.static_face_triangles()).c_str(),
+              thousands(stats.static_seam_triangles()).c_str(), thousands(st.vertices).c_str());
+  std::printf("error pyramids: %.3f s (once for all bounds)\n\n", stats.pyramid_seconds());
   std::printf("%12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s\n", "max error", "triangles",
               "of static", "reached", "px", "nx", "py", "ny", "pz", "nz", "seams");
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const Row& r = rows[i];
+  for (const BoundStats& r : rows) {
     std::printf("%12.6g %12s %8.3f%% %12.6g", r.max_error, thousands(r.triangles).c_str(),
-                100.0 * double(r.triangles) / double(st.triangles), r.reached);
+                100.0 * ratio(r, stats), r.max_error_reached);
     for (int f = 0; f < kOmniFaces; ++f)
-      std::printf(" %9s", thousands(details[i].face_triangles[f]).c_str());
-    std::printf(" %9s\n", thousands(details[i].seam_triangles).c_str());
+      std::printf(" %9s", thousands(r.omni.face_triangles[f]).c_str());
+    std::printf(" %9s\n", thousands(r.omni.seam_triangles).c_str());
   }
-  return 0;
 }
 
 int run_stats(const StatsOptions& o) {
@@ -184,98 +178,32 @@ int run_stats(const StatsOptions& o) {
   Result<Light> light = load_light(o.light_path);
   if (!light) return fail(light.error().message);
   progress.end();
-  if (light->type == LightType::omni) return run_stats_omni(o, *light, *bounds, progress);
-  if (o.depth_paths.size() != 1)
-    return fail("a " + std::string(to_string(light->type)) + " light takes one depth image, got " +
-                std::to_string(o.depth_paths.size()));
-  const std::string& depth_path = o.depth_paths.front();
-  progress.begin("reading " + depth_path);
-  Result<DepthImage> depth = read_depth_image(depth_path, {o.channel});
-  if (!depth) return fail(depth.error().message);
-  progress.end(std::to_string(depth->width) + "x" + std::to_string(depth->height));
 
-  progress.begin("error pyramid");
-  Result<TexelDepths> texels = TexelDepths::create(*light, *depth, 0, depth_path);
-  if (!texels) return fail(texels.error().message);
-  const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
+  const bool omni = light->type == LightType::omni;
+  progress.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
+  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, {o.channel});
+  if (!maps) return fail(maps.error().message);
+  progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
+
+  progress.begin(omni ? "error pyramids" : "error pyramid");
+  Result<VolumeStats> stats =
+      VolumeStats::create(*light, *maps, o.space == "light" ? Space::light : Space::world);
+  if (!stats) return fail(stats.error().message);
   progress.end();
-  const Space space = o.space == "light" ? Space::light : Space::world;
-  const bool standard =
-      Unprojector(*light, depth->width, depth->height, 0, space).standard_winding();
 
-  std::vector<Row> rows;
+  Rows rows;
   for (const double e : *bounds) {
     progress.begin("tessellating at " + std::to_string(e));
-    const AdaptiveGrid grid = pyramid.tessellate(e, standard);
-    Row r;
-    r.max_error = e;
-    const VolumeCounts counts = adaptive_volume_counts(light->type, grid);
-    r.triangles = counts.triangles;
-    r.vertices = counts.vertices;
-    r.leaves = grid.leaves;
-    r.fixup_rounds = grid.fixup_rounds;
-    r.balance = grid.balance_seconds;
-    r.emit = grid.emit_seconds;
-    StageLog m;
-    m.begin("measure");
-    r.reached = pyramid.measure(grid);
-    r.measure = m.end().seconds;
-    rows.push_back(r);
-    progress.end(thousands(r.triangles) + " triangles");
+    rows.push_back(stats->at(e));
+    progress.end(thousands(rows.back().triangles) + " triangles");
   }
-  const VolumeCounts st = static_volume_counts(light->type, depth->width, depth->height);
 
-  if (o.json) {
-    nlohmann::json adaptive = nlohmann::json::array();
-    for (const Row& r : rows)
-      adaptive.push_back(
-          {{"max_error", r.max_error},
-           {"triangles", r.triangles},
-           {"vertices", r.vertices},
-           {"max_error_reached", r.reached},
-           {"leaves", r.leaves},
-           {"fixup_rounds", r.fixup_rounds},
-           {"ratio_to_static", double(r.triangles) / double(st.triangles)},
-           {"seconds", {{"balance", r.balance}, {"emit", r.emit}, {"measure", r.measure}}}});
-    const nlohmann::json report = {
-        {"input", depth_path},
-        {"light",
-         {{"path", o.light_path},
-          {"type", to_string(light->type)},
-          {"depth", to_string(light->depth)}}},
-        {"width", depth->width},
-        {"height", depth->height},
-        {"static", {{"triangles", st.triangles}, {"vertices", st.vertices}}},
-        {"error_pyramid_seconds", pyramid.seconds()},
-        {"adaptive", adaptive}};
-    std::printf("%s\n", report.dump(2).c_str());
-    return 0;
-  }
-  if (o.csv) {
-    std::printf(
-        "mode,max_error,triangles,vertices,max_error_reached,error_pyramid_seconds,balance_seconds,"
-        "emit_seconds\n");
-    std::printf("static,,%llu,%llu,0,,,\n", static_cast<unsigned long long>(st.triangles),
-                static_cast<unsigned long long>(st.vertices));
-    for (const Row& r : rows)
-      std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f\n", r.max_error,
-                  static_cast<unsigned long long>(r.triangles),
-                  static_cast<unsigned long long>(r.vertices), r.reached, pyramid.seconds(),
-                  r.balance, r.emit);
-    return 0;
-  }
-  std::printf("%s: %dx%d, %s light, %s depth\n", depth_path.c_str(), depth->width, depth->height,
-              std::string(to_string(light->type)).c_str(),
-              std::string(to_string(light->depth)).c_str());
-  std::printf("static grid: %s triangles, %s vertices\n", thousands(st.triangles).c_str(),
-              thousands(st.vertices).c_str());
-  std::printf("error pyramid: %.3f s (once for all bounds)\n\n", pyramid.seconds());
-  std::printf("%12s %14s %14s %9s %14s %10s %10s\n", "max error", "triangles", "vertices",
-              "of static", "reached", "balance s", "emit s");
-  for (const Row& r : rows)
-    std::printf("%12.6g %14s %14s %8.3f%% %14.6g %10.3f %10.3f\n", r.max_error,
-                thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
-                100.0 * double(r.triangles) / double(st.triangles), r.reached, r.balance, r.emit);
+  if (o.json)
+    std::printf("%s\n", report_json(o, *light, *stats, rows).dump(2).c_str());
+  else if (o.csv)
+    print_csv(*stats, rows);
+  else
+    print_table(o, *light, *stats, rows);
   return 0;
 }
 
@@ -291,8 +219,10 @@ void add_stats_command(CLI::App& app, Runner* run) {
       "For each bound E (world units along the texel rays): the triangles and vertices that\n"
       "'lightvol build --adaptive --max-error E' writes, the largest error actually reached over\n"
       "all texels, and the time of each stage (the error pyramid is built once).");
-  cmd->add_option("depth", o->depth_paths,
-                  "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile")
+  cmd->add_option(
+         "depth", o->depth_paths,
+         "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
+         "{face} path or one W x 6W strip)")
       ->required();
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
   cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");

@@ -169,7 +169,8 @@ TEST(Isolated, AChildThatExceedsItsMemoryIsAnError) {
       });
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message,
-            "the decoder ran out of memory (its limit is 64.0 MiB; raise it with --max-memory)");
+            "the decoder ran out of memory (its limit is 64.0 MiB; raise it with "
+            "set_memory_budget())");
 }
 
 TEST(Isolated, TheParentsOwnRefusalIsTheAnswerAndTheChildIsEnded) {

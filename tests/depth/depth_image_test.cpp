@@ -65,7 +65,7 @@ TEST(DepthImage, ChannelSelection) {
   for (std::size_t i = 0; i < px.size(); ++i) px[i] = static_cast<float>(i);
   const std::string path = dir.file("rgb.exr");
   write_raw(path, 2, 2, {"R", "G", "B"}, OIIO::TypeDesc::FLOAT, px);
-  expect_error(read_depth_image(path), "choose the depth channel with --channel");
+  expect_error(read_depth_image(path), "choose the depth channel with DepthReadOptions::channel");
   Result<DepthImage> g = read_depth_image(path, {"G"});
   ASSERT_TRUE(g.ok()) << g.error().message;
   EXPECT_EQ(g->values, (std::vector<float>{1, 4, 7, 10}));

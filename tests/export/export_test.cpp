@@ -288,7 +288,8 @@ TEST(Export, LossyEncodingThatBreaksTheVolumeWritesNothing) {
   o.draco_bits = 2;  // 4 levels per axis: faces collapse
   const Status s = write_mesh(dir.file("m.drc"), m, o);
   ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("raise --draco-bits"), std::string::npos) << s.error().message;
+  EXPECT_NE(s.error().message.find("raise ExportOptions::draco_bits"), std::string::npos)
+      << s.error().message;
   o.draco = true;
   EXPECT_FALSE(write_mesh(dir.file("m.glb"), m, o).ok());
   EXPECT_EQ(dir.entries(), 0);

@@ -25,8 +25,9 @@ CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOption
 
   std::vector<CheckResult> cgal;
   if (light && !options.cgal_with_light) {
-    const std::string why = light_proved ? "implied by the light's non-self-nesting proof"
-                                         : "not run with a light (--cgal runs it)";
+    const std::string why = light_proved
+                                ? "implied by the light's non-self-nesting proof"
+                                : "not run with a light (CheckOptions::cgal_with_light runs it)";
     CheckResult si = skipped(kCheckSelfIntersections, why), bv = skipped(kCheckBoundsVolume, why);
     if (light_proved) si.status = bv.status = CheckStatus::passed;
     cgal = {si, bv};

@@ -33,8 +33,7 @@ std::uint64_t memory_budget() {
 void set_memory_budget(std::uint64_t bytes) { g_budget.store(bytes, std::memory_order_relaxed); }
 
 Result<std::uint64_t> parse_memory_size(const std::string& text) {
-  const Error bad{"--max-memory: '" + text +
-                  "' is not a memory size (examples: 512M, 8G, 1.5GiB, 2000000000)"};
+  const Error bad{"'" + text + "' is not a memory size (examples: 512M, 8G, 1.5GiB, 2000000000)"};
   std::size_t i = 0;
   while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.'))
     ++i;
@@ -123,7 +122,7 @@ Status check_memory(std::uint64_t needed, const std::string& source, const std::
   const std::uint64_t gib = (needed >> 30) + 1;
   return Error{source + ": " + what + " needs about " + format_bytes(needed) +
                " of memory, more than the budget of " + format_bytes(budget) +
-               "; raise it with --max-memory (e.g. --max-memory " + std::to_string(gib) + "G)"};
+               "; raise it with set_memory_budget() (e.g. to " + std::to_string(gib) + "G)"};
 }
 
 }  // namespace lightvol

@@ -16,12 +16,14 @@ std::uint64_t physical_memory_bytes();
 // 75% of physical memory (16 GiB if unknown): the budget when nothing else is set.
 std::uint64_t default_memory_budget();
 
-// The process-wide budget every reader checks against (the CLI's --max-memory sets it).
+// The process-wide budget every reader checks against (set_memory_budget; a command line sets it
+// from a flag).
 std::uint64_t memory_budget();
 void set_memory_budget(std::uint64_t bytes);
 
 // "512M", "8G", "1.5GiB", "2000000000": bytes. Suffixes K M G T (powers of 1024, optional "B" or
-// "iB"), case-insensitive. Errors name the text.
+// "iB"), case-insensitive. The Error ("'<text>' is not a memory size (examples: ...)") quotes the
+// text; a caller that took it from a flag prefixes the flag.
 Result<std::uint64_t> parse_memory_size(const std::string& text);
 
 // "1.5 GiB", for messages.
@@ -37,7 +39,7 @@ std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, 
 std::uint64_t shadow_map_memory_bytes(std::int64_t width, std::int64_t height, int faces = 1);
 
 // An Error "<source>: <what> needs about X of memory, more than the budget Y; raise it with
-// --max-memory (e.g. --max-memory Z)" when `needed` exceeds memory_budget(), else success.
+// set_memory_budget() (e.g. to ZG)" when `needed` exceeds memory_budget(), else success.
 Status check_memory(std::uint64_t needed, const std::string& source, const std::string& what);
 
 }  // namespace lightvol

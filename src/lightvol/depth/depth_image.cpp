@@ -43,7 +43,7 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
   }
   if (non_alpha == 1) return candidate;
   return Error{path + ": has " + std::to_string(spec.nchannels) + " channels (" +
-               join_names(names) + "): choose the depth channel with --channel"};
+               join_names(names) + "): choose the depth channel with DepthReadOptions::channel"};
 }
 
 }  // namespace

@@ -30,16 +30,16 @@ Status verify_decoded(const Mesh& original, const DecodedMesh& decoded, const st
   if (decoded.mesh.num_triangles() != original.num_triangles())
     return Error{what + ": " +
                  std::to_string(original.num_triangles() - decoded.mesh.num_triangles()) +
-                 " faces were lost (collapsed by quantization); raise --draco-bits"};
+                 " faces were lost (collapsed by quantization); raise ExportOptions::draco_bits"};
   if (options.light) {
     const CheckReport report =
         check_volume_linear(decoded.mesh, options.light, 1, decoded.quantization_step);
     if (!report.valid())
-      return Error{what + ": " + report.first_failure() + "; raise --draco-bits"};
+      return Error{what + ": " + report.first_failure() + "; raise ExportOptions::draco_bits"};
     return {};
   }
   if (Status s = check_closed_outward(decoded.mesh, what); !s)
-    return Error{s.error().message + "; raise --draco-bits"};
+    return Error{s.error().message + "; raise ExportOptions::draco_bits"};
   return {};
 }
 

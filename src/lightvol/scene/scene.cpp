@@ -22,15 +22,16 @@ Result<Mesh> load_scene(const std::string& path) {
 Result<MapSize> shadow_map_size(const Light& light, int n, const std::string& source) {
   constexpr int kMax = 16384;
   if (n < 2 || n > kMax)
-    return Error{"--size: must lie in [2, " + std::to_string(kMax) + "], got " + std::to_string(n)};
+    return Error{"shadow_map_size(n): must lie in [2, " + std::to_string(kMax) + "], got " +
+                 std::to_string(n)};
   MapSize size{n, n};
   if (light.type == LightType::spot) {
     // The projection's aspect is width / height: P(0,0) = P(1,1) / aspect.
     const double aspect = light.projection(1, 1) / light.projection(0, 0);
     const double h = std::round(n / aspect);
     if (!(h >= 2 && h <= kMax))
-      return Error{source + ": key 'aspect': --size " + std::to_string(n) + " gives a map " +
-                   std::to_string(n) + " wide and " + std::to_string(h) +
+      return Error{source + ": key 'aspect': width " + std::to_string(n) +
+                   " (shadow_map_size(n)) gives a map " + std::to_string(h) +
                    " high; the height must lie in [2, " + std::to_string(kMax) + "]"};
     size.height = static_cast<int>(h);
   }

@@ -23,7 +23,7 @@ namespace lightvol {
 // the file and the vertex.
 Result<Mesh> load_scene(const std::string& path);
 
-// Size of the depth image(s) a light gets for `--size n`:
+// Size of the depth image(s) of width `n` for a light:
 //  spot: width n, height round(n / aspect) (aspect = width / height, as in the projection);
 //  directional: n × n (the texels stretch when the ortho extents are not square);
 //  omni: n × n per face.

@@ -1,7 +1,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <memory>
 #include <string>
+#include <utility>
 
 #include <lightvol/core/check.h>
 #include <lightvol/scene/shadowmap.h>
@@ -125,6 +127,36 @@ Result<std::vector<DepthImage>> ShadowMapRenderer::render(const Light& light, Ma
   }
   if (gpu_seconds) *gpu_seconds = total;
   return images;
+}
+
+namespace {
+
+class GlDepthPasses final : public DepthPasses {
+ public:
+  GlDepthPasses(std::unique_ptr<Context> context, ShadowMapRenderer renderer)
+      : context_(std::move(context)), renderer_(std::move(renderer)) {}
+
+  std::string method() const override { return "OpenGL"; }
+
+  Result<std::vector<float>> window_depth(const Light& view, int width, int height, int face,
+                                          double* gpu_seconds) override {
+    return renderer_.render_window_depth(view, width, height, face, gpu_seconds);
+  }
+
+ private:
+  std::unique_ptr<Context> context_;  // declared first: destroyed after the renderer
+  ShadowMapRenderer renderer_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<DepthPasses>> gl_depth_passes(const Mesh& scene, const std::string& source) {
+  Result<std::unique_ptr<Context>> context = Context::create();
+  if (!context) return context.error();
+  Result<ShadowMapRenderer> renderer = ShadowMapRenderer::create(scene);
+  if (!renderer) return Error{source + ": " + renderer.error().message};
+  return std::unique_ptr<DepthPasses>(
+      std::make_unique<GlDepthPasses>(std::move(*context), std::move(*renderer)));
 }
 
 }  // namespace lightvol

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <lightvol/core/mesh.h>
@@ -17,6 +19,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/gl/context.h>
 #include <lightvol/light/light.h>
+#include <lightvol/scene/depth_passes.h>
 #include <lightvol/scene/scene.h>
 
 namespace lightvol {
@@ -48,5 +51,11 @@ class ShadowMapRenderer {
   gl::BufferHandle vertices_, indices_;
   std::size_t num_indices_ = 0;
 };
+
+// Depth passes on the GPU: creates a headless gl::Context (made current on this thread, and kept
+// current for the object's lifetime: other GL renderers may use it meanwhile) and a
+// ShadowMapRenderer of `scene`. Errors: no OpenGL context (the context's message), or the scene
+// does not upload (named by `source`).
+Result<std::unique_ptr<DepthPasses>> gl_depth_passes(const Mesh& scene, const std::string& source);
 
 }  // namespace lightvol

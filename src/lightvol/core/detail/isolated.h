@@ -88,7 +88,7 @@ struct IsolationLimits {
   double wall_seconds = 60;
   std::uint64_t memory = 0;  // bytes the child may allocate beyond what it inherits; 0: the budget
   // What the message says to do when `memory` ran out.
-  std::string memory_advice = "raise it with --max-memory";
+  std::string memory_advice = "raise it with set_memory_budget()";
 };
 
 // Runs `child` in a forked process and `parent` on what it writes. `child` must not use threads

@@ -112,7 +112,7 @@ std::unique_ptr<draco::Mesh> detail::to_draco(const Mesh& mesh) {
 
 Status detail::check_draco_bits(int bits) {
   if (bits < 1 || bits > 30)
-    return Error{"--draco-bits: must lie in 1..30, got " + std::to_string(bits)};
+    return Error{"ExportOptions::draco_bits: must lie in 1..30, got " + std::to_string(bits)};
   return {};
 }
 

@@ -1,0 +1,33 @@
+// One entry point for every light volume: static or adaptive tessellation, of one depth image
+// (spot, directional) or of six cube faces (omni). The builders it dispatches to are
+// static_volume.h, omni_volume.h, adaptive_volume.h and omni_adaptive.h.
+#pragma once
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
+#include <lightvol/depth/shadow_maps.h>
+#include <lightvol/light/light.h>
+#include <lightvol/volume/adaptive_volume.h>
+
+namespace lightvol {
+
+enum class Tessellation {
+  static_grid,  // one vertex per texel (build_static_volume, build_omni_volume)
+  adaptive,     // a quadtree under a bound (build_adaptive_volume, build_adaptive_omni_volume)
+};
+
+struct BuildVolumeOptions {
+  Space space = Space::world;  // frame of the output: world, or the light's eye space
+  Tessellation tessellation = Tessellation::static_grid;
+  AdaptiveOptions adaptive;  // with Tessellation::adaptive: the criterion and its bound
+};
+
+// The closed light volume of `light` over `maps` (read_shadow_maps): closed, edge-manifold,
+// oriented outward, star-shaped from the light. `maps` must match the light (six faces for an omni
+// light, one image otherwise). `report` (optional) receives an adaptive build's counts, reached
+// error and stage times; a static build leaves it untouched. Errors name the map's source and the
+// pixel (a radial depth no ray reaches), or the face (unequal omni faces).
+Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
+                          const BuildVolumeOptions& options, AdaptiveReport* report = nullptr);
+
+}  // namespace lightvol
