@@ -1,0 +1,344 @@
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include <lightvol/core/check.h>
+#include <lightvol/tessellate/collapse_grid.h>
+
+namespace lightvol {
+
+namespace {
+
+struct Pt {
+  int x = 0, y = 0;
+};
+
+std::int64_t cross(Pt a, Pt b, Pt c) {
+  return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
+}
+
+// Whether every texel (lattice point) of the closed triangle (a, b, c) lies within `bound` of the
+// triangle's plane in window depth (TexelDepths::error). Stops at the first row that breaks it.
+template <bool kUniform>
+bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
+  std::int64_t area2 = cross(a, b, c);
+  if (area2 < 0) {
+    std::swap(b, c);
+    area2 = -area2;
+  }
+  LV_CHECK(area2 > 0);
+  const double da = t.window_depth(a.x, a.y), db = t.window_depth(b.x, b.y),
+               dc = t.window_depth(c.x, c.y);
+  const double inv = 1.0 / static_cast<double>(area2);
+  const double gx = ((db - da) * (c.y - a.y) - (dc - da) * (b.y - a.y)) * inv;
+  const double gy = ((dc - da) * (b.x - a.x) - (db - da) * (c.x - a.x)) * inv;
+  const Pt v[3] = {a, b, c};
+  const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
+  const double limit = kUniform ? bound / t.uniform_scale() : bound;
+  for (int y = y0; y <= y1; ++y) {
+    // Each directed edge p→q keeps the points with cross(q − p, x − p) ≥ 0: A·x + C ≥ 0.
+    std::int64_t lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
+    for (int k = 0; k < 3; ++k) {
+      const Pt p = v[k], q = v[(k + 1) % 3];
+      const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
+      const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
+      // Quotients of integers below 2^53 by divisors below 2^31: the rounded double quotient has
+      // the same floor and ceiling as the exact one (an exact integer stays exact; otherwise it is
+      // at least 1/|A| away from the nearest integer, far more than the rounding).
+      if (A > 0) {
+        lo = std::max(lo, static_cast<std::int64_t>(
+                              std::ceil(static_cast<double>(-C) / static_cast<double>(A))));
+      } else if (A < 0) {
+        hi = std::min(hi, static_cast<std::int64_t>(
+                              std::floor(static_cast<double>(C) / static_cast<double>(-A))));
+      } else if (C < 0) {
+        lo = 1, hi = 0;
+      }
+    }
+    if (lo > hi) continue;
+    const int x0 = static_cast<int>(lo), x1 = static_cast<int>(hi);
+    const double* dt = t.depth_row(y);
+    const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
+    double m = 0;
+    if constexpr (kUniform) {
+#pragma omp simd reduction(max : m)
+      for (int x = x0; x <= x1; ++x) {
+        const double e = std::abs(base + gx * (x - x0) - dt[x]);
+        m = m > e ? m : e;
+      }
+      if (m * t.uniform_scale() > bound) return false;
+    } else {
+      const double* k = t.scale_row(y);
+      const double w0 = t.w0(x0, y), dw = t.w0_dc(), w1 = t.w1();
+#pragma omp simd reduction(max : m)
+      for (int x = x0; x <= x1; ++x) {
+        const double d = base + gx * (x - x0);
+        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0 + dw * (x - x0) + d * w1);
+        m = m > e ? m : e;
+      }
+      if (m > limit) return false;
+    }
+  }
+  return true;
+}
+
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+class Collapser {
+ public:
+  Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
+            const CollapseOptions& options)
+      : t_(texels), grid_(grid), bound_(bound), options_(options) {
+    const int w = grid.width, h = grid.height;
+    const std::size_t nv = grid.vertices.size(), nt = grid.num_triangles();
+    pt_.resize(nv);
+    sides_.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+      const std::uint32_t id = grid.vertices[v];
+      const Pt p{static_cast<int>(id % static_cast<std::uint32_t>(w)),
+                 static_cast<int>(id / static_cast<std::uint32_t>(w))};
+      pt_[v] = p;
+      std::uint8_t s = 0;
+      if (p.y == 0) s |= 1u << kTop;
+      if (p.x == w - 1) s |= 1u << kRight;
+      if (p.y == h - 1) s |= 1u << kBottom;
+      if (p.x == 0) s |= 1u << kLeft;
+      sides_[v] = s;
+    }
+    tri_.resize(nt);
+    alive_.assign(nt, 1);
+    std::vector<std::uint32_t> degree(nv + 1, 0);
+    for (std::size_t k = 0; k < nt; ++k) {
+      for (int c = 0; c < 3; ++c) {
+        tri_[k][c] = grid.indices[3 * k + c];
+        ++degree[tri_[k][c]];
+      }
+      const std::int64_t a = cross(pt_[tri_[k][0]], pt_[tri_[k][1]], pt_[tri_[k][2]]);
+      LV_CHECK(a != 0);
+      if (k == 0) sign_ = a > 0 ? 1 : -1;
+      LV_CHECK((a > 0) == (sign_ > 0));
+    }
+    star_.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) star_[v].reserve(degree[v]);
+    for (std::size_t k = 0; k < nt; ++k)
+      for (int c = 0; c < 3; ++c) star_[tri_[k][c]].push_back(static_cast<std::uint32_t>(k));
+    vertex_alive_.assign(nv, 1);
+  }
+
+  CollapseReport run() {
+    CollapseReport r;
+    const std::size_t nv = pt_.size();
+    std::vector<std::uint32_t> todo(nv);
+    for (std::size_t v = 0; v < nv; ++v) todo[v] = static_cast<std::uint32_t>(v);
+    std::vector<std::uint8_t> queued(nv, 0);
+    std::vector<std::uint32_t> next;
+    while (!todo.empty() && r.rounds < options_.max_rounds) {
+      ++r.rounds;
+      next.clear();
+      for (const std::uint32_t u : todo) {
+        // A vertex whose star changed in this sweep waits for the next one: collapses spread
+        // evenly (along a step, every other vertex goes first) instead of growing one star
+        // texel by texel, which would scan a chain of n vertices n²/2 times.
+        if (!vertex_alive_[u] || queued[u]) continue;
+        if (try_collapse(u, &r)) {
+          for (const std::uint32_t n : touched_)
+            if (!queued[n]) queued[n] = 1, next.push_back(n);
+        }
+      }
+      std::sort(next.begin(), next.end());
+      for (const std::uint32_t n : next) queued[n] = 0;
+      todo.swap(next);
+    }
+    return r;
+  }
+
+  AdaptiveGrid result() const {
+    AdaptiveGrid out;
+    out.width = grid_.width;
+    out.height = grid_.height;
+    std::vector<std::uint32_t> rank(pt_.size(), kNone);
+    for (std::size_t v = 0; v < pt_.size(); ++v) {
+      if (!vertex_alive_[v]) continue;
+      rank[v] = static_cast<std::uint32_t>(out.vertices.size());
+      out.vertices.push_back(grid_.vertices[v]);
+      const Pt p = pt_[v];
+      if (p.y == 0) out.border[kTop].push_back(p.x);
+      if (p.y == grid_.height - 1) out.border[kBottom].push_back(p.x);
+    }
+    for (std::size_t v = 0; v < pt_.size(); ++v) {
+      if (!vertex_alive_[v]) continue;
+      const Pt p = pt_[v];
+      if (p.x == 0) out.border[kLeft].push_back(p.y);
+      if (p.x == grid_.width - 1) out.border[kRight].push_back(p.y);
+    }
+    for (const std::vector<int>& side : out.border)
+      LV_CHECK(std::is_sorted(side.begin(), side.end()));
+    for (std::size_t k = 0; k < tri_.size(); ++k) {
+      if (!alive_[k]) continue;
+      for (int c = 0; c < 3; ++c) {
+        LV_CHECK(rank[tri_[k][c]] != kNone);
+        out.indices.push_back(rank[tri_[k][c]]);
+      }
+    }
+    out.leaves = grid_.leaves;
+    out.fixup_rounds = grid_.fixup_rounds;
+    return out;
+  }
+
+ private:
+  bool within(Pt a, Pt b, Pt c) const {
+    return t_.uniform() ? triangle_within<true>(t_, a, b, c, bound_)
+                        : triangle_within<false>(t_, a, b, c, bound_);
+  }
+
+  // Tries to merge u into one of its neighbours, the nearest first; on success `touched_` holds
+  // the vertices whose star changed.
+  bool try_collapse(std::uint32_t u, CollapseReport* r) {
+    const std::uint8_t su = sides_[u];
+    if (std::popcount(su) >= 2) return false;  // a corner
+    int side = -1;
+    if (su != 0) {
+      side = std::countr_zero(su);
+      if (options_.locked[side]) return false;
+    }
+    std::int64_t star2 = 0;
+    for (const std::uint32_t k : star_[u])
+      star2 += std::abs(cross(pt_[tri_[k][0]], pt_[tri_[k][1]], pt_[tri_[k][2]]));
+    if (0.5 * static_cast<double>(star2) > options_.max_star_area) return false;
+    // Neighbours of u, nearest first (ties by index: deterministic).
+    candidates_.clear();
+    for (const std::uint32_t k : star_[u])
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t n = tri_[k][c];
+        if (n == u) continue;
+        if (side >= 0 && !(sides_[n] & (1u << side))) continue;  // border vertices slide along
+        candidates_.push_back(n);
+      }
+    const Pt pu = pt_[u];
+    const auto dist2 = [&](std::uint32_t n) {
+      const std::int64_t dx = pt_[n].x - pu.x, dy = pt_[n].y - pu.y;
+      return dx * dx + dy * dy;
+    };
+    std::sort(candidates_.begin(), candidates_.end(), [&](std::uint32_t a, std::uint32_t b) {
+      const std::int64_t da = dist2(a), db = dist2(b);
+      return da != db ? da < db : a < b;
+    });
+    candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
+    for (const std::uint32_t v : candidates_) {
+      // Orientation first (cheap), then the texels.
+      bool ok = true;
+      for (const std::uint32_t k : star_[u]) {
+        const std::array<std::uint32_t, 3>& tr = tri_[k];
+        if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
+        Pt p[3];
+        for (int c = 0; c < 3; ++c) p[c] = tr[c] == u ? pt_[v] : pt_[tr[c]];
+        const std::int64_t a = cross(p[0], p[1], p[2]);
+        if (sign_ > 0 ? a <= 0 : a >= 0) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) continue;
+      ++r->attempts;
+      for (const std::uint32_t k : star_[u]) {
+        const std::array<std::uint32_t, 3>& tr = tri_[k];
+        if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
+        Pt p[3];
+        for (int c = 0; c < 3; ++c) p[c] = tr[c] == u ? pt_[v] : pt_[tr[c]];
+        if (!within(p[0], p[1], p[2])) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) continue;
+      apply(u, v);
+      ++r->collapses;
+      return true;
+    }
+    return false;
+  }
+
+  void apply(std::uint32_t u, std::uint32_t v) {
+    touched_.clear();
+    touched_.push_back(v);
+    const std::vector<std::uint32_t> star = std::move(star_[u]);
+    star_[u].clear();
+    for (const std::uint32_t k : star) {
+      std::array<std::uint32_t, 3>& tr = tri_[k];
+      for (int c = 0; c < 3; ++c)
+        if (tr[c] != u && tr[c] != v) touched_.push_back(tr[c]);
+      if (tr[0] == v || tr[1] == v || tr[2] == v) {
+        alive_[k] = 0;
+        for (int c = 0; c < 3; ++c) {
+          if (tr[c] == u) continue;
+          std::vector<std::uint32_t>& s = star_[tr[c]];
+          s.erase(std::find(s.begin(), s.end(), k));
+        }
+      } else {
+        for (int c = 0; c < 3; ++c)
+          if (tr[c] == u) tr[c] = v;
+        star_[v].push_back(k);
+      }
+    }
+    vertex_alive_[u] = 0;
+  }
+
+  const TexelDepths& t_;
+  const AdaptiveGrid& grid_;
+  double bound_;
+  CollapseOptions options_;
+  int sign_ = 1;
+  std::vector<Pt> pt_;
+  std::vector<std::uint8_t> sides_;
+  std::vector<std::array<std::uint32_t, 3>> tri_;
+  std::vector<std::uint8_t> alive_, vertex_alive_;
+  std::vector<std::vector<std::uint32_t>> star_;
+  std::vector<std::uint32_t> candidates_, touched_;
+};
+
+}  // namespace
+
+AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
+                           const CollapseOptions& options, CollapseReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  LV_CHECK(grid.width == texels.width() && grid.height == texels.height());
+  LV_CHECK(bound > 0);
+  if (grid.num_triangles() == 0) return grid;
+  Collapser collapser(texels, grid, bound, options);
+  CollapseReport r = collapser.run();
+  AdaptiveGrid out = collapser.result();
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.emit_seconds = grid.emit_seconds;
+  out.balance_seconds = grid.balance_seconds;
+  if (report) *report = r;
+  return out;
+}
+
+GridQuality grid_quality(const AdaptiveGrid& grid) {
+  GridQuality q{180.0, std::numeric_limits<double>::infinity()};
+  const std::uint32_t w = static_cast<std::uint32_t>(grid.width);
+  for (std::size_t k = 0; k < grid.num_triangles(); ++k) {
+    double x[3], y[3];
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t id = grid.vertices[grid.indices[3 * k + c]];
+      x[c] = id % w, y[c] = id / w;
+    }
+    const double area2 = std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+    q.min_area = std::min(q.min_area, 0.5 * area2);
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      const double ux = x[a] - x[c], uy = y[a] - y[c], vx = x[b] - x[c], vy = y[b] - y[c];
+      const double angle = std::atan2(area2, ux * vx + uy * vy) * 180.0 / std::numbers::pi;
+      q.min_angle_degrees = std::min(q.min_angle_degrees, angle);
+    }
+  }
+  if (grid.num_triangles() == 0) q = {};
+  return q;
+}
+
+}  // namespace lightvol

@@ -1,0 +1,53 @@
+// Coarsening of an adaptive grid by exact-verified half-edge collapses ("collapse" tessellation).
+//
+// The input is any conforming triangulation of a texel grid whose vertices are texels and which
+// meets the bound at every texel (the quadtree of RefinementPyramid::tessellate at the same
+// bound). A vertex u is merged into a neighbour v (v stays where it is, so vertices stay texels)
+// only when every triangle of u's star that does not hold v keeps its orientation with u replaced
+// by v (the new fan then covers exactly the old star: the triangulation stays conforming), and the
+// error of every texel under those new triangles, evaluated exactly on their planes in window depth
+// (the metric of TexelDepths::error), stays within the bound. Triangles that do not change keep
+// their texels' errors, so the bound holds at every texel for the triangles emitted.
+//
+// Border vertices move only along their side (a corner never), and not at all on a locked side:
+// locked sides keep exactly the border vertices of the input (omni seams, fixed closures).
+// Sequential and in a fixed order: the same input gives the same bytes on any machine and any
+// thread count.
+#pragma once
+
+#include <cstdint>
+
+#include <lightvol/tessellate/adaptive_grid.h>
+
+namespace lightvol {
+
+struct CollapseOptions {
+  bool locked[4] = {false, false, false, false};  // per GridSide: keep its border vertices
+  int max_rounds = 64;  // sweeps over the vertices whose star changed in the previous sweep
+  // A vertex whose star covers more texels (area in texel units²) is kept: bounds the cost of
+  // one attempt (every attempt evaluates the texels of the whole star).
+  double max_star_area = 4096;
+};
+
+struct CollapseReport {
+  std::uint64_t attempts = 0;   // collapses whose error was evaluated
+  std::uint64_t collapses = 0;  // collapses made
+  int rounds = 0;
+  double seconds = 0;
+};
+
+// `grid` must be a conforming triangulation of texels.width() × texels.height() texels meeting
+// `bound`. The result keeps its winding (standard or not) and its conventions (vertices in texel
+// order, border positions per side).
+AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
+                           const CollapseOptions& options = {}, CollapseReport* report = nullptr);
+
+// The smallest interior angle (degrees) and the smallest area (texel units²) of a grid's
+// triangles, in texel space.
+struct GridQuality {
+  double min_angle_degrees = 0;
+  double min_area = 0;
+};
+GridQuality grid_quality(const AdaptiveGrid& grid);
+
+}  // namespace lightvol

@@ -1,0 +1,65 @@
+// tessellation_tool N E: the tessellations of the synthetic N×N map (synthetic_scene.h) under the
+// benchmark's directional light (near 0, far 1, linear depth) at max error E, in memory: triangles,
+// reached error (RefinementPyramid::measure), time of each stage, smallest angle and area.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include <lightvol/light/light.h>
+#include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/collapse_grid.h>
+
+#include "synthetic_scene.h"
+
+namespace {
+
+lightvol::Light bench_light(int n) {
+  const std::string right = std::to_string(n - 1) + ".5";
+  const std::string json =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1],)"
+      R"( "up": [0, 1, 0], "ortho": [-0.5, )" +
+      right + ", -" + right + R"(, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  return *lightvol::parse_light(json, "bench.json");
+}
+
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3 && argc != 4) {
+    std::fprintf(stderr, "usage: tessellation_tool N E [MAX_STAR_AREA]\n");
+    return 2;
+  }
+  const int n = std::atoi(argv[1]);
+  const double e = std::atof(argv[2]);
+  const lightvol::DepthImage depth = lightvol::bench::synthetic_scene(n, n);
+  const lightvol::Light light = bench_light(n);
+  auto t0 = std::chrono::steady_clock::now();
+  auto texels = lightvol::TexelDepths::create(light, depth, 0, "bench");
+  const lightvol::RefinementPyramid pyramid(std::move(*texels), lightvol::Refinement::max_error);
+  const double tp = since(t0);
+  t0 = std::chrono::steady_clock::now();
+  const lightvol::AdaptiveGrid quad = pyramid.tessellate(e, true);
+  const double tq = since(t0);
+  const lightvol::GridQuality qq = lightvol::grid_quality(quad);
+  std::printf(
+      "quadtree  triangles %zu  reached %.8f  pyramid %.3f s  tessellate %.3f s  angle %.3f area "
+      "%.1f\n",
+      quad.num_triangles(), pyramid.measure(quad), tp, tq, qq.min_angle_degrees, qq.min_area);
+  lightvol::CollapseReport r;
+  lightvol::CollapseOptions o;
+  if (argc == 4) o.max_star_area = std::atof(argv[3]);
+  const lightvol::AdaptiveGrid col = lightvol::collapse_grid(pyramid.texels(), quad, e, o, &r);
+  const lightvol::GridQuality qc = lightvol::grid_quality(col);
+  std::printf(
+      "collapse  triangles %zu  reached %.8f  collapse %.3f s (%d rounds, %llu attempts, %llu "
+      "collapses)  angle %.3f area %.1f\n",
+      col.num_triangles(), pyramid.measure(col), r.seconds, r.rounds,
+      static_cast<unsigned long long>(r.attempts), static_cast<unsigned long long>(r.collapses),
+      qc.min_angle_degrees, qc.min_area);
+  return 0;
+}

@@ -1,0 +1,280 @@
+// The "collapse" tessellation (collapse_grid): checked by a brute-force measure that knows nothing
+// of how the grid was made: every texel is located in the triangles that hold it (integer
+// point-in-triangle tests over each triangle's bounding box), its depth interpolated with
+// barycentric weights, and its error taken with TexelDepths::error; the triangulation must tile the
+// grid's rectangle exactly (consistent orientation, areas summing to the rectangle, every interior
+// edge shared by two triangles in opposite directions, every other edge on the rectangle's border).
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/collapse_grid.h>
+#include <lightvol/volume/adaptive_volume.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using test::directional_json;
+using test::light_from_json;
+using test::make_depth;
+using test::spot_json;
+
+// Depths of a scene made of what shadow maps are made of: a sloped floor, a box (axis-aligned
+// steps), a one-texel bar, a diagonal step and a sphere. `scale` maps [0, 1] to the stored range.
+DepthImage scene(int w, int h, double lo, double hi) {
+  return make_depth(w, h, [=](int c, int r) {
+    const double x = (c + 0.5) / w, y = (r + 0.5) / h;
+    double t = 0.9 + 0.05 * x + 0.03 * y * y;
+    if (x > 0.15 && x < 0.45 && y > 0.2 && y < 0.4) t = 0.5;  // box
+    if (c == w / 2) t = 0.6;                                  // one-texel bar
+    if (x + 2 * y > 2.2) t = 0.75 + 0.02 * x;                 // diagonal step
+    const double dx = x - 0.7, dy = y - 0.3, rr = dx * dx + dy * dy;
+    if (rr < 0.02) t = std::min(t, 0.55 + 2 * rr);  // sphere-like cap
+    return static_cast<float>(lo + (hi - lo) * t);
+  });
+}
+
+struct Pt {
+  std::int64_t x, y;
+};
+
+Pt texel(const AdaptiveGrid& g, std::uint32_t v) {
+  const std::uint32_t id = g.vertices[v];
+  return {id % static_cast<std::uint32_t>(g.width), id / static_cast<std::uint32_t>(g.width)};
+}
+
+std::int64_t cross(Pt a, Pt b, Pt c) {
+  return (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+}
+
+// The triangulation tiles [0, W−1] × [0, H−1] without T-junctions; its border lists match its
+// vertices on each side.
+::testing::AssertionResult is_conforming(const AdaptiveGrid& g) {
+  const std::int64_t w = g.width, h = g.height;
+  if (!std::is_sorted(g.vertices.begin(), g.vertices.end()) ||
+      std::adjacent_find(g.vertices.begin(), g.vertices.end()) != g.vertices.end())
+    return ::testing::AssertionFailure() << "vertices not strictly ascending";
+  std::int64_t sign = 0, area2 = 0;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (std::size_t t = 0; t < g.num_triangles(); ++t) {
+    const std::uint32_t* v = &g.indices[3 * t];
+    const std::int64_t a = cross(texel(g, v[0]), texel(g, v[1]), texel(g, v[2]));
+    if (a == 0) return ::testing::AssertionFailure() << "triangle " << t << " is degenerate";
+    if (sign == 0) sign = a > 0 ? 1 : -1;
+    if ((a > 0) != (sign > 0))
+      return ::testing::AssertionFailure() << "triangle " << t << " flipped";
+    area2 += std::abs(a);
+    for (int k = 0; k < 3; ++k) ++edges[{v[k], v[(k + 1) % 3]}];
+  }
+  if (area2 != 2 * (w - 1) * (h - 1))
+    return ::testing::AssertionFailure() << "areas sum to " << area2 << "/2, not the rectangle";
+  for (const auto& [e, n] : edges) {
+    if (n != 1) return ::testing::AssertionFailure() << "edge used " << n << " times one way";
+    if (edges.count({e.second, e.first})) continue;
+    const Pt a = texel(g, e.first), b = texel(g, e.second);
+    const bool on_side =
+        (a.x == b.x && (a.x == 0 || a.x == w - 1)) || (a.y == b.y && (a.y == 0 || a.y == h - 1));
+    if (!on_side)
+      return ::testing::AssertionFailure() << "open edge (" << a.x << ", " << a.y << ")–(" << b.x
+                                           << ", " << b.y << ") inside the grid: a T-junction";
+  }
+  std::vector<int> border[4];
+  for (std::uint32_t v = 0; v < g.vertices.size(); ++v) {
+    const Pt p = texel(g, v);
+    if (p.y == 0) border[kTop].push_back(static_cast<int>(p.x));
+    if (p.y == h - 1) border[kBottom].push_back(static_cast<int>(p.x));
+  }
+  for (std::int64_t r = 0; r < h; ++r)
+    for (std::uint32_t v = 0; v < g.vertices.size(); ++v) {
+      const Pt p = texel(g, v);
+      if (p.y != r) continue;
+      if (p.x == 0) border[kLeft].push_back(static_cast<int>(r));
+      if (p.x == w - 1) border[kRight].push_back(static_cast<int>(r));
+    }
+  for (int s = 0; s < 4; ++s)
+    if (border[s] != g.border[s])
+      return ::testing::AssertionFailure() << "border list of side " << s << " is wrong";
+  return ::testing::AssertionSuccess();
+}
+
+struct Measured {
+  double max_error = 0;
+  int uncovered = 0;
+};
+
+// Every texel against every triangle holding it (closed triangles: texels on shared edges are
+// measured in each).
+Measured brute_force(const TexelDepths& t, const AdaptiveGrid& g) {
+  Measured m;
+  std::vector<std::uint8_t> covered(static_cast<std::size_t>(g.width) * g.height, 0);
+  for (std::size_t k = 0; k < g.num_triangles(); ++k) {
+    const Pt p[3] = {texel(g, g.indices[3 * k]), texel(g, g.indices[3 * k + 1]),
+                     texel(g, g.indices[3 * k + 2])};
+    const std::int64_t area = cross(p[0], p[1], p[2]);
+    const std::int64_t x0 = std::min({p[0].x, p[1].x, p[2].x}),
+                       x1 = std::max({p[0].x, p[1].x, p[2].x});
+    const std::int64_t y0 = std::min({p[0].y, p[1].y, p[2].y}),
+                       y1 = std::max({p[0].y, p[1].y, p[2].y});
+    for (std::int64_t y = y0; y <= y1; ++y)
+      for (std::int64_t x = x0; x <= x1; ++x) {
+        const Pt q{x, y};
+        // Barycentric weights (times the area): all of the area's sign or zero inside.
+        const std::int64_t b0 = cross(p[1], p[2], q), b1 = cross(p[2], p[0], q),
+                           b2 = cross(p[0], p[1], q);
+        const bool inside =
+            area > 0 ? (b0 >= 0 && b1 >= 0 && b2 >= 0) : (b0 <= 0 && b1 <= 0 && b2 <= 0);
+        if (!inside) continue;
+        const double d = (static_cast<double>(b0) * t.window_depth(int(p[0].x), int(p[0].y)) +
+                          static_cast<double>(b1) * t.window_depth(int(p[1].x), int(p[1].y)) +
+                          static_cast<double>(b2) * t.window_depth(int(p[2].x), int(p[2].y))) /
+                         static_cast<double>(area);
+        m.max_error = std::max(m.max_error, t.error(int(x), int(y), d));
+        covered[static_cast<std::size_t>(y) * g.width + x] = 1;
+      }
+  }
+  m.uncovered = static_cast<int>(std::count(covered.begin(), covered.end(), 0));
+  return m;
+}
+
+struct Case {
+  std::string name;
+  Light light;
+  DepthImage depth;
+};
+
+std::vector<Case> cases(int w, int h) {
+  return {{"directional linear", light_from_json(directional_json("linear")), scene(w, h, 2, 9)},
+          {"spot window", light_from_json(spot_json("window")), scene(w, h, 0.9, 0.999)},
+          {"spot linear", light_from_json(spot_json("linear")), scene(w, h, 1, 8)}};
+}
+
+TexelDepths texels_of(const Case& c) {
+  Result<TexelDepths> t = TexelDepths::create(c.light, c.depth, 0, "test.exr");
+  EXPECT_TRUE(t.ok());
+  return std::move(*t);
+}
+
+TEST(Collapse, BoundHoldsAtEveryTexelAndTheGridStaysConforming) {
+  for (const auto& [w, h] :
+       {std::pair{97, 81}, std::pair{64, 33}, std::pair{3, 70}, std::pair{2, 2}}) {
+    for (const Case& c : cases(w, h)) {
+      SCOPED_TRACE(c.name + " " + std::to_string(w) + "x" + std::to_string(h));
+      const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+      // Bounds relative to the scene's largest error, so that every light sees coarse and fine.
+      const double top = pyramid.measure(pyramid.tessellate(1e30, true));
+      for (const double f : {0.5, 0.05, 0.002}) {
+        const double e = std::max(top * f, 1e-9);
+        SCOPED_TRACE(e);
+        for (const bool standard : {true, false}) {
+          const AdaptiveGrid quad = pyramid.tessellate(e, standard);
+          CollapseReport report;
+          const AdaptiveGrid g = collapse_grid(pyramid.texels(), quad, e, {}, &report);
+          EXPECT_TRUE(is_conforming(g));
+          const Measured m = brute_force(pyramid.texels(), g);
+          EXPECT_EQ(m.uncovered, 0);
+          EXPECT_LE(m.max_error, e * (1 + 1e-9));
+          EXPECT_LE(g.num_triangles(), quad.num_triangles());
+          // Winding kept: the first triangle turns the same way as the quadtree's.
+          const auto turn = [](const AdaptiveGrid& a) {
+            return cross(texel(a, a.indices[0]), texel(a, a.indices[1]), texel(a, a.indices[2])) >
+                   0;
+          };
+          EXPECT_EQ(turn(g), turn(quad));
+          EXPECT_EQ(report.collapses, quad.vertices.size() - g.vertices.size());
+        }
+      }
+    }
+  }
+}
+
+TEST(Collapse, FarFewerTrianglesThanTheQuadtreeOnSteps) {
+  const Case c = cases(129, 129)[0];
+  const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+  const double e = 1e-3;
+  const AdaptiveGrid quad = pyramid.tessellate(e, true);
+  const AdaptiveGrid g = collapse_grid(pyramid.texels(), quad, e);
+  EXPECT_TRUE(is_conforming(g));
+  EXPECT_LE(brute_force(pyramid.texels(), g).max_error, e);
+  EXPECT_LT(3 * g.num_triangles(), quad.num_triangles());
+}
+
+TEST(Collapse, PlaneInWindowDepthIsTwoTriangles) {
+  // A plane in window depth (the directional light's linear depth is affine in window depth): any
+  // triangle interpolates it exactly, so everything but the corners collapses.
+  const Light light = light_from_json(directional_json("linear"));
+  const DepthImage depth =
+      make_depth(50, 37, [](int c, int r) { return float(3 + 0.01 * c + 0.02 * r); });
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "plane.exr");
+  ASSERT_TRUE(t.ok());
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  // Start from a fine grid (bound 0 keeps every texel whose float depth is off the plane) to make
+  // the collapses do the work.
+  const AdaptiveGrid full = pyramid.tessellate(0, true);
+  ASSERT_GT(full.num_triangles(), 1000u);
+  const AdaptiveGrid g = collapse_grid(pyramid.texels(), full, 1e-6);
+  EXPECT_TRUE(is_conforming(g));
+  EXPECT_EQ(g.num_triangles(), 2u);
+  EXPECT_EQ(g.vertices.size(), 4u);
+}
+
+TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
+  const Case c = cases(65, 65)[2];
+  const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+  const double e = pyramid.measure(pyramid.tessellate(1e30, true)) * 0.01;
+  BorderSplits forced;
+  for (int p = 0; p < 65; p += 3) forced.side[kTop].push_back(p), forced.side[kLeft].push_back(p);
+  const AdaptiveGrid quad = pyramid.tessellate(e, true, forced);
+  CollapseOptions locked;
+  locked.locked[kTop] = locked.locked[kLeft] = true;
+  const AdaptiveGrid g = collapse_grid(pyramid.texels(), quad, e, locked);
+  EXPECT_TRUE(is_conforming(g));
+  EXPECT_LE(brute_force(pyramid.texels(), g).max_error, e);
+  EXPECT_EQ(g.border[kTop], quad.border[kTop]);
+  EXPECT_EQ(g.border[kLeft], quad.border[kLeft]);
+  // The free sides lose vertices (only ever a subset of the quadtree's).
+  for (const int s : {kRight, kBottom}) {
+    EXPECT_LT(g.border[s].size(), quad.border[s].size());
+    EXPECT_TRUE(std::includes(quad.border[s].begin(), quad.border[s].end(), g.border[s].begin(),
+                              g.border[s].end()));
+  }
+}
+
+TEST(Collapse, SameBytesWithOneThreadAndMany) {
+  const Case c = cases(97, 81)[1];
+  const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+  const double e = pyramid.measure(pyramid.tessellate(1e30, true)) * 0.01;
+  const AdaptiveGrid many = collapse_grid(pyramid.texels(), pyramid.tessellate(e, true), e);
+  AdaptiveGrid one;
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    const RefinementPyramid p1(texels_of(c), Refinement::max_error);
+    one = collapse_grid(p1.texels(), p1.tessellate(e, true), e);
+  }
+  EXPECT_EQ(one.vertices, many.vertices);
+  EXPECT_EQ(one.indices, many.indices);
+  for (int s = 0; s < 4; ++s) EXPECT_EQ(one.border[s], many.border[s]);
+}
+
+TEST(Collapse, QualityReportsTheSmallestAngleAndArea) {
+  AdaptiveGrid g;
+  g.width = 11, g.height = 2;
+  g.vertices = {0, 10, 11, 21};  // (0,0) (10,0) (0,1) (10,1)
+  g.indices = {0, 2, 1, 1, 2, 3};
+  const GridQuality q = grid_quality(g);
+  EXPECT_NEAR(q.min_angle_degrees, std::atan2(1.0, 10.0) * 180 / M_PI, 1e-9);
+  EXPECT_DOUBLE_EQ(q.min_area, 5.0);
+}
+
+}  // namespace
+}  // namespace lightvol
