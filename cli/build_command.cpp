@@ -40,6 +40,8 @@ struct BuildCommandOptions {
   double max_error = -1;         // --max-error, world units
   std::string refine = "error";  // --refine error|laplacian
   double threshold = -1;         // --threshold, for --refine laplacian
+  std::string tessellation;      // --tessellation collapse|quadtree (default: collapse; laplacian:
+                                 // quadtree)
   bool no_check = false;
 };
 
@@ -59,6 +61,10 @@ std::string conflicting_flags(const BuildCommandOptions& o, MeshFormat format) {
     return "--max-error: does not apply to --refine laplacian (use --threshold)";
   if (o.refine == "error" && o.threshold >= 0)
     return "--threshold: applies with --refine laplacian only";
+  if (!o.tessellation.empty() && !o.adaptive && o.refine != "laplacian")
+    return "--tessellation: applies with --adaptive only";
+  if (o.refine == "laplacian" && o.tessellation == "collapse")
+    return "--tessellation collapse: needs a bound (--refine error); laplacian uses quadtree";
   return "";
 }
 
@@ -66,10 +72,12 @@ BuildVolumeOptions volume_options(const BuildCommandOptions& o) {
   BuildVolumeOptions v;
   v.space = o.space == "light" ? Space::light : Space::world;
   const bool adaptive = o.adaptive || o.refine == "laplacian";
-  v.tessellation = adaptive ? Tessellation::adaptive : Tessellation::static_grid;
+  v.grid = adaptive ? VolumeGrid::adaptive : VolumeGrid::static_grid;
   v.adaptive.refinement = o.refine == "laplacian" ? Refinement::laplacian : Refinement::max_error;
   v.adaptive.max_error = o.max_error;
   v.adaptive.threshold = o.threshold;
+  v.adaptive.tessellation =
+      o.tessellation == "quadtree" ? Tessellation::quadtree : Tessellation::collapse;
   v.adaptive.measure = o.json || !o.report_path.empty();  // the reached error is for reports
   return v;
 }
@@ -122,16 +130,22 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
   const bool laplacian = o.refine == "laplacian";
   report["adaptive"] = {
       {"refine", o.refine},
+      {"tessellation", !laplacian && o.tessellation != "quadtree" ? "collapse" : "quadtree"},
       {"max_error", laplacian ? nlohmann::json(nullptr) : nlohmann::json(o.max_error)},
       {"threshold", laplacian ? nlohmann::json(o.threshold) : nlohmann::json(nullptr)},
       {"max_error_reached", a.max_error_reached},
       {"grid_triangles", a.grid_triangles},
+      {"quadtree_triangles", a.quadtree_triangles},
+      {"collapses", a.collapses},
+      {"min_angle_degrees", a.min_angle_degrees},
+      {"min_area_texels", a.min_area},
       {"leaves", a.leaves},
       {"fixup_rounds", a.fixup_rounds},
       {"seconds",
        {{"error_pyramid", a.pyramid_seconds},
         {"balance", a.balance_seconds},
         {"emit", a.emit_seconds},
+        {"collapse", a.collapse_seconds},
         {"measure", a.measure_seconds},
         {"assemble", a.assemble_seconds}}}};
   return report;
@@ -161,7 +175,7 @@ int run_build(const BuildCommandOptions& o) {
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())
     return fail(conflict);
   const BuildVolumeOptions options = volume_options(o);
-  const bool adaptive = options.tessellation == Tessellation::adaptive;
+  const bool adaptive = options.grid == VolumeGrid::adaptive;
 
   progress.begin("reading " + o.light_path);
   Result<Light> light = load_light(o.light_path);
@@ -267,8 +281,8 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
   cmd->add_flag(
       "--adaptive", o->adaptive,
-      "Adaptive tessellation: a quadtree whose cells stay coarse while every texel they cover "
-      "lies within --max-error world units of the surface (no T-junctions)");
+      "Adaptive tessellation: every texel lies within --max-error world units of the surface (no "
+      "T-junctions; see --tessellation)");
   cmd->add_option("--max-error", o->max_error,
                   "Error bound of --adaptive, in world units along each texel ray")
       ->check(CLI::NonNegativeNumber);
@@ -280,6 +294,11 @@ void add_build_command(CLI::App& app, Runner* run) {
   cmd->add_option("--threshold", o->threshold,
                   "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--tessellation", o->tessellation,
+                  "--adaptive: collapse (default: the quadtree coarsened by collapses verified at "
+                  "every texel, far fewer triangles) or quadtree (the paper's restricted quadtree; "
+                  "the only one for --refine laplacian)")
+      ->check(CLI::IsMember({"collapse", "quadtree"}));
   cmd->add_flag(
       "--no-check", o->no_check,
       "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");

@@ -169,7 +169,7 @@ Result<std::vector<Volume>> build_volumes(const Light& light, const ShadowMaps& 
     const std::string name = adaptive ? "adaptive" : "static";
     progress.begin(name + " volume");
     BuildVolumeOptions options;
-    options.tessellation = adaptive ? Tessellation::adaptive : Tessellation::static_grid;
+    options.grid = adaptive ? VolumeGrid::adaptive : VolumeGrid::static_grid;
     options.adaptive.max_error = max_error;
     Result<Mesh> mesh = build_volume(light, shadow, options);
     if (!mesh) return mesh.error();

@@ -1,6 +1,7 @@
-// lightvol stats: the triangle-count report. The static grid against the adaptive tessellation at
-// several error bounds, with the error actually reached and the time of each stage. The counts are
-// those `lightvol build --adaptive --max-error E` writes (volume/volume_stats.h).
+// lightvol stats: the triangle-count report. The static grid against the adaptive tessellations
+// (collapse and quadtree, side by side) at several error bounds, with the error actually reached,
+// the smallest angle and area of the grid triangles and the time of each stage. The counts are
+// those `lightvol build --adaptive --max-error E --tessellation T` writes (volume/volume_stats.h).
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -23,6 +24,7 @@ struct StatsOptions {
   std::string light_path;
   std::string channel;
   std::string max_errors = "0.001,0.01,0.1";
+  std::string tessellations = "collapse,quadtree";
   std::string space = "world";
   bool json = false;
   bool csv = false;
@@ -50,6 +52,28 @@ Result<std::vector<double>> parse_bounds(const std::string& text) {
   return out;
 }
 
+// "collapse,quadtree" → the tessellations in that order.
+Result<std::vector<Tessellation>> parse_tessellations(const std::string& text) {
+  std::vector<Tessellation> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item == "collapse") {
+      out.push_back(Tessellation::collapse);
+    } else if (item == "quadtree") {
+      out.push_back(Tessellation::quadtree);
+    } else {
+      return Error{"--tessellation: '" + item + "' is not collapse or quadtree"};
+    }
+  }
+  if (out.empty()) return Error{"--tessellation: give at least one of collapse, quadtree"};
+  return out;
+}
+
+const char* tessellation_name(Tessellation t) {
+  return t == Tessellation::collapse ? "collapse" : "quadtree";
+}
+
 using Rows = std::vector<BoundStats>;
 
 double ratio(const BoundStats& r, const VolumeStats& stats) {
@@ -61,15 +85,19 @@ nlohmann::json report_json(const StatsOptions& o, const Light& light, const Volu
   const VolumeCounts st = stats.static_counts();
   nlohmann::json adaptive = nlohmann::json::array();
   for (const BoundStats& r : rows) {
-    nlohmann::json row = {{"max_error", r.max_error},
+    nlohmann::json row = {{"tessellation", tessellation_name(r.tessellation)},
+                          {"max_error", r.max_error},
                           {"triangles", r.triangles},
                           {"vertices", r.vertices},
                           {"max_error_reached", r.max_error_reached},
+                          {"min_angle_degrees", r.min_angle_degrees},
+                          {"min_area_texels", r.min_area},
                           {"leaves", r.leaves},
                           {"ratio_to_static", ratio(r, stats)},
                           {"seconds",
                            {{"balance", r.balance_seconds},
                             {"emit", r.emit_seconds},
+                            {"collapse", r.collapse_seconds},
                             {"measure", r.measure_seconds}}}};
     if (stats.omni()) {
       nlohmann::json faces = nlohmann::json::object();
@@ -111,24 +139,27 @@ void print_csv(const VolumeStats& stats, const Rows& rows) {
   if (!stats.omni()) {
     std::printf(
         "mode,max_error,triangles,vertices,max_error_reached,error_pyramid_seconds,balance_seconds,"
-        "emit_seconds\n");
-    std::printf("static,,%llu,%llu,0,,,\n", ull(st.triangles), ull(st.vertices));
+        "emit_seconds,tessellation,collapse_seconds,min_angle_degrees,min_area_texels\n");
+    std::printf("static,,%llu,%llu,0,,,,,,,\n", ull(st.triangles), ull(st.vertices));
     for (const BoundStats& r : rows)
-      std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f\n", r.max_error, ull(r.triangles),
-                  ull(r.vertices), r.max_error_reached, stats.pyramid_seconds(), r.balance_seconds,
-                  r.emit_seconds);
+      std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f,%s,%.6f,%.9g,%.9g\n", r.max_error,
+                  ull(r.triangles), ull(r.vertices), r.max_error_reached, stats.pyramid_seconds(),
+                  r.balance_seconds, r.emit_seconds, tessellation_name(r.tessellation),
+                  r.collapse_seconds, r.min_angle_degrees, r.min_area);
     return;
   }
   std::printf(
-      "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners\n");
+      "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners,"
+      "tessellation,min_angle_degrees,min_area_texels\n");
   std::printf("static,,%llu,%llu,0", ull(st.triangles), ull(st.vertices));
   for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", ull(stats.static_face_triangles()));
-  std::printf(",%llu,8\n", ull(stats.static_seam_triangles()));
+  std::printf(",%llu,8,,,\n", ull(stats.static_seam_triangles()));
   for (const BoundStats& r : rows) {
     std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error, ull(r.triangles), ull(r.vertices),
                 r.max_error_reached);
     for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", ull(r.omni.face_triangles[f]));
-    std::printf(",%llu,8\n", ull(r.omni.seam_triangles));
+    std::printf(",%llu,8,%s,%.9g,%.9g\n", ull(r.omni.seam_triangles),
+                tessellation_name(r.tessellation), r.min_angle_degrees, r.min_area);
   }
 }
 
@@ -142,12 +173,15 @@ void print_table(const StatsOptions& o, const Light& light, const VolumeStats& s
     std::printf("static grid: %s triangles, %s vertices\n", thousands(st.triangles).c_str(),
                 thousands(st.vertices).c_str());
     std::printf("error pyramid: %.3f s (once for all bounds)\n\n", stats.pyramid_seconds());
-    std::printf("%12s %14s %14s %9s %14s %10s %10s\n", "max error", "triangles", "vertices",
-                "of static", "reached", "balance s", "emit s");
+    std::printf("%12s %12s %14s %14s %9s %14s %10s %9s %10s %10s %10s\n", "tessellation",
+                "max error", "triangles", "vertices", "of static", "reached", "min angle",
+                "min area", "balance s", "emit s", "collapse s");
     for (const BoundStats& r : rows)
-      std::printf("%12.6g %14s %14s %8.3f%% %14.6g %10.3f %10.3f\n", r.max_error,
-                  thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
-                  100.0 * ratio(r, stats), r.max_error_reached, r.balance_seconds, r.emit_seconds);
+      std::printf("%12s %12.6g %14s %14s %8.3f%% %14.6g %9.4f° %9.2f %10.3f %10.3f %10.3f\n",
+                  tessellation_name(r.tessellation), r.max_error, thousands(r.triangles).c_str(),
+                  thousands(r.vertices).c_str(), 100.0 * ratio(r, stats), r.max_error_reached,
+                  r.min_angle_degrees, r.min_area, r.balance_seconds, r.emit_seconds,
+                  r.collapse_seconds);
     return;
   }
   const int w = stats.width();
@@ -157,14 +191,16 @@ void print_table(const StatsOptions& o, const Light& light, const VolumeStats& s
               thousands(st.triangles).c_str(), thousands(stats.static_face_triangles()).c_str(),
               thousands(stats.static_seam_triangles()).c_str(), thousands(st.vertices).c_str());
   std::printf("error pyramids: %.3f s (once for all bounds)\n\n", stats.pyramid_seconds());
-  std::printf("%12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s\n", "max error", "triangles",
-              "of static", "reached", "px", "nx", "py", "ny", "pz", "nz", "seams");
+  std::printf("%12s %12s %12s %9s %12s %9s %9s %9s %9s %9s %9s %9s %10s %9s\n", "tessellation",
+              "max error", "triangles", "of static", "reached", "px", "nx", "py", "ny", "pz", "nz",
+              "seams", "min angle", "min area");
   for (const BoundStats& r : rows) {
-    std::printf("%12.6g %12s %8.3f%% %12.6g", r.max_error, thousands(r.triangles).c_str(),
-                100.0 * ratio(r, stats), r.max_error_reached);
+    std::printf("%12s %12.6g %12s %8.3f%% %12.6g", tessellation_name(r.tessellation), r.max_error,
+                thousands(r.triangles).c_str(), 100.0 * ratio(r, stats), r.max_error_reached);
     for (int f = 0; f < kOmniFaces; ++f)
       std::printf(" %9s", thousands(r.omni.face_triangles[f]).c_str());
-    std::printf(" %9s\n", thousands(r.omni.seam_triangles).c_str());
+    std::printf(" %9s %9.4f° %9.2f\n", thousands(r.omni.seam_triangles).c_str(),
+                r.min_angle_degrees, r.min_area);
   }
 }
 
@@ -172,6 +208,8 @@ int run_stats(const StatsOptions& o) {
   if (o.json && o.csv) return fail("--json and --csv: choose one");
   Result<std::vector<double>> bounds = parse_bounds(o.max_errors);
   if (!bounds) return fail(bounds.error().message);
+  Result<std::vector<Tessellation>> tessellations = parse_tessellations(o.tessellations);
+  if (!tessellations) return fail(tessellations.error().message);
   Progress progress(o.quiet || o.json || o.csv);
 
   progress.begin("reading " + o.light_path);
@@ -192,11 +230,12 @@ int run_stats(const StatsOptions& o) {
   progress.end();
 
   Rows rows;
-  for (const double e : *bounds) {
-    progress.begin("tessellating at " + std::to_string(e));
-    rows.push_back(stats->at(e));
-    progress.end(thousands(rows.back().triangles) + " triangles");
-  }
+  for (const Tessellation t : *tessellations)
+    for (const double e : *bounds) {
+      progress.begin(std::string(tessellation_name(t)) + " at " + std::to_string(e));
+      rows.push_back(stats->at(e, t));
+      progress.end(thousands(rows.back().triangles) + " triangles");
+    }
 
   if (o.json)
     std::printf("%s\n", report_json(o, *light, *stats, rows).dump(2).c_str());
@@ -217,8 +256,10 @@ void add_stats_command(CLI::App& app, Runner* run) {
   cmd->footer(
       "Example:\n  lightvol stats shadow.exr --light light.json --max-error 0.001,0.01,0.1 --csv\n"
       "For each bound E (world units along the texel rays): the triangles and vertices that\n"
-      "'lightvol build --adaptive --max-error E' writes, the largest error actually reached over\n"
-      "all texels, and the time of each stage (the error pyramid is built once).");
+      "'lightvol build --adaptive --max-error E --tessellation T' writes for each tessellation T,\n"
+      "the largest error actually reached over all texels, the smallest angle and area of the\n"
+      "grid triangles (texel space), and the time of each stage (the error pyramid is built "
+      "once).");
   cmd->add_option(
          "depth", o->depth_paths,
          "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
@@ -230,6 +271,9 @@ void add_stats_command(CLI::App& app, Runner* run) {
       ->capture_default_str();
   cmd->add_option("--space", o->space, "Frame of the volume (its winding): world or light")
       ->check(CLI::IsMember({"world", "light"}))
+      ->capture_default_str();
+  cmd->add_option("--tessellation", o->tessellations,
+                  "Comma-separated tessellations to compare: collapse, quadtree")
       ->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the report as JSON");
   cmd->add_flag("--csv", o->csv, "Print the report as CSV");

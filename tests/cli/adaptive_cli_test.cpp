@@ -63,14 +63,20 @@ TEST(AdaptiveCli, StatsCountsAreWhatBuildWrites) {
     const nlohmann::json stats = nlohmann::json::parse(s.out);
     EXPECT_EQ(stats["static"]["triangles"], light == w.spot ? 2 * 64 * 48 + 2 * 64 + 2 * 48
                                                             : 2 * 64 * 48 + 3 * (2 * 64 + 2 * 48));
-    ASSERT_EQ(stats["adaptive"].size(), 3u);
+    // Both tessellations (collapse first), each at the three bounds.
+    ASSERT_EQ(stats["adaptive"].size(), 6u);
     std::uint64_t previous = ~std::uint64_t{0};
-    for (const auto& row : stats["adaptive"]) {
+    for (std::size_t i = 0; i < 6; ++i) {
+      const auto& row = stats["adaptive"][i];
+      const std::string t = row["tessellation"].get<std::string>();
+      EXPECT_EQ(t, i < 3 ? "collapse" : "quadtree");
+      if (i == 3) previous = ~std::uint64_t{0};
       const double e = row["max_error"].get<double>();
       const std::string out = w.dir.file("v.ply"), report = w.dir.file("r.json");
-      const test::CommandResult b = test::run_lightvol(
-          "build " + q(w.depth) + " --light " + q(light) + " --adaptive --max-error " +
-          std::to_string(e) + " --out " + q(out) + " --report " + q(report) + " --quiet");
+      const test::CommandResult b =
+          test::run_lightvol("build " + q(w.depth) + " --light " + q(light) +
+                             " --adaptive --max-error " + std::to_string(e) + " --tessellation " +
+                             t + " --out " + q(out) + " --report " + q(report) + " --quiet");
       ASSERT_EQ(b.exit_code, 0) << b.err;
       const nlohmann::json r = nlohmann::json::parse(slurp(report));
       EXPECT_EQ(r["mode"], "adaptive");
@@ -79,8 +85,16 @@ TEST(AdaptiveCli, StatsCountsAreWhatBuildWrites) {
       EXPECT_EQ(ply_faces(out), row["triangles"].get<long>());
       EXPECT_LE(row["max_error_reached"].get<double>(), e);
       EXPECT_EQ(r["adaptive"]["max_error_reached"], row["max_error_reached"]);
+      EXPECT_EQ(r["adaptive"]["tessellation"], t);
+      EXPECT_EQ(r["adaptive"]["min_angle_degrees"], row["min_angle_degrees"]);
+      EXPECT_GT(row["min_angle_degrees"].get<double>(), 0);
+      EXPECT_GE(row["min_area_texels"].get<double>(), 0.5);
       EXPECT_GT(r["volume"].get<double>(), 0);
-      EXPECT_LE(row["triangles"].get<std::uint64_t>(), previous);  // looser bound, fewer triangles
+      // The quadtree's cells only merge as the bound grows (a greedy collapse promises no such
+      // monotony).
+      if (t == "quadtree") {
+        EXPECT_LE(row["triangles"].get<std::uint64_t>(), previous);
+      }
       previous = row["triangles"].get<std::uint64_t>();
     }
   }
@@ -93,9 +107,11 @@ TEST(AdaptiveCli, CsvAndTableFormats) {
   ASSERT_EQ(csv.exit_code, 0) << csv.err;
   EXPECT_EQ(csv.out.rfind("mode,max_error,triangles,vertices,max_error_reached,", 0), 0u)
       << csv.out;
-  EXPECT_EQ(std::count(csv.out.begin(), csv.out.end(), '\n'), 3) << csv.out;
+  EXPECT_EQ(std::count(csv.out.begin(), csv.out.end(), '\n'), 4) << csv.out;
   EXPECT_NE(csv.out.find("\nstatic,,"), std::string::npos);
   EXPECT_NE(csv.out.find("\nadaptive,0.01,"), std::string::npos);
+  EXPECT_NE(csv.out.find(",collapse,"), std::string::npos);
+  EXPECT_NE(csv.out.find(",quadtree,"), std::string::npos);
   const test::CommandResult table = test::run_lightvol(
       "stats " + q(w.depth) + " --light " + q(w.directional) + " --max-error 0.01 --quiet");
   ASSERT_EQ(table.exit_code, 0) << table.err;
@@ -127,6 +143,16 @@ TEST(AdaptiveCli, BadFlagCombinationsAreErrors) {
   expect_input_error(test::run_lightvol(base + "--adaptive --max-error 0.1 --threshold 2"),
                      "--threshold: applies with --refine laplacian only");
   expect_input_error(test::run_lightvol(base + "--adaptive --max-error -1"), "--max-error");
+  expect_input_error(test::run_lightvol(base + "--tessellation quadtree"),
+                     "--tessellation: applies with --adaptive only");
+  expect_input_error(
+      test::run_lightvol(base + "--refine laplacian --threshold 1 --tessellation collapse"),
+      "--tessellation collapse: needs a bound");
+  expect_input_error(test::run_lightvol(base + "--adaptive --max-error 0.1 --tessellation rtin"),
+                     "--tessellation");
+  expect_input_error(test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.spot) +
+                                        " --tessellation collapse,rtin"),
+                     "--tessellation: 'rtin' is not collapse or quadtree");
   EXPECT_FALSE(std::ifstream(w.dir.file("x.ply")).good());
   expect_input_error(
       test::run_lightvol("stats " + q(w.depth) + " --light " + q(w.spot) + " --max-error 0.1,abc"),

@@ -126,15 +126,17 @@ TEST_F(OmniBuildCli, StatsReportsFacesAndSeams) {
   std::getline(lines, fine);
   std::getline(lines, coarse);
   EXPECT_EQ(header,
-            "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners");
+            "mode,max_error,triangles,vertices,max_error_reached,px,nx,py,ny,pz,nz,seams,corners,"
+            "tessellation,min_angle_degrees,min_area_texels");
   // Static: 12W² − 4 triangles, 2(W − 1)² per face, 24(W − 1) in the seams, 8 corners.
   const int w = kW;
   std::string expected =
       "static,," + std::to_string(12 * w * w - 4) + "," + std::to_string(6 * w * w) + ",0";
   for (int f = 0; f < kOmniFaces; ++f) expected += "," + std::to_string(2 * (w - 1) * (w - 1));
-  EXPECT_EQ(static_row, expected + "," + std::to_string(24 * (w - 1)) + ",8");
+  EXPECT_EQ(static_row, expected + "," + std::to_string(24 * (w - 1)) + ",8,,,");
   EXPECT_EQ(fine.rfind("adaptive,0.01,", 0), 0u) << fine;
   EXPECT_EQ(coarse.rfind("adaptive,0.1,", 0), 0u) << coarse;
+  EXPECT_NE(fine.find(",collapse,"), std::string::npos) << fine;
 }
 
 TEST_F(OmniBuildCli, MissingFaceIsExit2NamingFileAndFace) {

@@ -37,10 +37,14 @@ struct Built {
   AdaptiveReport report;
 };
 
+// The quadtree unless asked (this file's exact counts are the quadtree's; collapse_test.cpp checks
+// the collapse tessellation's own properties).
 Built build(const Light& light, const DepthImage& depth, double e,
-            Refinement refinement = Refinement::max_error) {
+            Refinement refinement = Refinement::max_error,
+            Tessellation tessellation = Tessellation::quadtree) {
   AdaptiveOptions o;
   o.refinement = refinement;
+  o.tessellation = tessellation;
   o.max_error = e;
   o.threshold = e;
   o.measure = true;
@@ -56,18 +60,20 @@ Built build(const Light& light, const DepthImage& depth, double e,
 TEST(Adaptive, BoundHoldsAtEveryTexelDirectionalLinear) {
   const Light light = light_from_json(directional_json("linear"));
   const DepthImage depth = adaptive_scene(97, 81, 7.0);
-  for (const double e : {0.5, 0.05, 0.005}) {
-    SCOPED_TRACE(e);
-    const Built b = build(light, depth, e);
-    expect_valid_volume(b.mesh);
-    const RayErrors r = ray_errors(b.mesh, light, depth);
-    EXPECT_EQ(r.missed, 0);
-    EXPECT_LE(r.max_error, e * (1 + 1e-4) + 2e-5);
-    // The mesher's own measure agrees with the rays (up to float positions).
-    EXPECT_NEAR(b.report.max_error_reached, r.max_error, 1e-4);
-    EXPECT_LE(b.report.max_error_reached, e);
-    EXPECT_LT(b.report.triangles, static_volume_counts(light.type, 97, 81).triangles);
-  }
+  for (const double e : {0.5, 0.05, 0.005})
+    for (const Tessellation t : {Tessellation::quadtree, Tessellation::collapse}) {
+      SCOPED_TRACE(e);
+      SCOPED_TRACE(t == Tessellation::collapse ? "collapse" : "quadtree");
+      const Built b = build(light, depth, e, Refinement::max_error, t);
+      expect_valid_volume(b.mesh);
+      const RayErrors r = ray_errors(b.mesh, light, depth);
+      EXPECT_EQ(r.missed, 0);
+      EXPECT_LE(r.max_error, e * (1 + 1e-4) + 2e-5);
+      // The mesher's own measure agrees with the rays (up to float positions).
+      EXPECT_NEAR(b.report.max_error_reached, r.max_error, 1e-4);
+      EXPECT_LE(b.report.max_error_reached, e);
+      EXPECT_LT(b.report.triangles, static_volume_counts(light.type, 97, 81).triangles);
+    }
 }
 
 TEST(Adaptive, BoundHoldsAtEveryTexelSpotWindowAndLinear) {
@@ -76,15 +82,17 @@ TEST(Adaptive, BoundHoldsAtEveryTexelSpotWindowAndLinear) {
     const Light light = light_from_json(spot_json(enc));
     const DepthImage depth =
         std::string(enc) == "window" ? window_scene(65, 65) : adaptive_scene(65, 65, 8.0);
-    for (const double e : {0.2, 0.01}) {
-      SCOPED_TRACE(e);
-      const Built b = build(light, depth, e);
-      expect_valid_volume(b.mesh);
-      const RayErrors r = ray_errors(b.mesh, light, depth);
-      EXPECT_EQ(r.missed, 0);
-      EXPECT_LE(r.max_error, e * (1 + 1e-4) + 5e-5);
-      EXPECT_LE(b.report.max_error_reached, e);
-    }
+    for (const double e : {0.2, 0.01})
+      for (const Tessellation t : {Tessellation::quadtree, Tessellation::collapse}) {
+        SCOPED_TRACE(e);
+        SCOPED_TRACE(t == Tessellation::collapse ? "collapse" : "quadtree");
+        const Built b = build(light, depth, e, Refinement::max_error, t);
+        expect_valid_volume(b.mesh);
+        const RayErrors r = ray_errors(b.mesh, light, depth);
+        EXPECT_EQ(r.missed, 0);
+        EXPECT_LE(r.max_error, e * (1 + 1e-4) + 5e-5);
+        EXPECT_LE(b.report.max_error_reached, e);
+      }
   }
 }
 
@@ -134,6 +142,7 @@ TEST(Adaptive, ZeroBoundOnRoughMapIsTheStaticGrid) {
   });
   AdaptiveOptions o;
   o.max_error = 0;
+  o.tessellation = Tessellation::quadtree;
   Result<Mesh> a = build_adaptive_volume(light, depth, {}, o, "rough");
   ASSERT_TRUE(a.ok());
   const VolumeCounts s = static_volume_counts(light.type, 23, 14);

@@ -307,7 +307,7 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
                            const CollapseOptions& options, CollapseReport* report) {
   const auto start = std::chrono::steady_clock::now();
   LV_CHECK(grid.width == texels.width() && grid.height == texels.height());
-  LV_CHECK(bound > 0);
+  LV_CHECK(bound >= 0);
   if (grid.num_triangles() == 0) return grid;
   Collapser collapser(texels, grid, bound, options);
   CollapseReport r = collapser.run();

@@ -7,6 +7,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/light/texel.h>
+#include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/closing.h>
 
@@ -94,12 +95,24 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
       Unprojector(light, depth.width, depth.height, 0, volume.space).standard_winding();
   const double bound =
       options.refinement == Refinement::max_error ? options.max_error : options.threshold;
-  const AdaptiveGrid grid = pyramid.tessellate(bound, standard);
+  AdaptiveGrid grid = pyramid.tessellate(bound, standard);
   r.balance_seconds = grid.balance_seconds;
   r.emit_seconds = grid.emit_seconds;
-  r.grid_triangles = grid.num_triangles();
+  r.quadtree_triangles = grid.num_triangles();
   r.leaves = grid.leaves;
   r.fixup_rounds = grid.fixup_rounds;
+  if (options.refinement == Refinement::max_error &&
+      options.tessellation == Tessellation::collapse) {
+    // The closing follows whatever border the grid keeps: no side is locked.
+    CollapseReport c;
+    grid = collapse_grid(pyramid.texels(), grid, bound, {}, &c);
+    r.collapses = c.collapses;
+    r.collapse_seconds = c.seconds;
+  }
+  r.grid_triangles = grid.num_triangles();
+  const GridQuality quality = grid_quality(grid);
+  r.min_angle_degrees = quality.min_angle_degrees;
+  r.min_area = quality.min_area;
   if (options.measure) {
     const auto m = std::chrono::steady_clock::now();
     r.max_error_reached = pyramid.measure(grid);

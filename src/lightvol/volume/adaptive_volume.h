@@ -15,8 +15,14 @@
 
 namespace lightvol {
 
+// How a max_error grid is triangulated: the restricted quadtree of RefinementPyramid, or that
+// quadtree coarsened by exact-verified collapses (collapse_grid.h; the default). Both meet the
+// bound at every texel; Refinement::laplacian has no bound to verify and always uses the quadtree.
+enum class Tessellation { quadtree, collapse };
+
 struct AdaptiveOptions {
   Refinement refinement = Refinement::max_error;
+  Tessellation tessellation = Tessellation::collapse;
   double max_error = 0.001;  // world units, for Refinement::max_error (> 0)
   double threshold = 0.01;   // |Laplacian of window depth|, for Refinement::laplacian (≥ 0)
   bool measure = false;      // also measure the largest error reached over all texels
@@ -27,9 +33,14 @@ struct AdaptiveReport {
   std::uint64_t vertices = 0, triangles = 0;  // of the whole volume, as written
   std::uint64_t grid_triangles = 0, leaves = 0;
   int fixup_rounds = 0;
+  std::uint64_t quadtree_triangles = 0;  // of the grid(s) before the collapses (= grid_triangles
+                                         // with Tessellation::quadtree)
+  std::uint64_t collapses = 0;
   double max_error_reached = -1;  // world units; −1 when not measured
-  double pyramid_seconds = 0, balance_seconds = 0, emit_seconds = 0, measure_seconds = 0,
-         assemble_seconds = 0;
+  double min_angle_degrees = 0;   // the grid triangles' smallest angle and area, in texel space
+  double min_area = 0;
+  double pyramid_seconds = 0, balance_seconds = 0, emit_seconds = 0, collapse_seconds = 0,
+         measure_seconds = 0, assemble_seconds = 0;
 };
 
 // Vertex and triangle counts of the volume assemble_adaptive_volume makes from `grid`.

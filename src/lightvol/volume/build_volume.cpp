@@ -11,7 +11,7 @@ Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
   LV_CHECK(maps.omni == (light.type == LightType::omni));
   VolumeOptions volume;
   volume.space = options.space;
-  if (options.tessellation == Tessellation::adaptive)
+  if (options.grid == VolumeGrid::adaptive)
     return maps.omni
                ? build_adaptive_omni_volume(light, maps.cube, volume, options.adaptive, report)
                : build_adaptive_volume(light, maps.image, volume, options.adaptive, maps.source,

@@ -11,15 +11,16 @@
 
 namespace lightvol {
 
-enum class Tessellation {
+enum class VolumeGrid {
   static_grid,  // one vertex per texel (build_static_volume, build_omni_volume)
-  adaptive,     // a quadtree under a bound (build_adaptive_volume, build_adaptive_omni_volume)
+  adaptive,     // a tessellation under a bound (build_adaptive_volume, build_adaptive_omni_volume;
+                // AdaptiveOptions::tessellation chooses collapse or quadtree)
 };
 
 struct BuildVolumeOptions {
   Space space = Space::world;  // frame of the output: world, or the light's eye space
-  Tessellation tessellation = Tessellation::static_grid;
-  AdaptiveOptions adaptive;  // with Tessellation::adaptive: the criterion and its bound
+  VolumeGrid grid = VolumeGrid::static_grid;
+  AdaptiveOptions adaptive;  // with VolumeGrid::adaptive: the criterion, its bound, the tessellation
 };
 
 // The closed light volume of `light` over `maps` (read_shadow_maps): closed, edge-manifold,

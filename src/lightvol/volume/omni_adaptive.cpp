@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <iterator>
@@ -9,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
@@ -78,14 +80,14 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   if (!refinement) return refinement.error();
   const double bound =
       options.refinement == Refinement::max_error ? options.max_error : options.threshold;
-  return refinement->build(bound, options.measure, report, detail);
+  return refinement->build(bound, options.measure, report, detail, options.tessellation);
 }
 
 // Long (over 80 lines) on purpose: the six faces' tessellation rounds (seam vertices forced across
 // faces until no face adds any) and the assembly share the per-face state; split, it would pass
 // that state around without making a step readable on its own.
 Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
-                           OmniAdaptiveDetail* detail) const {
+                           OmniAdaptiveDetail* detail, Tessellation tessellation) const {
   const CubeFaces& cube = *cube_;
   const std::vector<RefinementPyramid>& pyramids = pyramids_;
   const std::vector<Unprojector>& faces = faces_;
@@ -129,9 +131,29 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   for (const AdaptiveGrid& g : grids) {
     r.balance_seconds += g.balance_seconds;
     r.emit_seconds += g.emit_seconds;
-    r.grid_triangles += g.num_triangles();
+    r.quadtree_triangles += g.num_triangles();
     r.leaves += g.leaves;
     r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
+  }
+  if (pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse) {
+    // Borders locked: the seams keep the vertices both of their faces agreed on.
+    const auto collapse_start = std::chrono::steady_clock::now();
+    CollapseOptions locked;
+    for (bool& side : locked.locked) side = true;
+    std::array<CollapseReport, kOmniFaces> reports;
+    tbb::parallel_for(0, kOmniFaces, [&](int f) {
+      grids[f] = collapse_grid(pyramids[f].texels(), grids[f], bound, locked, &reports[f]);
+    });
+    for (const CollapseReport& c : reports) r.collapses += c.collapses;
+    r.collapse_seconds = seconds_since(collapse_start);
+  }
+  r.min_angle_degrees = 180;
+  r.min_area = std::numeric_limits<double>::infinity();
+  for (const AdaptiveGrid& g : grids) {
+    r.grid_triangles += g.num_triangles();
+    const GridQuality quality = grid_quality(g);
+    r.min_angle_degrees = std::min(r.min_angle_degrees, quality.min_angle_degrees);
+    r.min_area = std::min(r.min_area, quality.min_area);
   }
   if (measure) {
     const auto m = std::chrono::steady_clock::now();

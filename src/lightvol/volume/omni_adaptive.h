@@ -39,8 +39,11 @@ class OmniRefinement {
 
   // The adaptive omni volume at `bound` (max_error: world units; laplacian: the threshold T).
   // `report` and `detail` as for build_adaptive_omni_volume (report's pyramid_seconds: seconds()).
+  // With Tessellation::collapse (max_error only), each face's grid is coarsened after the seams
+  // agree, with its four borders locked: both faces of a seam keep the same border vertices.
   Mesh build(double bound, bool measure, AdaptiveReport* report = nullptr,
-             OmniAdaptiveDetail* detail = nullptr) const;
+             OmniAdaptiveDetail* detail = nullptr,
+             Tessellation tessellation = Tessellation::collapse) const;
 
  private:
   OmniRefinement(const Light& light, const CubeFaces& cube) : light_(light), cube_(&cube) {}

@@ -2,6 +2,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/core/stages.h>
+#include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/volume_stats.h>
 
@@ -27,23 +28,35 @@ Result<VolumeStats> VolumeStats::create(const Light& light, const ShadowMaps& ma
   return stats;
 }
 
-BoundStats VolumeStats::at(double max_error) const {
+BoundStats VolumeStats::at(double max_error, Tessellation tessellation) const {
   BoundStats r;
+  r.tessellation = tessellation;
   r.max_error = max_error;
   if (omni_) {
     AdaptiveReport report;
-    omni_->build(max_error, true, &report, &r.omni);
+    omni_->build(max_error, true, &report, &r.omni, tessellation);
     r.triangles = report.triangles;
     r.vertices = report.vertices;
     r.leaves = report.leaves;
     r.fixup_rounds = report.fixup_rounds;
     r.max_error_reached = report.max_error_reached;
+    r.min_angle_degrees = report.min_angle_degrees;
+    r.min_area = report.min_area;
+    r.collapse_seconds = report.collapse_seconds;
     r.balance_seconds = report.balance_seconds;
     r.emit_seconds = report.emit_seconds;
     r.measure_seconds = report.measure_seconds;
     return r;
   }
-  const AdaptiveGrid grid = pyramid_->tessellate(max_error, standard_);
+  AdaptiveGrid grid = pyramid_->tessellate(max_error, standard_);
+  if (tessellation == Tessellation::collapse) {
+    CollapseReport collapse;
+    grid = collapse_grid(pyramid_->texels(), grid, max_error, {}, &collapse);
+    r.collapse_seconds = collapse.seconds;
+  }
+  const GridQuality quality = grid_quality(grid);
+  r.min_angle_degrees = quality.min_angle_degrees;
+  r.min_area = quality.min_area;
   const VolumeCounts counts = adaptive_volume_counts(type_, grid);
   r.triangles = counts.triangles;
   r.vertices = counts.vertices;
