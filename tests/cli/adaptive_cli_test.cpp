@@ -100,6 +100,23 @@ TEST(AdaptiveCli, StatsCountsAreWhatBuildWrites) {
   }
 }
 
+TEST(AdaptiveCli, BothTessellationsPassCheckWithTheLight) {
+  Workspace w;
+  for (const std::string& light : {w.spot, w.directional})
+    for (const std::string t : {"collapse", "quadtree"}) {
+      SCOPED_TRACE(light + " " + t);
+      const std::string out = w.dir.file("v.ply");
+      const test::CommandResult b =
+          test::run_lightvol("build " + q(w.depth) + " --light " + q(light) +
+                             " --adaptive --max-error 0.001 --tessellation " + t + " --out " +
+                             q(out) + " --quiet --no-check");
+      ASSERT_EQ(b.exit_code, 0) << b.err;
+      const test::CommandResult check =
+          test::run_lightvol("check " + q(out) + " --light " + q(light));
+      EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+    }
+}
+
 TEST(AdaptiveCli, CsvAndTableFormats) {
   Workspace w;
   const test::CommandResult csv = test::run_lightvol("stats " + q(w.depth) + " --light " +

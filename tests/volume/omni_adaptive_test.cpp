@@ -7,6 +7,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
@@ -90,27 +91,54 @@ TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
   const Light light = scene_light();
   for (int w : {16, 37}) {
     const CubeFaces cube = test::omni_scene(w);
-    for (double bound : {0.002, 0.05, 0.5}) {
-      SCOPED_TRACE("W = " + std::to_string(w) + ", max error " + std::to_string(bound));
-      AdaptiveOptions options;
-      options.max_error = bound;
-      options.measure = true;
-      AdaptiveReport report;
-      OmniAdaptiveDetail detail;
-      Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options, &report, &detail);
-      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
-      EXPECT_TRUE(is_closed_and_oriented(*mesh));
-      EXPECT_TRUE(has_no_degenerate_triangles(*mesh));
-      EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
-      EXPECT_LE(report.max_error_reached, bound);
-      EXPECT_EQ(report.triangles, mesh->num_triangles());
-      EXPECT_EQ(mesh->num_triangles(), report.grid_triangles + detail.seam_triangles + 8);
-      EXPECT_LE(mesh->num_triangles(), 12u * w * w - 4);  // never more than the static volume
-      if (w == 16) {
-        EXPECT_LE(largest_texel_error(*mesh, light, cube), bound * (1 + 1e-4) + 1e-5);
+    for (double bound : {0.002, 0.05, 0.5})
+      for (const Tessellation t : {Tessellation::collapse, Tessellation::quadtree}) {
+        SCOPED_TRACE("W = " + std::to_string(w) + ", max error " + std::to_string(bound) +
+                     (t == Tessellation::collapse ? ", collapse" : ", quadtree"));
+        AdaptiveOptions options;
+        options.max_error = bound;
+        options.tessellation = t;
+        options.measure = true;
+        AdaptiveReport report;
+        OmniAdaptiveDetail detail;
+        Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options, &report, &detail);
+        ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+        EXPECT_TRUE(is_closed_and_oriented(*mesh));
+        EXPECT_TRUE(has_no_degenerate_triangles(*mesh));
+        EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+        EXPECT_LE(report.max_error_reached, bound);
+        EXPECT_EQ(report.triangles, mesh->num_triangles());
+        EXPECT_EQ(mesh->num_triangles(), report.grid_triangles + detail.seam_triangles + 8);
+        EXPECT_LE(mesh->num_triangles(), 12u * w * w - 4);  // never more than the static volume
+        if (w == 16) {
+          EXPECT_LE(largest_texel_error(*mesh, light, cube), bound * (1 + 1e-4) + 1e-5);
+        }
       }
-    }
   }
+}
+
+// The faces are coarsened in parallel (their borders locked): the bytes do not depend on the
+// thread count, and the seams still join the same border vertices.
+TEST(OmniAdaptive, CollapseIsDeterministicAndSmallerThanTheQuadtree) {
+  const Light light = scene_light();
+  const CubeFaces cube = test::omni_scene(40);
+  AdaptiveOptions options;
+  options.max_error = 0.01;
+  Result<Mesh> many = build_adaptive_omni_volume(light, cube, {}, options);
+  ASSERT_TRUE(many.ok());
+  Result<Mesh> one = Error{""};
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = build_adaptive_omni_volume(light, cube, {}, options);
+  }
+  ASSERT_TRUE(one.ok());
+  EXPECT_EQ(one->positions, many->positions);
+  EXPECT_EQ(one->indices, many->indices);
+  options.tessellation = Tessellation::quadtree;
+  Result<Mesh> quad = build_adaptive_omni_volume(light, cube, {}, options);
+  ASSERT_TRUE(quad.ok());
+  EXPECT_LT(many->num_triangles(), quad->num_triangles());
+  EXPECT_TRUE(is_closed_and_oriented(*many));
 }
 
 TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
