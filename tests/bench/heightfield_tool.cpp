@@ -11,7 +11,11 @@
 //       "triangles N max_error E uncovered U": for every texel, the triangle over it is found by
 //       rasterizing each triangle's lattice points, its height interpolated linearly and compared
 //       with the map. The closing of a volume (vertices on the near plane, z = 0) is dropped first.
-//       Nothing here knows how either mesh was made.
+//       Nothing here knows how either mesh was made. Also prints "min_angle A": the triangles'
+//       smallest angle in degrees, in texel space.
+//   heightfield_tool from IN N SCALE OUT.exr OUT.f32
+//       a real N×N depth image (e.g. a shadow map of `lightvol shadowmap` with linear depth) as a
+//       height field: every value times SCALE (e.g. 1/far, so that values lie in [0, 1]).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -107,10 +111,17 @@ int measure(const std::string& map_path, int n, const std::string& mesh_path) {
     return 2;
   }
   std::vector<float> err(map.size(), -1.0f);
+  double min_angle = 180;
   for (const Tri& t : tris) {
     const double area2 =
         (t.x[1] - t.x[0]) * (t.y[2] - t.y[0]) - (t.x[2] - t.x[0]) * (t.y[1] - t.y[0]);
     if (area2 == 0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      const double ux = t.x[a] - t.x[c], uy = t.y[a] - t.y[c], vx = t.x[b] - t.x[c],
+                   vy = t.y[b] - t.y[c];
+      min_angle = std::min(min_angle, std::atan2(std::abs(area2), ux * vx + uy * vy) * 180 / M_PI);
+    }
     const int x0 = std::max(0, static_cast<int>(std::floor(std::min({t.x[0], t.x[1], t.x[2]}))));
     const int x1 = std::min(n - 1, static_cast<int>(std::ceil(std::max({t.x[0], t.x[1], t.x[2]}))));
     const int y0 = std::max(0, static_cast<int>(std::floor(std::min({t.y[0], t.y[1], t.y[2]}))));
@@ -133,7 +144,8 @@ int measure(const std::string& map_path, int n, const std::string& mesh_path) {
     if (e < 0) ++uncovered;
     worst = std::max(worst, static_cast<double>(e));
   }
-  std::printf("triangles %zu max_error %.6g uncovered %ld\n", tris.size(), worst, uncovered);
+  std::printf("triangles %zu max_error %.6g uncovered %ld min_angle %.4g\n", tris.size(), worst,
+              uncovered, min_angle);
   return 0;
 }
 
@@ -152,9 +164,29 @@ int main(int argc, char** argv) {
                static_cast<std::streamsize>(4 * d.values.size()));
     return 0;
   }
+  if (argc == 7 && std::string(argv[1]) == "from") {
+    const int n = std::atoi(argv[3]);
+    const double scale = std::atof(argv[4]);
+    lightvol::Result<lightvol::DepthImage> d = lightvol::read_depth_image(argv[2], {});
+    if (!d || d->width != n || d->height != n) {
+      std::fprintf(stderr, "heightfield_tool: %s: not a readable %dx%d depth image\n", argv[2], n,
+                   n);
+      return 2;
+    }
+    for (float& v : d->values) v = static_cast<float>(v * scale);
+    if (const lightvol::Status s = lightvol::write_depth_image(argv[5], *d); !s) {
+      std::fprintf(stderr, "heightfield_tool: %s\n", s.error().message.c_str());
+      return 2;
+    }
+    std::ofstream(argv[6], std::ios::binary)
+        .write(reinterpret_cast<const char*>(d->values.data()),
+               static_cast<std::streamsize>(4 * d->values.size()));
+    return 0;
+  }
   if (argc == 5 && std::string(argv[1]) == "error")
     return measure(argv[2], std::atoi(argv[3]), argv[4]);
   std::fprintf(stderr,
-               "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt}\n");
+               "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt} | "
+               "from IN N SCALE OUT.exr OUT.f32\n");
   return 2;
 }

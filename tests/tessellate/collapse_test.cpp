@@ -185,6 +185,7 @@ TEST(Collapse, BoundHoldsAtEveryTexelAndTheGridStaysConforming) {
           EXPECT_EQ(m.uncovered, 0);
           EXPECT_LE(m.max_error, e * (1 + 1e-9));
           EXPECT_LE(g.num_triangles(), quad.num_triangles());
+          EXPECT_GE(grid_quality(g).min_height, CollapseOptions{}.min_height);
           // Winding kept: the first triangle turns the same way as the quadtree's.
           const auto turn = [](const AdaptiveGrid& a) {
             return cross(texel(a, a.indices[0]), texel(a, a.indices[1]), texel(a, a.indices[2])) >
@@ -274,6 +275,7 @@ TEST(Collapse, QualityReportsTheSmallestAngleAndArea) {
   const GridQuality q = grid_quality(g);
   EXPECT_NEAR(q.min_angle_degrees, std::atan2(1.0, 10.0) * 180 / M_PI, 1e-9);
   EXPECT_DOUBLE_EQ(q.min_area, 5.0);
+  EXPECT_NEAR(q.min_height, 10.0 / std::hypot(10.0, 1.0), 1e-12);
 }
 
 }  // namespace

@@ -242,6 +242,17 @@ class Collapser {
           ok = false;
           break;
         }
+        // Height over the longest edge: |a| / L ≥ h ⇔ a² ≥ h²·L².
+        double longest2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double dx = p[(c + 1) % 3].x - p[c].x, dy = p[(c + 1) % 3].y - p[c].y;
+          longest2 = std::max(longest2, dx * dx + dy * dy);
+        }
+        const double ad = static_cast<double>(a);
+        if (ad * ad < options_.min_height * options_.min_height * longest2) {
+          ok = false;
+          break;
+        }
       }
       if (!ok) continue;
       ++r->attempts;
@@ -320,7 +331,8 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
 }
 
 GridQuality grid_quality(const AdaptiveGrid& grid) {
-  GridQuality q{180.0, std::numeric_limits<double>::infinity()};
+  GridQuality q{180.0, std::numeric_limits<double>::infinity(),
+                std::numeric_limits<double>::infinity()};
   const std::uint32_t w = static_cast<std::uint32_t>(grid.width);
   for (std::size_t k = 0; k < grid.num_triangles(); ++k) {
     double x[3], y[3];
@@ -330,6 +342,10 @@ GridQuality grid_quality(const AdaptiveGrid& grid) {
     }
     const double area2 = std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
     q.min_area = std::min(q.min_area, 0.5 * area2);
+    double longest = 0;
+    for (int c = 0; c < 3; ++c)
+      longest = std::max(longest, std::hypot(x[(c + 1) % 3] - x[c], y[(c + 1) % 3] - y[c]));
+    q.min_height = std::min(q.min_height, area2 / longest);
     for (int c = 0; c < 3; ++c) {
       const int a = (c + 1) % 3, b = (c + 2) % 3;
       const double ux = x[a] - x[c], uy = y[a] - y[c], vx = x[b] - x[c], vy = y[b] - y[c];

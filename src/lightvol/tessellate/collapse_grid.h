@@ -27,6 +27,12 @@ struct CollapseOptions {
   // A vertex whose star covers more texels (area in texel units²) is kept: bounds the cost of
   // one attempt (every attempt evaluates the texels of the whole star).
   double max_star_area = 4096;
+  // No new triangle narrower than this (texel units) across its longest edge: its height there,
+  // twice its area over that edge's length. A lattice triangle has area ≥ 1/2 but can be as thin
+  // as 1/L for a longest edge L (nearly collinear corners); after the volume's positions are
+  // rounded to float32 such a sliver could turn over. Thin strips along a step (height ≥ 1 texel)
+  // stay allowed: they are what make the count small.
+  double min_height = 0.25;
 };
 
 struct CollapseReport {
@@ -47,6 +53,7 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
 struct GridQuality {
   double min_angle_degrees = 0;
   double min_area = 0;
+  double min_height = 0;  // twice the area over the longest edge
 };
 GridQuality grid_quality(const AdaptiveGrid& grid);
 

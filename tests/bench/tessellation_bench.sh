@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# lightvol's adaptive tessellations (collapse, the default, and quadtree) against Mapbox Martini
+# (RTIN, @mapbox/martini 0.2.0) and Delatin (greedy Delaunay insertion, delatin 0.2.0, the JS port of
+# hmm) on height fields: the synthetic shadow maps (floor, boxes, one-texel bars, a sphere) and real
+# spot shadow maps of Sponza and Sibenik rendered with `lightvol shadowmap` (linear depth divided by
+# far, so values lie in [0, 1]; sizes 2^k + 1 because Martini needs them). lightvol builds with a
+# directional light, near 0, far 1, linear depth: world units along a texel ray are height units, as
+# the other meshers' are. One shared checker (heightfield_tool error) measures every mesh at every
+# texel: triangles (the volume's closing dropped), max error reached, smallest angle (texel space).
+# Time and peak memory: the whole process (/usr/bin/time: wall, user+sys CPU, max RSS) — lightvol
+# build (read EXR, tessellate, check, write PLY) and node (read map, mesh, write the dump). Martini
+# is rerun at halved thresholds until its measured error meets E; only that row is printed.
+# Usage: tests/bench/tessellation_bench.sh BUILD_DIR [SIZES] [E] [REAL_SIZES] [SCENES_DIR]
+#   BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON (heightfield_tool); SIZES "1025 4097";
+#   E 0.001; REAL_SIZES "1025"; SCENES_DIR with sponza/sponza.obj and sibenik/sibenik.obj.
+# The npm packages go into a scratch folder under /tmp (TIN_DIR), never into the source tree.
+# One run per cell (no repetition): on a shared machine, compare CPU time rather than wall time.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+build=$(realpath "${1:?usage: tessellation_bench.sh BUILD_DIR [SIZES] [E] [REAL_SIZES] [SCENES_DIR]}")
+sizes=${2:-"1025 4097"}
+bound=${3:-0.001}
+real_sizes=${4:-"1025"}
+scenes=${5:-$here/../../../shared/scenes}
+scratch=${TIN_DIR:-/tmp/lightvol-martini}
+mkdir -p "$scratch"
+if [ ! -d "$scratch/node_modules/@mapbox/martini" ] || [ ! -d "$scratch/node_modules/delatin" ]; then
+  (cd "$scratch" && npm install --silent --no-audit --no-fund @mapbox/martini@0.2.0 delatin@0.2.0 >/dev/null)
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+tool="$build/tests/bench/heightfield_tool"
+lv="$build/lightvol"
+
+# timed CMD...: runs it under /usr/bin/time; sets wall, cpu (user+sys), mem (MB).
+timed() {
+  /usr/bin/time -f '%e %U %S %M' -o "$work/time" "$@"
+  read -r wall user sys kb < "$work/time"
+  cpu=$(awk -v u="$user" -v s="$sys" 'BEGIN { printf "%.2f", u + s }')
+  mem=$(awk -v k="$kb" 'BEGIN { printf "%.0f", k / 1024 }')
+}
+
+row() {  # map mesher threshold mesh
+  read -r _ tris _ reached _ uncovered _ angle < <("$tool" error "$work/map.f32" "$n" "$4")
+  printf '| %s | %s | %s | %s | %s | %s | %s s | %s s | %s MB | %s° |\n' "$1" "$2" "$3" "$tris" \
+    "$reached" "$uncovered" "$wall" "$cpu" "$mem" "$angle"
+}
+
+bench_map() {  # label: $work/map.exr and $work/map.f32 of size $n
+  local label=$1
+  cat > "$work/light.json" <<JSON
+{"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],
+ "ortho": [-0.5, $((n - 1)).5, -$((n - 1)).5, 0.5], "near": 0, "far": 1, "depth": "linear"}
+JSON
+  for t in collapse quadtree; do
+    timed "$lv" build "$work/map.exr" --light "$work/light.json" --adaptive --max-error "$bound" \
+      --tessellation $t --out "$work/v.ply" --quiet
+    row "$label" "lightvol $t" "$bound" "$work/v.ply"
+  done
+  local th=$bound
+  for _ in 1 2 3 4 5 6 7; do
+    timed node "$here/tin_bench.mjs" "$scratch" martini "$work/map.f32" "$n" "$work/m" "$th" > /dev/null
+    read -r _ _ _ reached _ < <("$tool" error "$work/map.f32" "$n" "$work/m0.mrt")
+    if awk -v r="$reached" -v e="$bound" 'BEGIN { exit !(r <= e) }'; then break; fi
+    th=$(awk -v t="$th" 'BEGIN { printf "%.9g", t / 2 }')
+  done
+  row "$label" "Martini" "$th" "$work/m0.mrt"
+  timed node "$here/tin_bench.mjs" "$scratch" delatin "$work/map.f32" "$n" "$work/d" "$bound" > /dev/null
+  row "$label" "Delatin" "$bound" "$work/d0.mrt"
+}
+
+echo "E = $bound; $(nproc) cores; $(date -u +%Y-%m-%d)"
+printf '| map | mesher | threshold | triangles | max error reached | uncovered texels | wall | CPU | peak memory | smallest angle |\n'
+printf '|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n'
+for n in $sizes; do
+  "$tool" map "$n" "$work/map.exr" "$work/map.f32"
+  bench_map "synthetic $n²"
+done
+for scene in sponza sibenik; do
+  obj="$scenes/$scene/$scene.obj"
+  [ -f "$obj" ] || { echo "(no $obj: $scene skipped)" >&2; continue; }
+  # Sponza: above the atrium looking down through it (sponza_bench.sh's light, 90°); Sibenik (its
+  # units are about 1/30 m): inside the nave looking down. Heights: linear depth / far.
+  case $scene in
+    sponza) light='"position": [0, 14, -1], "direction": [0, -14, 4], "near": 0.5, "far": 40'
+            far=40 ;;
+    sibenik) light='"position": [150, 400, 0], "direction": [0.3, -1, 0.0001], "near": 1, "far": 800'
+             far=800 ;;
+  esac
+  cat > "$work/spot.json" <<JSON
+{ "type": "spot", $light, "up": [1, 0, 0], "fov_y_deg": 90, "depth": "linear" }
+JSON
+  for n in $real_sizes; do
+    "$lv" shadowmap "$obj" --light "$work/spot.json" --size "$n" --out "$work/shadow.exr" --quiet
+    "$tool" from "$work/shadow.exr" "$n" "$(awk -v f=$far 'BEGIN { print 1 / f }')" "$work/map.exr" "$work/map.f32"
+    bench_map "$scene spot $n² (depth/far)"
+  done
+done
