@@ -7,6 +7,8 @@
 #include <numbers>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/collapse_grid.h>
 
@@ -130,29 +132,67 @@ class Collapser {
     vertex_alive_.assign(nv, 1);
   }
 
+  // Sweeps. Each sweep visits its vertices in texel order, in horizontal stripes of kStripe rows:
+  // first the even stripes in parallel, then the odd ones, each stripe in order, touching only
+  // vertices whose whole star lies inside the stripe (so two stripes of one phase, a stripe
+  // apart, share no vertex and no triangle); then, sequentially, the vertices whose star crosses a
+  // stripe's edge. The schedule depends on the grid alone, never on the threads: same bytes.
   CollapseReport run() {
     CollapseReport r;
     const std::size_t nv = pt_.size();
     std::vector<std::uint32_t> todo(nv);
     for (std::size_t v = 0; v < nv; ++v) todo[v] = static_cast<std::uint32_t>(v);
-    std::vector<std::uint8_t> queued(nv, 0);
+    queued_.assign(nv, 0);
+    const int stripes = (grid_.height + kStripe - 1) / kStripe;
+    struct Work {
+      Scratch scratch;
+      CollapseReport report;
+      std::vector<std::uint32_t> next, crossing;
+      std::size_t begin = 0, end = 0;  // range of todo
+    };
+    std::vector<Work> work(static_cast<std::size_t>(stripes));
     std::vector<std::uint32_t> next;
     while (!todo.empty() && r.rounds < options_.max_rounds) {
       ++r.rounds;
-      next.clear();
-      for (const std::uint32_t u : todo) {
-        // A vertex whose star changed in this sweep waits for the next one: collapses spread
-        // evenly (along a step, every other vertex goes first) instead of growing one star
-        // texel by texel, which would scan a chain of n vertices n²/2 times.
-        if (!vertex_alive_[u] || queued[u]) continue;
-        if (try_collapse(u, &r)) {
-          for (const std::uint32_t n : touched_)
-            if (!queued[n]) queued[n] = 1, next.push_back(n);
-        }
+      // todo is ascending: vertex order is texel order, so each stripe is one range.
+      std::size_t at = 0;
+      for (int s = 0; s < stripes; ++s) {
+        Work& wk = work[static_cast<std::size_t>(s)];
+        wk.next.clear();
+        wk.crossing.clear();
+        wk.begin = at;
+        while (at < todo.size() && pt_[todo[at]].y < (s + 1) * kStripe) ++at;
+        wk.end = at;
+      }
+      for (int phase = 0; phase < 2; ++phase) {
+        tbb::parallel_for(0, (stripes + 1 - phase) / 2, [&](int k) {
+          const int s = 2 * k + phase;
+          Work& wk = work[static_cast<std::size_t>(s)];
+          const int y0 = s * kStripe, y1 = y0 + kStripe;
+          for (std::size_t i = wk.begin; i < wk.end; ++i) {
+            const std::uint32_t u = todo[i];
+            if (!vertex_alive_[u] || queued_[u]) continue;
+            if (!star_within_rows(u, y0, y1)) {
+              wk.crossing.push_back(u);
+              continue;
+            }
+            visit(u, &wk.scratch, &wk.report, &wk.next);
+          }
+        });
+      }
+      Scratch scratch;
+      for (Work& wk : work) {
+        for (const std::uint32_t u : wk.crossing)
+          if (vertex_alive_[u] && !queued_[u]) visit(u, &scratch, &r, &next);
+        next.insert(next.end(), wk.next.begin(), wk.next.end());
+        r.attempts += wk.report.attempts;
+        r.collapses += wk.report.collapses;
+        wk.report = {};
       }
       std::sort(next.begin(), next.end());
-      for (const std::uint32_t n : next) queued[n] = 0;
+      for (const std::uint32_t n : next) queued_[n] = 0;
       todo.swap(next);
+      next.clear();
     }
     return r;
   }
@@ -196,9 +236,35 @@ class Collapser {
                         : triangle_within<false>(t_, a, b, c, bound_);
   }
 
-  // Tries to merge u into one of its neighbours, the nearest first; on success `touched_` holds
+  static constexpr int kStripe = 64;
+
+  struct Scratch {
+    std::vector<std::uint32_t> candidates, touched;
+  };
+
+  bool star_within_rows(std::uint32_t u, int y0, int y1) const {
+    for (const std::uint32_t k : star_[u])
+      for (int c = 0; c < 3; ++c) {
+        const int y = pt_[tri_[k][c]].y;
+        if (y < y0 || y >= y1) return false;
+      }
+    return true;
+  }
+
+  // One attempt on u. A vertex whose star changed in this sweep waits for the next one (queued):
+  // collapses spread evenly (along a step, every other vertex goes first) instead of growing one
+  // star texel by texel, which would scan a chain of n vertices n²/2 times.
+  void visit(std::uint32_t u, Scratch* scratch, CollapseReport* r,
+             std::vector<std::uint32_t>* next) {
+    if (!try_collapse(u, scratch, r)) return;
+    for (const std::uint32_t n : scratch->touched)
+      if (!queued_[n]) queued_[n] = 1, next->push_back(n);
+  }
+
+  // Tries to merge u into one of its neighbours, the nearest first; on success `touched` holds
   // the vertices whose star changed.
-  bool try_collapse(std::uint32_t u, CollapseReport* r) {
+  bool try_collapse(std::uint32_t u, Scratch* scratch, CollapseReport* r) {
+    std::vector<std::uint32_t>& candidates_ = scratch->candidates;
     const std::uint8_t su = sides_[u];
     if (std::popcount(su) >= 2) return false;  // a corner
     int side = -1;
@@ -267,14 +333,15 @@ class Collapser {
         }
       }
       if (!ok) continue;
-      apply(u, v);
+      apply(u, v, &scratch->touched);
       ++r->collapses;
       return true;
     }
     return false;
   }
 
-  void apply(std::uint32_t u, std::uint32_t v) {
+  void apply(std::uint32_t u, std::uint32_t v, std::vector<std::uint32_t>* touched) {
+    std::vector<std::uint32_t>& touched_ = *touched;
     touched_.clear();
     touched_.push_back(v);
     const std::vector<std::uint32_t> star = std::move(star_[u]);
@@ -309,7 +376,7 @@ class Collapser {
   std::vector<std::array<std::uint32_t, 3>> tri_;
   std::vector<std::uint8_t> alive_, vertex_alive_;
   std::vector<std::vector<std::uint32_t>> star_;
-  std::vector<std::uint32_t> candidates_, touched_;
+  std::vector<std::uint8_t> queued_;
 };
 
 }  // namespace
