@@ -20,7 +20,7 @@ enum class VolumeGrid {
 struct BuildVolumeOptions {
   Space space = Space::world;  // frame of the output: world, or the light's eye space
   VolumeGrid grid = VolumeGrid::static_grid;
-  AdaptiveOptions adaptive;  // with VolumeGrid::adaptive: the criterion, its bound, the tessellation
+  AdaptiveOptions adaptive;  // with VolumeGrid::adaptive: criterion, bound, tessellation
 };
 
 // The closed light volume of `light` over `maps` (read_shadow_maps): closed, edge-manifold,

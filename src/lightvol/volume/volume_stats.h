@@ -20,11 +20,11 @@ namespace lightvol {
 // The adaptive volume at one bound and tessellation.
 struct BoundStats {
   Tessellation tessellation = Tessellation::collapse;
-  double max_error = 0;                       // the bound, world units along the texel rays
-  std::uint64_t triangles = 0, vertices = 0;  // of the whole volume, as build_volume writes it
-  std::uint64_t leaves = 0;                   // quadtree leaves (all faces of an omni light)
-  int fixup_rounds = 0;                       // spot, directional: see AdaptiveGrid
-  double max_error_reached = 0;               // the largest error over all texels, world units
+  double max_error = 0;                        // the bound, world units along the texel rays
+  std::uint64_t triangles = 0, vertices = 0;   // of the whole volume, as build_volume writes it
+  std::uint64_t leaves = 0;                    // quadtree leaves (all faces of an omni light)
+  int fixup_rounds = 0;                        // spot, directional: see AdaptiveGrid
+  double max_error_reached = 0;                // the largest error over all texels, world units
   double min_angle_degrees = 0, min_area = 0;  // of the grid triangles, in texel space
   double balance_seconds = 0, emit_seconds = 0, collapse_seconds = 0, measure_seconds = 0;
   OmniAdaptiveDetail omni;  // omni lights: triangles per face and in the seams
