@@ -1,4 +1,5 @@
 // lightvol build: depth image(s) + light description → closed light volume on disk.
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -16,6 +17,7 @@
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
 #include <lightvol/volume/build_volume.h>
+#include <lightvol/volume/static_volume.h>
 
 #include "commands.h"
 #include "progress.h"
@@ -104,7 +106,8 @@ nlohmann::json stage_json(const StageLog& log) {
 // The --report / --json report of a finished build.
 nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
                             const ShadowMaps& maps, const Mesh& mesh,
-                            const AdaptiveReport* adaptive, const StageLog& log) {
+                            const AdaptiveReport* adaptive, const StageLog& log,
+                            const std::vector<std::string>& warnings) {
   const Bounds box = bounding_box(mesh);
   nlohmann::json report = {
       {"inputs", o.depth_paths},
@@ -124,6 +127,7 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
       {"stages", stage_json(log)},
       {"total_seconds", log.total_seconds()},
       {"peak_memory_bytes", peak_memory_bytes()},
+      {"warnings", warnings},
   };
   if (!adaptive) return report;
   const AdaptiveReport& a = *adaptive;
@@ -151,12 +155,33 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
   return report;
 }
 
+// CLI::NonNegativeNumber lets NaN and infinity through (and words its refusal with a 300-digit
+// bound).
+CLI::Validator finite_non_negative() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        std::size_t used = 0;
+        double v = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || !std::isfinite(v) || v < 0)
+          return "expected a finite number >= 0, got '" + text + "'";
+        return {};
+      },
+      "NUMBER>=0");
+}
+
 // Every file a build run writes is written here, and only here: the volume, then the --report
 // JSON, made by `report_of` once the volume is written (it records that step's time). Returns the
 // report, for --json.
 Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& mesh,
                                      const ExportOptions& export_options, Progress& progress,
                                      const std::function<nlohmann::json()>& report_of) {
+  // The volume and the report are committed together once both are written, or neither is.
+  OutputTransaction outputs;
   progress.begin("writing " + o.out_path);
   if (Status s = write_mesh(o.out_path, mesh, export_options); !s) return s.error();
   progress.end();
@@ -165,6 +190,7 @@ Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& m
     if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
       return s.error();
   }
+  if (Status s = outputs.commit(); !s) return s.error();
   return report;
 }
 
@@ -191,12 +217,24 @@ int run_build(const BuildCommandOptions& o) {
   if (!maps) return fail(maps.error().message);
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
 
+  // Warnings go to stderr (unless --quiet) and into the report.
+  std::vector<std::string> warnings;
+  if (const std::string note = omni ? "" : aspect_mismatch(*light, maps->width(), maps->height());
+      !note.empty()) {
+    warnings.push_back(o.depth_paths.front() + ": " + note);
+    if (!o.quiet)
+      std::fprintf(stderr, "lightvol: warning: %s\n", printable(warnings.back()).c_str());
+  }
+
   progress.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
                  (omni ? "omni " : "") + "volume");
   AdaptiveReport adaptive_report;
   Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
+  // A valid light whose volume float32 cannot hold is bad input (exit 2), not an invalid volume.
+  if (Status s = check_representable(*mesh, *light, options.space, o.light_path); !s)
+    return fail(s.error().message);
 
   const Light frame_light = light_in_space(*light, options.space);
   if (!o.no_check) {
@@ -222,7 +260,7 @@ int run_build(const BuildCommandOptions& o) {
   eo.glb.medium_json = *medium;
   Result<nlohmann::json> report = write_outputs(o, *mesh, eo, progress, [&] {
     return build_report(o, *light, *maps, *mesh, adaptive ? &adaptive_report : nullptr,
-                        progress.log());
+                        progress.log(), warnings);
   });
   if (!report) return fail(report.error().message);
 
@@ -285,7 +323,7 @@ void add_build_command(CLI::App& app, Runner* run) {
       "T-junctions; see --tessellation)");
   cmd->add_option("--max-error", o->max_error,
                   "Error bound of --adaptive, in world units along each texel ray")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_non_negative());
   cmd->add_option(
          "--refine", o->refine,
          "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
@@ -293,7 +331,7 @@ void add_build_command(CLI::App& app, Runner* run) {
       ->check(CLI::IsMember({"error", "laplacian"}));
   cmd->add_option("--threshold", o->threshold,
                   "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_non_negative());
   cmd->add_option("--tessellation", o->tessellation,
                   "--adaptive: collapse (default: the quadtree coarsened by collapses verified at "
                   "every texel, far fewer triangles) or quadtree (the paper's restricted quadtree; "

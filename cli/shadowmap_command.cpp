@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
@@ -100,6 +101,7 @@ int run_shadowmap(const ShadowmapOptions& o) {
   progress.end();
 
   progress.begin("writing " + o.out_path);
+  OutputTransaction outputs;  // the faces and the preview appear together, or none does
   Result<std::vector<std::string>> written = write_shadow_maps(o.out_path, rendered->maps);
   if (!written) return fail(written.error().message);
   if (!o.preview_path.empty()) {
@@ -108,6 +110,7 @@ int run_shadowmap(const ShadowmapOptions& o) {
         !s)
       return fail(s.error().message);
   }
+  if (Status s = outputs.commit(); !s) return fail(s.error().message);
   progress.end();
 
   if (!o.quiet) {

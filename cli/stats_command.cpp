@@ -2,6 +2,7 @@
 // (collapse and quadtree, side by side) at several error bounds, with the error actually reached,
 // the smallest angle and area of the grid triangles and the time of each stage. The counts are
 // those `lightvol build --adaptive --max-error E --tessellation T` writes (volume/volume_stats.h).
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -44,7 +45,7 @@ Result<std::vector<double>> parse_bounds(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != item.size() || !(v >= 0))
+    if (used == 0 || used != item.size() || !(v >= 0) || !std::isfinite(v))
       return Error{"--max-error: '" + item + "' is not a non-negative number"};
     out.push_back(v);
   }

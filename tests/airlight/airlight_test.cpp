@@ -220,7 +220,9 @@ TEST(Camera, RejectsBadInputNamingFileAndKey) {
       {"{" + base + R"(, "width": 2.5, "height": 64})",
        "cam.json: key 'width': expected an integer"},
       {"{" + base + R"(, "width": 8, "height": 8, "fov": 3})", "cam.json: key 'fov': unknown key"},
-      {"{" + base + R"(, "width": 8, "height": 8, "near": 1e99999})", "cam.json: not valid JSON"},
+      {"{" + base + R"(, "width": 8, "height": 1e99999})", "cam.json: not valid JSON"},
+      {"{" + base + R"(, "width": 8, "height": 8, "width": 9})",
+       "cam.json: key \"width\" appears twice in one object"},
       {R"({"type": "omni", "position": [0, 0, 0], "near": 1, "far": 2, "width": 8, "height": 8})",
        "cam.json: key 'type': a camera cannot be an omni light"},
   };

@@ -1,9 +1,15 @@
 // `lightvol build` as a user runs it: exit codes, one-line errors, no partial or clobbered files.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <thread>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -31,7 +37,7 @@ struct Workspace {
     const DepthImage d = test::make_depth(
         9, 7, [](int c, int r) { return (c > 2 && c < 6 && r > 1 && r < 5) ? 0.95f : 0.99f; });
     EXPECT_TRUE(write_depth_image(depth, d).ok());
-    light = dir.write("light.json", test::spot_json());
+    light = dir.write("light.json", test::spot_json("window", 9.0 / 7.0));  // square texels
   }
   test::CommandResult build(const std::string& extra) const {
     return test::run_lightvol("build " + q(depth) + " --light " + q(light) + " " + extra);
@@ -111,6 +117,176 @@ TEST(BuildCli, FailureNeverClobbersAnExistingOutput) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("raise --draco-bits"), std::string::npos) << r.err;
   EXPECT_EQ(slurp(out), "an existing good file");
+}
+
+// Before: the volume was renamed into place before the report was tried, so a failing report
+// (a directory, a missing folder) left the new volume over the old one; --report equal to --out
+// left JSON in the .ply.
+TEST(BuildCli, AFailingReportLeavesTheOldVolume) {
+  Workspace w;
+  const std::string out = w.dir.write("keep.ply", "OLD\n");
+  std::filesystem::create_directory(w.dir.file("rdir"));
+  const int before = w.dir.entries();
+  expect_input_error(w.build("--out " + q(out) + " --report " + q(w.dir.file("rdir"))),
+                     "is a directory");
+  expect_input_error(w.build("--out " + q(out) + " --report " + q(w.dir.file("nope/r.json"))),
+                     "does not exist");
+  expect_input_error(w.build("--out " + q(out) + " --report " + q(out)),
+                     "another output of this run");
+  EXPECT_EQ(slurp(out), "OLD\n");
+  EXPECT_EQ(w.dir.entries(), before);  // no temporary left either
+}
+
+// Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
+TEST(BuildCli, InterruptedWriteLeavesNothing) {
+  Workspace w;
+  const std::string big = w.dir.file("big.exr");
+  ASSERT_TRUE(write_depth_image(
+                  big, test::make_depth(
+                           1200, 1200,
+                           [](int c, int r) {
+                             return 0.9f + 0.05f * static_cast<float>((c * 7 + r * 3) % 17) / 17;
+                           }))
+                  .ok());
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const int before = w.dir.entries();
+    const std::string out = w.dir.file("big.ply");
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      ::execl(LIGHTVOL_EXE, LIGHTVOL_EXE, "build", big.c_str(), "--light", w.light.c_str(), "--out",
+              out.c_str(), "--ascii", "--no-check", "--quiet", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Wait until the temporary exists (a hidden file that is not an input), then signal.
+    bool seen = false;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
+    while (!seen && std::chrono::steady_clock::now() < deadline) {
+      for (const auto& e : std::filesystem::directory_iterator(w.dir.path()))
+        if (e.path().filename().string().rfind(".", 0) == 0) seen = true;
+      if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(500));
+    }
+    ASSERT_TRUE(seen) << "no temporary file appeared";
+    ::kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << sig << ": exited " << WEXITSTATUS(status);
+    EXPECT_EQ(WTERMSIG(status), sig);
+    std::string names;
+    for (const auto& e : std::filesystem::directory_iterator(w.dir.path()))
+      names += e.path().filename().string() + " ";
+    EXPECT_EQ(w.dir.entries(), before) << "signal " << sig << ": " << names;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
+}
+
+// Before: a 9x7 image with a light of aspect 1 was accepted silently. Now a warning (stderr and
+// the report), and the volume is still built.
+TEST(BuildCli, AspectMismatchIsAWarning) {
+  Workspace w;
+  const std::string square = w.dir.write("square.json", test::spot_json("window", 1.0));
+  const std::string report = w.dir.file("r.json");
+  const test::CommandResult r =
+      test::run_lightvol("build " + q(w.depth) + " --light " + q(square) + " --out " +
+                         q(w.dir.file("v.ply")) + " --report " + q(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("lightvol: warning: " + w.depth + ": the image is 9x7"), std::string::npos)
+      << r.err;
+  const nlohmann::json j = nlohmann::json::parse(slurp(report));
+  ASSERT_EQ(j["warnings"].size(), 1u);
+  EXPECT_NE(j["warnings"][0].get<std::string>().find("aspect 1"), std::string::npos);
+  const test::CommandResult matching =
+      w.build("--out " + q(w.dir.file("w.ply")) + " --report " + q(report));
+  ASSERT_EQ(matching.exit_code, 0) << matching.err;
+  EXPECT_EQ(matching.err, "");
+  EXPECT_TRUE(nlohmann::json::parse(slurp(report))["warnings"].empty());
+}
+
+// Before: --max-error nan and --threshold nan were accepted (a 2-triangle grid 6.5 units off), and
+// --max-error inf was refused with a 300-digit number.
+TEST(BuildCli, NonFiniteBoundsAreRefused) {
+  Workspace w;
+  const std::string out = q(w.dir.file("v.ply"));
+  const int before = w.dir.entries();
+  for (const char* v : {"nan", "inf", "-inf", "NaN", "1e999"}) {
+    const test::CommandResult a = w.build("--out " + out + " --adaptive --max-error " + v);
+    EXPECT_EQ(a.exit_code, 2) << v << ": " << a.err;
+    EXPECT_NE(a.err.find("expected a finite number >= 0"), std::string::npos) << a.err;
+    EXPECT_LT(a.err.size(), 200u) << a.err;
+    const test::CommandResult t = w.build("--out " + out + " --refine laplacian --threshold " + v);
+    EXPECT_EQ(t.exit_code, 2) << v << ": " << t.err;
+    EXPECT_NE(t.err.find("expected a finite number >= 0"), std::string::npos) << t.err;
+    const test::CommandResult s = test::run_lightvol("stats " + q(w.depth) + " --light " +
+                                                     q(w.light) + " --max-error 0.1," + v);
+    EXPECT_EQ(s.exit_code, 2) << v << ": " << s.err;
+    EXPECT_NE(s.err.find("is not a non-negative number"), std::string::npos) << s.err;
+  }
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
+// Before: valid lights whose volumes float32 cannot hold gave NaN vertices (written with
+// --no-check) or zero-area faces, and exit 1 blaming the volume. Now: exit 2 naming the light's
+// keys and the remedy, nothing written; or a volume that passes its checks.
+TEST(BuildCli, UnrepresentableLightsAreRefusedNamingTheKey) {
+  test::TempDir dir;
+  const std::string depth = dir.file("d.exr");
+  ASSERT_TRUE(write_depth_image(depth, test::make_depth(64, 64,
+                                                        [](int c, int r) {
+                                                          return 0.5f +
+                                                                 0.004f * static_cast<float>(
+                                                                              (c + 2 * r) % 50);
+                                                        }))
+                  .ok());
+  const std::string linear = dir.file("lin.exr");
+  ASSERT_TRUE(write_depth_image(linear, test::constant_depth(64, 64, 5.0f)).ok());
+  const auto spot = [](const std::string& extra) {
+    return std::string(R"({"type": "spot", "direction": [0, -1, 0], "up": [0, 0, -1], )") + extra +
+           "}";
+  };
+  struct Case {
+    std::string name, json, image, needle, extra;
+  };
+  const Case refused[] = {
+      {"lin.json",
+       spot(
+           R"("position": [0, 10, 0], "fov_y_deg": 60, "near": 0.1, "far": 1e18, "depth": "linear")"),
+       linear, "keys 'near', 'far' and 'fov_y_deg'", ""},
+      {"far_away.json", spot(R"("position": [1e6, 10, 0], "fov_y_deg": 60, "near": 1, "far": 20)"),
+       depth, "key 'position'", "--space light"},
+      {"deep.json", spot(R"("position": [0, 10, 0], "fov_y_deg": 60, "near": 1e-30, "far": 1e30)"),
+       depth, "keys 'near', 'far' and 'fov_y_deg'", ""},
+      {"ortho.json",
+       R"({"type": "directional", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1], "ortho": [-1e30, 1e30, -1e30, 1e30], "near": 0, "far": 20})",
+       depth, "keys 'ortho', 'near' and 'far'", ""},
+  };
+  for (const Case& c : refused) {
+    const std::string light = dir.write(c.name, c.json);
+    for (const char* flags : {"", " --no-check"}) {
+      const test::CommandResult r =
+          test::run_lightvol("build " + q(c.image) + " --light " + q(light) + " --out " +
+                             q(dir.file("v.ply")) + flags);
+      EXPECT_EQ(r.exit_code, 2) << c.name << flags << ": " << r.err;
+      EXPECT_NE(r.err.find(c.name + ": "), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find(c.needle), std::string::npos) << r.err;
+      if (!c.extra.empty()) {
+        EXPECT_NE(r.err.find(c.extra), std::string::npos) << r.err;
+      }
+      EXPECT_FALSE(std::filesystem::exists(dir.file("v.ply"))) << c.name;
+      std::filesystem::remove(dir.file("v.ply"));
+    }
+  }
+  // The remedy works: the light far from the origin, in its own eye space.
+  const test::CommandResult light_space =
+      test::run_lightvol("build " + q(depth) + " --light " + q(dir.file("far_away.json")) +
+                         " --out " + q(dir.file("l.ply")) + " --space light");
+  EXPECT_EQ(light_space.exit_code, 0) << light_space.err;
+  // A needle of a frustum (fov 1e-6 degrees): refused naming the keys, never blamed on the volume.
+  const std::string needle = dir.write(
+      "needle.json", spot(R"("position": [0, 10, 0], "fov_y_deg": 1e-6, "near": 1, "far": 20)"));
+  const test::CommandResult thin = test::run_lightvol("build " + q(depth) + " --light " +
+                                                      q(needle) + " --out " + q(dir.file("n.ply")));
+  EXPECT_EQ(thin.exit_code, 2) << thin.err;
+  EXPECT_NE(thin.err.find("keys 'near', 'far' and 'fov_y_deg'"), std::string::npos) << thin.err;
 }
 
 // Draco's default 16 bits move the apex off the light; what build writes, check --light accepts,

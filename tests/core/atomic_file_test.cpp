@@ -1,8 +1,10 @@
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -79,6 +81,143 @@ TEST(AtomicFile, DeviceOrPipeTargetIsRefusedAndKept) {
   EXPECT_NE(s.error().message.find("is not a regular file"), std::string::npos)
       << s.error().message;
   EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+}
+
+// Before: the temporary was ".NAME.lightvol-tmp-PID-N.ext", opened without O_EXCL: a symlink
+// planted there made the write go through it (overwriting the victim), and a directory planted
+// there made the run fail.
+TEST(AtomicFile, PlantedSymlinksAndDirectoriesAtPredictableNamesAreNotFollowed) {
+  test::TempDir dir;
+  const std::string victim = dir.write("victim.txt", "precious");
+  for (int n = 0; n < 8; ++n) {
+    const std::string old_name = "." + std::string("out") + ".lightvol-tmp-" +
+                                 std::to_string(::getpid()) + "-" + std::to_string(n) + ".ply";
+    ASSERT_EQ(::symlink(victim.c_str(), dir.file(old_name).c_str()), 0);
+    const std::string old_dir =
+        ".out.lightvol-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(n + 8) + ".ply";
+    ASSERT_EQ(::mkdir(dir.file(old_dir).c_str(), 0700), 0);
+  }
+  const int before = dir.entries();
+  ASSERT_TRUE(write_bytes_atomically(dir.file("out.ply"), "new volume").ok());
+  EXPECT_EQ(slurp(victim), "precious");
+  EXPECT_EQ(slurp(dir.file("out.ply")), "new volume");
+  struct stat st {};
+  ASSERT_EQ(::lstat(dir.file("out.ply").c_str(), &st), 0);
+  EXPECT_TRUE(S_ISREG(st.st_mode));
+  EXPECT_EQ(dir.entries(), before + 1);
+}
+
+TEST(AtomicFile, TemporaryIsAFreshUnguessableFileOfItsOwn) {
+  test::TempDir dir;
+  std::vector<std::string> names;
+  for (int i = 0; i < 2; ++i)
+    ASSERT_TRUE(write_file_atomically(dir.file("m.ply"), [&](const std::string& temp) -> Status {
+                  struct stat st {};
+                  EXPECT_EQ(::lstat(temp.c_str(), &st), 0);
+                  EXPECT_TRUE(S_ISREG(st.st_mode));  // created exclusively, not a planted link
+                  EXPECT_EQ(st.st_size, 0);
+                  EXPECT_EQ(st.st_nlink, 1u);
+                  names.push_back(temp);
+                  std::ofstream(temp) << "x";
+                  return {};
+                }).ok());
+  EXPECT_NE(names[0], names[1]);
+  EXPECT_EQ(names[0].find(std::to_string(::getpid())), std::string::npos) << names[0];
+}
+
+TEST(AtomicFile, ReplacedTemporaryIsAnError) {
+  test::TempDir dir;
+  const std::string victim = dir.write("victim.txt", "precious");
+  const Status s = write_file_atomically(dir.file("o.ply"), [&](const std::string& temp) -> Status {
+    ::unlink(temp.c_str());
+    EXPECT_EQ(::symlink(victim.c_str(), temp.c_str()), 0);
+    return {};
+  });
+  ASSERT_FALSE(s.ok());
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.ply")));
+  EXPECT_EQ(slurp(victim), "precious");
+}
+
+// Before: a 444 file replaced by a run became 644.
+TEST(AtomicFile, ReplacingAFileKeepsItsMode) {
+  test::TempDir dir;
+  const std::string path = dir.write("ro.ply", "old");
+  ASSERT_EQ(::chmod(path.c_str(), 0444), 0);
+  ASSERT_TRUE(write_bytes_atomically(path, "new").ok());
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0444u);
+  EXPECT_EQ(slurp(path), "new");
+  const std::string exec = dir.write("x.ply", "old");
+  ASSERT_EQ(::chmod(exec.c_str(), 0751), 0);
+  ASSERT_TRUE(write_bytes_atomically(exec, "new").ok());
+  ASSERT_EQ(::stat(exec.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 07777, 0751u);
+}
+
+// Before: names of 234-255 bytes failed with "File name too long" (the temporary name was longer).
+TEST(AtomicFile, LongestNamesWork) {
+  test::TempDir dir;
+  for (std::size_t length : {234u, 250u, 255u}) {
+    const std::string name = std::string(length - 4, 'n') + ".ply";
+    ASSERT_TRUE(write_bytes_atomically(dir.file(name), "v").ok()) << length;
+    EXPECT_EQ(slurp(dir.file(name)), "v");
+  }
+  EXPECT_EQ(dir.entries(), 3);
+}
+
+TEST(AtomicFile, TransactionCommitsAllOrNothing) {
+  test::TempDir dir;
+  const std::string a = dir.write("a.ply", "old a");
+  {
+    OutputTransaction tx;
+    ASSERT_TRUE(write_bytes_atomically(a, "new a").ok());
+    EXPECT_EQ(slurp(a), "old a");  // staged, not yet in place
+    ASSERT_FALSE(write_bytes_atomically(dir.file("missing/r.json"), "{}").ok());
+    // no commit: the run failed
+  }
+  EXPECT_EQ(slurp(a), "old a");
+  EXPECT_EQ(dir.entries(), 1);
+  {
+    OutputTransaction tx;
+    ASSERT_TRUE(write_bytes_atomically(a, "new a").ok());
+    ASSERT_TRUE(write_bytes_atomically(dir.file("b.json"), "b").ok());
+    ASSERT_TRUE(tx.commit().ok());
+  }
+  EXPECT_EQ(slurp(a), "new a");
+  EXPECT_EQ(slurp(dir.file("b.json")), "b");
+  EXPECT_EQ(dir.entries(), 2);
+}
+
+TEST(AtomicFile, TransactionRefusesOneFileNamedTwice) {
+  test::TempDir dir;
+  const std::string a = dir.write("same.ply", "old");
+  OutputTransaction tx;
+  ASSERT_TRUE(write_bytes_atomically(a, "volume").ok());
+  const Status s = write_bytes_atomically(dir.path() + "/./same.ply", "{json}");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("another output of this run"), std::string::npos)
+      << s.error().message;
+}
+
+TEST(AtomicFile, FailedCommitPutsBackWhatItReplaced) {
+  test::TempDir dir;
+  const std::string a = dir.write("a.ply", "old a");
+  const std::string b = dir.file("b.json");
+  {
+    OutputTransaction tx;
+    ASSERT_TRUE(write_bytes_atomically(a, "new a").ok());
+    ASSERT_TRUE(write_bytes_atomically(b, "new b").ok());
+    // Between staging and commit, b's name becomes a non-empty directory: its rename fails.
+    ASSERT_EQ(::mkdir(b.c_str(), 0700), 0);
+    dir.write("b.json/inside", "x");
+    const Status s = tx.commit();
+    ASSERT_FALSE(s.ok());
+    EXPECT_NE(s.error().message.find("no output written"), std::string::npos) << s.error().message;
+  }
+  EXPECT_EQ(slurp(a), "old a");
+  EXPECT_TRUE(std::filesystem::is_directory(b));
+  EXPECT_EQ(dir.entries(), 2);
 }
 
 }  // namespace

@@ -147,5 +147,71 @@ TEST(DepthImage, FormatByContentThenByExtensionAmongTheVettedOnes) {
   expect_error(read_depth_image(dir.file("junk.hdr")), "junk.hdr: cannot read image: ");
 }
 
+// Before: an EXR whose data window was a 32x32 crop of a 64x64 display window was read as the
+// whole view (oiiotool full.exr --crop 32x32+16+16 -o crop.exr), silently wrong geometry.
+TEST(DepthImage, DataWindowOtherThanTheDisplayWindowIsRefused) {
+  test::TempDir dir;
+  const std::string path = dir.file("crop.exr");
+  {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(32, 32, 1, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"Z"};
+    spec.x = spec.y = 16;
+    spec.full_x = spec.full_y = 0;
+    spec.full_width = spec.full_height = 64;
+    ASSERT_TRUE(out->open(path, spec));
+    const std::vector<float> px(32 * 32, 0.5f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->close());
+  }
+  expect_error(read_depth_image(path),
+               "crop.exr: its data window (32x32 at (16, 16)) is not its display window (64x64 "
+               "at (0, 0))");
+}
+
+// Before: the scale's magnitude multiplied the depths undocumented, and scale 0 made every depth
+// 0. Now: the sign is the byte order, the magnitude multiplies (documented), 0 is refused.
+TEST(DepthImage, PfmScaleMultipliesAndZeroIsRefused) {
+  test::TempDir dir;
+  const auto pfm = [&](const std::string& name, const std::string& scale) {
+    std::string bytes = "Pf\n2 2\n" + scale + "\n";
+    const float v[4] = {0.25f, 0.5f, 0.75f, 1.0f};
+    bytes.append(reinterpret_cast<const char*>(v), sizeof v);
+    return dir.write(name, bytes);
+  };
+  const Result<DepthImage> one = read_depth_image(pfm("one.pfm", "-1.0"));
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  EXPECT_EQ(one->values, (std::vector<float>{0.75f, 1.0f, 0.25f, 0.5f}));  // bottom row first
+  const Result<DepthImage> half = read_depth_image(pfm("half.pfm", "-0.5"));
+  ASSERT_TRUE(half.ok()) << half.error().message;
+  EXPECT_EQ(half->values, (std::vector<float>{0.375f, 0.5f, 0.125f, 0.25f}));
+  for (const char* bad : {"0", "-0.0", "nan", "-inf", "x"})
+    expect_error(read_depth_image(pfm("bad.pfm", bad)), "is not a finite non-zero number");
+}
+
+// Before: an image whose only channel is alpha was read as depth.
+TEST(DepthImage, AlphaOnlyImageIsRefusedUnlessNamed) {
+  test::TempDir dir;
+  const std::string path = dir.file("alpha.exr");
+  {
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(2, 2, 1, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"A"};
+    spec.alpha_channel = 0;
+    ASSERT_TRUE(out->open(path, spec));
+    const std::vector<float> px(4, 0.5f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    ASSERT_TRUE(out->close());
+  }
+  expect_error(read_depth_image(path), "alpha.exr: its only channel, 'A', is alpha");
+  DepthReadOptions named;
+  named.channel = "A";
+  const Result<DepthImage> read = read_depth_image(path, named);
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  EXPECT_EQ(read->values, std::vector<float>(4, 0.5f));
+}
+
 }  // namespace
 }  // namespace lightvol

@@ -327,6 +327,54 @@ TEST(ReadMesh, PolygonsAreFanTriangulated) {
   EXPECT_EQ(quad->num_triangles(), 2u);
 }
 
+// Before: comment lines before the keyword (as CGAL writes them) made "not an OFF file", and the
+// header variants 4OFF and nOFF were refused. Geomview's OFF: comments anywhere, the keyword
+// optional, [ST][C][N][4][n]OFF.
+TEST(ReadMesh, OffAsGeomviewDefinesIt) {
+  TempDir dir;
+  const std::string tetra_vertices = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+  const std::string tetra_faces = "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  const auto expect_tetra = [&](const std::string& name, const std::string& text, double scale) {
+    Result<Mesh> mesh = read_mesh(dir.write(name, text));
+    ASSERT_TRUE(mesh.ok()) << name << ": " << mesh.error().message;
+    EXPECT_EQ(mesh->num_triangles(), 4u) << name;
+    EXPECT_EQ(mesh->num_vertices(), 4u) << name;
+    EXPECT_NEAR(signed_volume(*mesh), scale * scale * scale / 6, 1e-6) << name;
+  };
+  expect_tetra("cgal.off",
+               "# Output of a CGAL tool\n#\nOFF\n4 4 0\n\n# vertices\n" + tetra_vertices +
+                   "\n# faces\n" + tetra_faces,
+               1);
+  expect_tetra("nokeyword.off", "4 4 6\n" + tetra_vertices + tetra_faces, 1);
+  expect_tetra("sameline.off", "OFF 4 4 6 # counts\n" + tetra_vertices + tetra_faces, 1);
+  expect_tetra("coff.off",
+               "COFF\n4 4 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n"
+               "0 0 1 9 9 9 255\n3 0 2 1 1 0 0\n3 0 1 3\n3 0 3 2 0.5 0.5 0.5 1\n3 1 2 3 7\n",
+               1);
+  expect_tetra("stcnoff.off",
+               "STCNOFF\n4 4 0\n0 0 0 0 0 1 1 1 1 1 0 0\n1 0 0 0 0 1 1 1 1 1 0 1\n"
+               "0 1 0 0 0 1 1 1 1 1 1 0\n0 0 1 0 0 1 1 1 1 1 1 1\n" +
+                   tetra_faces,
+               1);
+  expect_tetra("homogeneous.off", "4OFF\n4 4 0\n0 0 0 2\n1 0 0 2\n0 1 0 2\n0 0 1 2\n" + tetra_faces,
+               0.5);
+  expect_tetra("ndim.off", "nOFF\n3\n4 4 0\n" + tetra_vertices + tetra_faces, 1);
+  expect_tetra("4ndim.off", "4nOFF 3 4 4 0\n0 0 0 1\n2 0 0 2\n0 3 0 3\n0 0 2 2\n" + tetra_faces, 1);
+  const auto expect_refused = [&](const std::string& name, const std::string& text,
+                                  const std::string& why) {
+    Result<Mesh> mesh = read_mesh(dir.write(name, text));
+    ASSERT_FALSE(mesh.ok()) << name;
+    EXPECT_NE(mesh.error().message.find(why), std::string::npos) << mesh.error().message;
+  };
+  expect_refused("2d.off", "nOFF 2\n3 1 0\n0 0\n1 0\n0 1\n3 0 1 2\n",
+                 "only 3-dimensional OFF makes a triangle mesh");
+  expect_refused("inf.off", "4OFF\n4 4 0\n0 0 0 0\n1 0 0 1\n0 1 0 1\n0 0 1 1\n" + tetra_faces,
+                 "homogeneous coordinate 0");
+  expect_refused("xoff.off", "XOFF\n4 4 0\n" + tetra_vertices + tetra_faces,
+                 "'XOFF' is not an OFF keyword");
+  expect_refused("comments.off", "# just a comment\nhello\n", "not an OFF file");
+}
+
 TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
   TempDir dir;
   const auto expect_error = [](const std::string& path, const std::string& what) {

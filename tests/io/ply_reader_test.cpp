@@ -92,6 +92,27 @@ TEST(ReadPly, AsciiFacesBeforeVerticesBlankLinesAndCrLf) {
       "0.5 0.25 -2.5 1 -1e3\r\n")));
 }
 
+// Before: old Blender's header line without the 'comment' keyword (assimp's Wuson.ply) was refused
+// as an unknown keyword. Free text before the first element is read as a comment; after it, an
+// unknown keyword is still an error (a misspelt property would otherwise vanish).
+TEST(ReadPly, FreeTextBeforeTheFirstElementIsAComment) {
+  TempDir dir;
+  expect_square(
+      read_mesh(dir.write("wuson.ply",
+                          "ply\nformat ascii 1.0\n"
+                          "Created by Blender3D 247 - www.blender.org, source file: 'wuson.blend'\n"
+                          "element vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                          "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.25 -2.5\n4 0 1 2 3\n3 0 2 4\n")));
+  const std::string late = dir.write(
+      "late.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproprety float x\nend_header\n0\n");
+  const Result<Mesh> mesh = read_mesh(late);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_NE(mesh.error().message.find("PLY header line 4: unknown keyword 'proprety'"),
+            std::string::npos)
+      << mesh.error().message;
+}
+
 TEST(ReadPly, AsciiAsShortAsTheFormatAllowsWithoutAFinalNewline) {
   // Every value one character and one separator, the last newline missing: exactly at the bound
   // the header's counts are checked against.

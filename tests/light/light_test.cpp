@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <lightvol/airlight/airlight.h>
 #include <lightvol/light/light.h>
 
 #include "support/test_support.h"
@@ -141,6 +142,73 @@ TEST(LightParse, MissingFileIsNamed) {
   Result<Light> r = load_light("/nonexistent/light.json");
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().message.find("/nonexistent/light.json"), std::string::npos);
+}
+
+// Before: duplicate keys were resolved silently (the last one won) and bytes after a NUL were
+// ignored.
+TEST(LightParse, DuplicateKeysAndNulBytesAreErrors) {
+  const Error dup = parse_error(obj(std::string(kSpot) + R"(, "near": 0.2)"));
+  EXPECT_NE(dup.message.find("L.json: key \"near\" appears twice"), std::string::npos)
+      << dup.message;
+  const Error nested = parse_error(R"({"type": "spot", "view": {"a": 1, "a": 2}})");
+  EXPECT_NE(nested.message.find("appears twice"), std::string::npos) << nested.message;
+  std::string with_nul = obj(kSpot);
+  with_nul += std::string(1, '\0') + "garbage";
+  const Error nul = parse_error(with_nul);
+  EXPECT_NE(nul.message.find("is NUL"), std::string::npos) << nul.message;
+  // The same for cameras and media.
+  const Result<Camera> cam =
+      parse_camera(obj(std::string(kSpot) + R"(, "width": 4, "height": 4, "width": 8)"), "C.json");
+  ASSERT_FALSE(cam.ok());
+  EXPECT_NE(cam.error().message.find("appears twice"), std::string::npos);
+  const Result<Medium> med = parse_medium(
+      R"({"scattering": 0.1, "scattering": 0.2, "absorption": 0, "intensity": 1})", "M.json");
+  ASSERT_FALSE(med.ok());
+  EXPECT_NE(med.error().message.find("appears twice"), std::string::npos);
+}
+
+// Before: a value nested 100,000 arrays deep under a known key crashed (SIGSEGV in the recursive
+// dump that quoted it), and a 10 MiB string was echoed whole.
+TEST(LightParse, DeepOrHugeValuesGiveShortMessages) {
+  for (const char* key : {"flip_y", "aspect"}) {
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    const Error e = parse_error(obj(std::string(kSpot) + ", \"" + key + "\": " + deep));
+    EXPECT_NE(e.message.find("nested deeper than 32 levels"), std::string::npos) << e.message;
+    const Result<Camera> cam =
+        parse_camera(obj(std::string(kSpot) + R"(, "width": 4, "height": )" + deep), "C.json");
+    ASSERT_FALSE(cam.ok());
+    EXPECT_LT(cam.error().message.size(), 200u);
+  }
+  // Deep but within the limit: quoted, not dumped whole.
+  const std::string deep30 = std::string(30, '[') + std::string(30, ']');
+  const Error e30 = parse_error(obj(std::string(kSpot) + R"(, "flip_y": )" + deep30));
+  EXPECT_NE(e30.message.find("'flip_y'"), std::string::npos) << e30.message;
+  EXPECT_LT(e30.message.size(), 200u) << e30.message;
+  const std::string huge(10 << 20, 'x');
+  for (const std::string& body : {std::string(kSpot) + R"(, "depth": ")" + huge + "\"",
+                                  std::string(kSpot) + R"(, "flip_y": ")" + huge + "\"",
+                                  std::string(kSpot) + ", \"" + huge + "\": 1"}) {
+    const Error h = parse_error(obj(body));
+    EXPECT_LT(h.message.size(), 300u) << h.message.substr(0, 400);
+    EXPECT_NE(h.message.find("L.json"), std::string::npos);
+  }
+}
+
+// Before: a 128x64 image with a light of aspect 1 was accepted silently. The rule: texels must be
+// square within a texel of rounding, else a note (build prints it as a warning).
+TEST(LightParse, AspectMismatchIsNoted) {
+  const Light spot = test::light_from_json(test::spot_json("window", 1.0));
+  EXPECT_NE(aspect_mismatch(spot, 128, 64).find("128x64 (aspect 2)"), std::string::npos)
+      << aspect_mismatch(spot, 128, 64);
+  EXPECT_EQ(aspect_mismatch(spot, 64, 64), "");
+  EXPECT_EQ(aspect_mismatch(spot, 65, 64), "");  // a texel of rounding
+  const Light wide = test::light_from_json(test::spot_json("window", 1.5));
+  EXPECT_EQ(aspect_mismatch(wide, 100, 67), "");  // shadowmap's N x round(N / aspect)
+  EXPECT_NE(aspect_mismatch(wide, 100, 100), "");
+  const Light dir = test::light_from_json(test::directional_json());  // ortho 10 x 8
+  EXPECT_EQ(aspect_mismatch(dir, 10, 8), "");
+  EXPECT_EQ(aspect_mismatch(dir, 125, 100), "");
+  EXPECT_NE(aspect_mismatch(dir, 100, 100), "");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // The CPU reference against brute-force integration with analytic visibility, on a floor and a box
 // lit by a spot and a directional light.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -74,6 +75,60 @@ TEST(Reference, SoftEdgedSpotMatchesBruteForce) {
                                         {0, 1, 0},
                                         {PhaseType::hg, 0.4, 0},
                                         {12, 24}});
+}
+
+// Before: a ray through an edge shared by two triangles could miss both (Möller–Trumbore rounds
+// each triangle's barycentrics its own way), losing a crossing: with the camera above a spot
+// looking down through its apex, four pixels were 13x their neighbours. Cameras that see the apex,
+// look into the light, or sit inside the volume.
+TEST(Reference, CamerasThroughTheApexIntoTheLightAndInsideMatchBruteForce) {
+  expect_reference_matches_brute_force({"sees the apex",
+                                        test::spot_json("linear"),
+                                        {0.02, 8, 0.01},
+                                        {0, 0, 0},
+                                        {PhaseType::isotropic}});
+  expect_reference_matches_brute_force({"looks into the light",
+                                        test::spot_json("linear"),
+                                        {2.5, 0.4, 1.5},
+                                        {0, 4, 0},
+                                        {PhaseType::hg, 0.4, 0}});
+  // Inside, looking up beside the light (a ray through the light itself is infinite: 1/r²).
+  expect_reference_matches_brute_force({"inside, beside the light",
+                                        test::spot_json("linear"),
+                                        {0.4, 2.5, 0.3},
+                                        {-0.5, 3.5, -0.5},
+                                        {PhaseType::isotropic}});
+}
+
+// The scene of the report: spot at (0, 10, 0) looking down at a floor at its far plane, camera at
+// (0, 20, 0) looking down through the apex, 64x64. The image is symmetric under the quarter turns
+// of the square frustum; a lost crossing broke that at four pixels.
+TEST(Reference, ApexViewIsSymmetric) {
+  const Light light = test::light_from_json(
+      R"({"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
+          "fov_y_deg": 60, "near": 1, "far": 20})");
+  const DepthImage shadow = test::constant_depth(64, 64, 1.0f);
+  Result<Mesh> volume = build_static_volume(light, shadow, {}, "shadow");
+  ASSERT_TRUE(volume) << volume.error().message;
+  constexpr int kN = 64;
+  const Result<Camera> camera = parse_camera(
+      R"({"type": "spot", "position": [0, 20, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
+          "fov_y_deg": 60, "near": 0.5, "far": 40, "width": 64, "height": 64})",
+      "camera.json");
+  ASSERT_TRUE(camera) << camera.error().message;
+  const RenderScene scene =
+      test::make_render_scene(*camera, light, test_medium({PhaseType::isotropic}));
+  const Image ref = render_reference(*volume, scene);
+  double worst = 0;
+  for (int row = 0; row < kN; ++row)
+    for (int col = 0; col < kN; ++col) {
+      const double a = ref.values[static_cast<std::size_t>(row) * kN + col];
+      const double b = ref.values[static_cast<std::size_t>(col) * kN + (kN - 1 - row)];
+      const double c = ref.values[static_cast<std::size_t>(row) * kN + (kN - 1 - col)];
+      worst = std::max({worst, std::abs(a - b) / std::max(1e-12, std::abs(a) + std::abs(b)),
+                        std::abs(a - c) / std::max(1e-12, std::abs(a) + std::abs(c))});
+    }
+  EXPECT_LT(worst, 1e-3);
 }
 
 TEST(Reference, DirectionalLightMatchesBruteForce) {

@@ -92,13 +92,13 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
       medium.phase.type = PhaseType::schlick;
       parameter = "k";
     } else {
-      return phase->error("type",
-                          "expected \"isotropic\", \"hg\" or \"schlick\", got \"" + *type + "\"");
+      return phase->error(
+          "type", "expected \"isotropic\", \"hg\" or \"schlick\", got " + quote_text(*type));
     }
     for (const char* key : {"g", "k"}) {
       if (!phase->has(key)) continue;
       if (parameter != key)
-        return phase->error(key, "does not apply to a phase of type \"" + *type + "\"");
+        return phase->error(key, "does not apply to a phase of type " + quote_text(*type));
       Result<double> x = phase->number(key);
       if (!x) return x.error();
       if (!(std::abs(*x) < 1))
@@ -141,7 +141,7 @@ Result<Camera> parse_camera(std::string_view json_text, const std::string& sourc
     if (!keys.has(key)) return keys.error(key, "missing");
     const json& v = root->at(key);
     if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 16384)
-      return keys.error(key, "expected an integer in [1, 16384], got " + v.dump());
+      return keys.error(key, "expected an integer in [1, 16384], got " + describe_json(v));
     *field = v.get<int>();
   }
   json view = *root;  // the rest is a light description

@@ -1,7 +1,9 @@
-// Atomic output: a file appears whole under its name, or not at all.
+// Atomic output: a file appears whole under its name, or not at all; the outputs of one run appear
+// together, or none does.
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -9,13 +11,42 @@
 
 namespace lightvol {
 
-// Calls `write(temp_path)` to create a temporary file beside `path` (same directory, same
-// extension, so format-by-extension writers still pick the right format), then renames it onto
-// `path`. If `write` fails or throws, the temporary file is removed and `path` is left untouched.
+// Calls `write(temp_path)` to fill a temporary file beside `path`, then renames it onto `path`.
+// The temporary file is created exclusively (O_EXCL | O_NOFOLLOW) under an unguessable name in
+// the same directory, short enough to fit wherever `path`'s name fits, with `path`'s extension (so
+// format-by-extension writers still pick the right format); `write` opens it by name and
+// overwrites it. If `path` exists, the result keeps its permission bits. If `write` fails or
+// throws, the temporary file is removed and `path` is left untouched. SIGINT, SIGTERM and SIGHUP
+// while the temporary file exists remove it before the process dies (unless the program handles or
+// ignores those signals itself).
+//
+// While an OutputTransaction is open on this thread, the finished file is not renamed yet: it is
+// staged in the transaction, and appears under `path` when the transaction commits.
 Status write_file_atomically(const std::string& path,
                              const std::function<Status(const std::string& temp_path)>& write);
 
-// Writes `bytes` to `path` atomically.
+// Writes `bytes` to `path` atomically (see write_file_atomically).
 Status write_bytes_atomically(const std::string& path, std::string_view bytes);
+
+// All outputs of a run, committed together. Open one before writing the outputs; every
+// write_file_atomically on this thread until it is destroyed stages its file here. commit() renames
+// them all into place, or (if one rename fails) puts back what the others replaced and leaves every
+// target as it was; a transaction destroyed without commit() removes what it staged. Two outputs
+// naming the same file are an error at the second write.
+class OutputTransaction {
+ public:
+  OutputTransaction();
+  ~OutputTransaction();
+  OutputTransaction(const OutputTransaction&) = delete;
+  OutputTransaction& operator=(const OutputTransaction&) = delete;
+
+  Status commit();
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  Impl* previous_ = nullptr;  // the transaction this one is nested in
+};
 
 }  // namespace lightvol

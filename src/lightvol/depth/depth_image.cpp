@@ -31,13 +31,19 @@ Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& 
     return Error{path + ": no channel named '" + options.channel +
                  "' (channels: " + join_names(names) + ")"};
   }
-  if (spec.nchannels == 1) return 0;
+  const auto is_alpha = [&](int c) { return c == spec.alpha_channel || names[c] == "A"; };
+  if (spec.nchannels == 1 && !is_alpha(0)) return 0;
+  if (spec.nchannels == 1)
+    return Error{path + ": its only channel, '" + names[0] +
+                 "', is alpha (coverage), not depth; to read it as depth anyway, name it with "
+                 "--channel " +
+                 names[0]};
   for (const char* preferred : {"Z", "depth", "Y"})
     for (int c = 0; c < spec.nchannels; ++c)
       if (names[c] == preferred) return c;
   int candidate = -1, non_alpha = 0;
   for (int c = 0; c < spec.nchannels; ++c) {
-    if (c == spec.alpha_channel || names[c] == "A") continue;
+    if (is_alpha(c)) continue;
     ++non_alpha;
     candidate = c;
   }

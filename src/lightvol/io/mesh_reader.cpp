@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 #include <string_view>
+#include <vector>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
@@ -173,8 +174,21 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
   const std::string head = file_head(path, 512);
   switch (format) {
     case MeshFormat::off: {
-      const std::size_t at = head.find("OFF");
-      if (at == std::string::npos || at > 4)
+      // The first word after blank and comment lines: the keyword ([ST][C][N][4][n]OFF), or the
+      // vertex count of a file without one (the keyword is optional).
+      std::size_t at = 0;
+      while (at < head.size()) {
+        at = head.find_first_not_of(" \t\r\n", at);
+        if (at == std::string::npos || head[at] != '#') break;
+        at = head.find('\n', at);
+      }
+      if (at == std::string::npos || at >= head.size())
+        return {};  // long comments: read_off decides
+      const std::size_t end = std::min(head.find_first_of(" \t\r\n#", at), head.size());
+      const std::string word = head.substr(at, end - at);
+      const bool keyword = word.size() >= 3 && word.compare(word.size() - 3, 3, "OFF") == 0;
+      const bool count = !word.empty() && word.find_first_not_of("0123456789") == std::string::npos;
+      if (!keyword && !count)
         return Error{path + ": not an OFF file (no 'OFF' keyword at its start)"};
       return {};  // read_off reads and bounds the rest
     }
@@ -197,11 +211,14 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
   }
 }
 
-// Text OFF, read here rather than by OpenMesh, whose reader trusts each face's vertex count: a
-// 40-byte file with "500000000 0 1 2" took 12 GB and a minute (fuzz finding). Lines: an optional
-// [C][N][ST]OFF keyword (counts may follow it), "V F [E]", V vertex lines (x y z first; normals,
-// colours and texture coordinates after them are ignored), F face lines "n i1 .. in" (colours
-// after them ignored), fan-triangulated. '#' starts a comment. Binary OFF is refused.
+// Text OFF as Geomview defines it, read here rather than by OpenMesh, whose reader trusts each
+// face's vertex count: a 40-byte file with "500000000 0 1 2" took 12 GB and a minute (fuzz
+// finding). '#' starts a comment anywhere (also before the keyword, as CGAL writes). An optional
+// keyword [ST][C][N][4][n]OFF (nOFF: the dimension follows; only 3 makes a triangle mesh; 4: a
+// homogeneous coordinate follows each vertex, which is divided by it), then "V F [E]" on its line
+// or the next ones, V vertex lines (the coordinates first; normals, colours and texture
+// coordinates after them are ignored), F face lines "n i1 .. in" (colours after them ignored),
+// fan-triangulated. Binary OFF is refused.
 // Long (over 80 lines) on purpose: a straight parse of the format (header, counts, vertices,
 // faces), each step with its own message.
 Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
@@ -225,25 +242,50 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
   const auto at_line = [&] { return path + ": OFF line " + std::to_string(number) + ": "; };
   std::istringstream words;
   if (!next_line(&words)) return Error{path + ": OFF file has no header"};
-  std::string keyword;
-  words >> keyword;
-  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0)
+  // The header's words: the keyword's prefixes, then the numbers (dimension, counts).
+  std::vector<std::string> header;
+  for (std::string w; words >> w;) header.push_back(w);
+  bool homogeneous = false, any_dimension = false;
+  if (const std::string& keyword = header.front();
+      keyword.size() >= 3 && keyword.compare(keyword.size() - 3, 3, "OFF") == 0) {
+    std::string_view prefix(keyword.data(), keyword.size() - 3);
+    for (std::string_view p : {"ST", "C", "N", "4", "n"})
+      if (prefix.substr(0, p.size()) == p) {
+        homogeneous = homogeneous || p == "4";
+        any_dimension = any_dimension || p == "n";
+        prefix.remove_prefix(p.size());
+      }
+    if (!prefix.empty())
+      return Error{at_line() + "'" + keyword.substr(0, 40) +
+                   "' is not an OFF keyword ([ST][C][N][4][n]OFF)"};
+    header.erase(header.begin());
+    if (!header.empty() && header.front() == "BINARY")
+      return Error{at_line() + "binary OFF is not supported; convert it to PLY"};
+  } else if (keyword.find_first_not_of("0123456789") != std::string::npos) {
     return Error{at_line() + "expected the OFF keyword, got '" + keyword.substr(0, 40) + "'"};
-  if (keyword.find_first_of("4n") != std::string::npos)
-    return Error{at_line() + "'" + keyword + "': only 3D OFF is supported"};
-  // The counts follow the keyword, on its line or the next.
-  std::string rest;
-  std::getline(words, rest);
-  std::istringstream counts(rest);
-  std::string first;
-  if (counts >> first && first == "BINARY")
-    return Error{at_line() + "binary OFF is not supported; convert it to PLY"};
-  counts.clear();
-  counts.str(rest);
-  long long nv = -1, nf = -1;
-  if (first.empty() && !next_line(&counts))
-    return Error{path + ": OFF file has no vertex and face counts"};
-  if (!(counts >> nv >> nf)) return Error{at_line() + "expected the vertex and face counts"};
+  }
+  const std::size_t needed = any_dimension ? 3 : 2;
+  while (header.size() < needed) {
+    if (!next_line(&words)) return Error{path + ": OFF file has no vertex and face counts"};
+    for (std::string w; words >> w;) header.push_back(w);
+  }
+  const auto integer = [&](const std::string& w, long long* out) {
+    std::size_t used = 0;
+    try {
+      *out = std::stoll(w, &used);
+    } catch (const std::exception&) {
+      return false;
+    }
+    return used == w.size();
+  };
+  long long dimension = 3, nv = -1, nf = -1;
+  if (any_dimension && !integer(header[0], &dimension))
+    return Error{at_line() + "expected the dimension of nOFF"};
+  if (dimension != 3)
+    return Error{at_line() + "vertices of dimension " + header[0].substr(0, 20) +
+                 ": only 3-dimensional OFF makes a triangle mesh"};
+  if (!integer(header[needed - 2], &nv) || !integer(header[needed - 1], &nf))
+    return Error{at_line() + "expected the vertex and face counts"};
   const auto most = static_cast<long long>(max_elements(size));
   if (nv < 0 || nf < 0 || nv > most || nf > most || nv + nf > most)
     return Error{path + ": OFF header: " + std::to_string(nv) + " vertices and " +
@@ -255,8 +297,18 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
     if (!next_line(&words))
       return Error{path + ": OFF file ends after " + std::to_string(v) + " of " +
                    std::to_string(nv) + " vertices"};
-    double x = 0, y = 0, z = 0;
-    if (!(words >> x >> y >> z)) return Error{at_line() + "expected a vertex: x y z"};
+    double x = 0, y = 0, z = 0, w = 1;
+    if (!(words >> x >> y >> z) || (homogeneous && !(words >> w)))
+      return Error{at_line() +
+                   (homogeneous ? "expected a vertex: x y z w" : "expected a vertex: x y z")};
+    if (homogeneous) {
+      if (!(std::isfinite(w) && w != 0))
+        return Error{at_line() + "vertex " + std::to_string(v) +
+                     " has the homogeneous coordinate 0 (a point at infinity)"};
+      x /= w;
+      y /= w;
+      z /= w;
+    }
     mesh.positions.insert(mesh.positions.end(),
                           {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
   }

@@ -69,7 +69,8 @@ Result<LightType> parse_type(const KeyReader& keys) {
   if (name == "spot") return LightType::spot;
   if (name == "directional") return LightType::directional;
   if (name == "omni") return LightType::omni;
-  return keys.error("type", "expected \"spot\", \"directional\" or \"omni\", got \"" + name + "\"");
+  return keys.error("type",
+                    "expected \"spot\", \"directional\" or \"omni\", got " + quote_text(name));
 }
 
 Status parse_near_far(const KeyReader& keys, bool perspective, Light* light) {
@@ -190,7 +191,7 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
       light.depth = DepthEncoding::radial;
     else
       return keys.error("depth",
-                        "expected \"window\", \"linear\" or \"radial\", got \"" + name + "\"");
+                        "expected \"window\", \"linear\" or \"radial\", got " + quote_text(name));
   }
   if (keys.has("flip_y")) {
     LV_TRY_ASSIGN(flip, keys.boolean("flip_y"));
@@ -256,6 +257,21 @@ std::string_view omni_face_tag(int face) {
   static constexpr std::string_view tags[kOmniFaces] = {"px", "nx", "py", "ny", "pz", "nz"};
   LV_CHECK(face >= 0 && face < kOmniFaces);
   return tags[face];
+}
+
+std::string aspect_mismatch(const Light& light, int width, int height) {
+  if (light.type == LightType::omni || width < 1 || height < 1) return {};
+  // Half-width and half-height of the view at unit distance (perspective) or in eye units
+  // (orthographic) are 1/P00 and 1/P11: the aspect is P11/P00.
+  const double aspect = std::abs(light.projection(1, 1) / light.projection(0, 0));
+  if (!std::isfinite(aspect) || aspect <= 0) return {};
+  const double w = width, h = height;
+  if (std::abs(w / aspect - h) <= 1 || std::abs(h * aspect - w) <= 1) return {};
+  std::ostringstream note;
+  note << "the image is " << width << "x" << height << " (aspect " << w / h
+       << ") but the light's view has aspect " << aspect
+       << ": texels are not square; is the light's \"aspect\" (or ortho) the image's?";
+  return note.str();
 }
 
 Mat4d omni_face_view(const Light& light, int face) {

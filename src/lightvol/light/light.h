@@ -48,6 +48,13 @@ Result<Light> parse_light(std::string_view json_text, const std::string& source)
 // Reads and parses a light description file.
 Result<Light> load_light(const std::string& path);
 
+// Empty when a W×H image has square texels under `light`'s projection, within a texel of
+// rounding (W/aspect or H·aspect off by at most one texel); else a one-line note naming both
+// aspects. The aspect is the view's width over its height (spot: "aspect"; directional: the ortho
+// extents). Non-square texels do not make a volume wrong (each texel's ray comes from the
+// projection), but they are usually a light description whose aspect is not the image's.
+std::string aspect_mismatch(const Light& light, int width, int height);
+
 // Omni faces in the order +X −X +Y −Y +Z −Z, and their file-name tags (px nx py ny pz nz).
 inline constexpr int kOmniFaces = 6;
 std::string_view omni_face_tag(int face);

@@ -111,11 +111,16 @@ void Bvh::intersect_all(Vec3d origin, Vec3d direction, double t_min,
       if (det == 0 || dot(normal, normal) == 0) continue;
       const double inv_det = 1.0 / det;
       const Vec3d s = origin - a;
+      // Edges are widened by kEdge (barycentric): Möller–Trumbore rounds u and w differently in
+      // the two triangles of a shared edge, and a ray through the edge could miss both, losing a
+      // crossing (a volume entered and never left: the reference was 13x off at such pixels).
+      // Widened, it hits both at the same t; dedupe_hits counts that once.
+      constexpr double kEdge = 1e-9;
       const double u = dot(s, p) * inv_det;
-      if (u < 0 || u > 1) continue;
+      if (u < -kEdge || u > 1 + kEdge) continue;
       const Vec3d q = cross(s, e1);
       const double w = dot(direction, q) * inv_det;
-      if (w < 0 || u + w > 1) continue;
+      if (w < -kEdge || u + w > 1 + kEdge) continue;
       const double t = dot(e2, q) * inv_det;
       if (t <= t_min) continue;
       hits->push_back({t, dot(normal, direction), tri});

@@ -24,8 +24,9 @@ class Bvh {
 
   // Appends to `hits` every triangle the ray origin + t·direction crosses with t > t_min, in no
   // particular order; edge-on and degenerate triangles are skipped. Möller–Trumbore in double
-  // precision, edges inclusive: a ray through a shared edge or vertex can hit several triangles
-  // at the same t; `dedupe_hits` removes those repeats.
+  // precision, edges inclusive and widened by 1e-9 in barycentric terms (so that rounding never
+  // lets a ray slip between two triangles sharing an edge): a ray through a shared edge or vertex
+  // hits several triangles at the same t; `dedupe_hits` removes those repeats.
   void intersect_all(Vec3d origin, Vec3d direction, double t_min, std::vector<RayHit>* hits) const;
 
   std::size_t num_nodes() const { return nodes_.size(); }

@@ -1,6 +1,8 @@
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <limits>
+#include <sstream>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -80,10 +82,24 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
   return mesh;
 }
 
+Result<double> adaptive_bound(const AdaptiveOptions& options) {
+  const bool error = options.refinement == Refinement::max_error;
+  const double bound = error ? options.max_error : options.threshold;
+  if (!std::isfinite(bound) || bound < 0) {
+    std::ostringstream shown;
+    shown << bound;
+    return Error{std::string(error ? "max_error" : "threshold") +
+                 ": expected a finite number >= 0, got " + shown.str()};
+  }
+  return bound;
+}
+
 Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
                                    const VolumeOptions& volume, const AdaptiveOptions& options,
                                    const std::string& source, AdaptiveReport* report) {
   LV_CHECK(light.type != LightType::omni);
+  const Result<double> bound = adaptive_bound(options);
+  if (!bound) return bound.error();
   const auto start = std::chrono::steady_clock::now();
   Result<TexelDepths> texels = TexelDepths::create(light, depth, 0, source);
   if (!texels) return texels.error();
@@ -93,9 +109,7 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
 
   const bool standard =
       Unprojector(light, depth.width, depth.height, 0, volume.space).standard_winding();
-  const double bound =
-      options.refinement == Refinement::max_error ? options.max_error : options.threshold;
-  AdaptiveGrid grid = pyramid.tessellate(bound, standard);
+  AdaptiveGrid grid = pyramid.tessellate(*bound, standard);
   r.balance_seconds = grid.balance_seconds;
   r.emit_seconds = grid.emit_seconds;
   r.quadtree_triangles = grid.num_triangles();
@@ -105,7 +119,7 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
       options.tessellation == Tessellation::collapse) {
     // The closing follows whatever border the grid keeps: no side is locked.
     CollapseReport c;
-    grid = collapse_grid(pyramid.texels(), grid, bound, {}, &c);
+    grid = collapse_grid(pyramid.texels(), grid, *bound, {}, &c);
     r.collapses = c.collapses;
     r.collapse_seconds = c.seconds;
   }

@@ -56,6 +56,10 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
 // The whole adaptive build: texel depths, pyramid, tessellation, assembly. Closed, oriented
 // outward, without T-junctions; in max_error mode every texel's point lies within
 // options.max_error world units of its ray's point on the volume. `report` is optional.
+// The bound `options` uses (max_error or threshold, per its refinement), or an error naming the
+// option when it is negative, NaN or infinite.
+Result<double> adaptive_bound(const AdaptiveOptions& options);
+
 Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
                                    const VolumeOptions& volume, const AdaptiveOptions& options,
                                    const std::string& source, AdaptiveReport* report = nullptr);

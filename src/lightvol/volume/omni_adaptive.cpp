@@ -75,12 +75,12 @@ Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFace
 Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
                                         const VolumeOptions& volume, const AdaptiveOptions& options,
                                         AdaptiveReport* report, OmniAdaptiveDetail* detail) {
+  const Result<double> bound = adaptive_bound(options);
+  if (!bound) return bound.error();
   Result<OmniRefinement> refinement =
       OmniRefinement::create(light, cube, options.refinement, volume.space);
   if (!refinement) return refinement.error();
-  const double bound =
-      options.refinement == Refinement::max_error ? options.max_error : options.threshold;
-  return refinement->build(bound, options.measure, report, detail, options.tessellation);
+  return refinement->build(*bound, options.measure, report, detail, options.tessellation);
 }
 
 // Long (over 80 lines) on purpose: the six faces' tessellation rounds (seam vertices forced across

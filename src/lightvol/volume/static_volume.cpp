@@ -1,5 +1,8 @@
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <limits>
+#include <sstream>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -106,6 +109,81 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   LV_CHECK_EQ(mesh.num_vertices(), counts.vertices);
   LV_CHECK_EQ(mesh.num_triangles(), counts.triangles);
   return mesh;
+}
+
+Status check_representable(const Mesh& mesh, const Light& light, Space space,
+                           const std::string& light_source) {
+  constexpr double kLargest = 1e18;  // squares stay below float's 3.4e38
+  const auto shown = [](double x) {
+    std::ostringstream out;
+    out << x;
+    return out.str();
+  };
+  const std::string frustum_keys =
+      light.type == LightType::spot   ? "keys 'near', 'far' and 'fov_y_deg'"
+      : light.type == LightType::omni ? "keys 'near' and 'far'"
+                                      : "keys 'ortho', 'near' and 'far'";
+  double largest = 0;
+  Vec3d lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+           std::numeric_limits<double>::max()};
+  Vec3d hi{-lo.x, -lo.y, -lo.z};
+  for (std::size_t i = 0; i < mesh.positions.size(); i += 3) {
+    const Vec3d p{mesh.positions[i], mesh.positions[i + 1], mesh.positions[i + 2]};
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      return Error{light_source + ": " + frustum_keys +
+                   ": the volume's vertices are not finite numbers (near " + shown(light.near) +
+                   ", far " + shown(light.far) +
+                   ": more than double precision holds); bring far closer to near"};
+    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  if (largest > kLargest)
+    return Error{light_source + ": " + frustum_keys + ": the volume reaches coordinate " +
+                 shown(largest) + "; float32 meshes need coordinates below " + shown(kLargest) +
+                 " (choose the scene's units so that the frustum is smaller)"};
+  const Vec3d span = hi - lo;
+  const double across = std::max({span.x, span.y, span.z});
+  // The checks form areas and volumes in float: a volume smaller than this underflows them.
+  constexpr double kSmallest = 1e-12;
+  if (across < kSmallest)
+    return Error{light_source + ": " + frustum_keys + ": the volume is " + shown(across) +
+                 " across; float32 meshes and their checks need at least " + shown(kSmallest) +
+                 " (choose the scene's units, or near and far, so that it is larger)"};
+  std::size_t collapsed = 0;
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+    const auto tri = mesh.triangle(t);
+    const auto at = [&](std::uint32_t v) {
+      return Vec3d{mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
+    };
+    const Vec3d a = at(tri[0]), b = at(tri[1]), c = at(tri[2]);
+    const Vec3d n = cross(b - a, c - a);
+    if (n.x == 0 && n.y == 0 && n.z == 0) ++collapsed;
+  }
+  // Float32 steps at the volume's coordinates against the spacing of its vertices (its thinnest
+  // extent over the square root of their count, a texel's spacing across a grid): steps coarser
+  // than a sixteenth of it move vertices by more than the checks allow for, which then refuse the
+  // volume (a spot far from the origin, or a fov of 1e-6 degrees).
+  const double thinnest = std::min({span.x, span.y, span.z});
+  const double spacing = thinnest / std::sqrt(std::max<double>(1, double(mesh.num_vertices())));
+  const bool coarse = largest * std::numeric_limits<float>::epsilon() > spacing / 16;
+  if (collapsed == 0 && !coarse) return {};
+  const Vec3d extent = hi - lo;
+  const double size = std::max({extent.x, extent.y, extent.z});
+  const double step = largest * std::numeric_limits<float>::epsilon();
+  std::string what = light_source + ": float32 cannot hold this volume (coordinates up to " +
+                     shown(largest) + ", steps of " + shown(step) + ", vertices about " +
+                     shown(spacing) + " apart; " + std::to_string(collapsed) + " of " +
+                     std::to_string(mesh.num_triangles()) + " faces collapse to zero area)";
+
+  if (space == Space::world && largest > 100 * size)
+    return Error{what + ": key 'position': the light is far from the origin for the volume's " +
+                 "size " + shown(size) +
+                 "; write it in the light's eye space with --space light and place it with the "
+                 "light's view matrix"};
+  return Error{what + ": " + frustum_keys +
+               ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
+               "near and far closer"};
 }
 
 }  // namespace lightvol

@@ -37,4 +37,15 @@ std::vector<std::uint32_t> border_loop(int width, int height, bool standard);
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  const VolumeOptions& options, const std::string& source);
 
+// Whether `mesh`, a volume of `light` built in `space`, holds in float32 as it is: every
+// coordinate finite and below 1e18 in magnitude (so that the products the checks and renderers
+// form stay finite), the volume at least 1e-12 across (so that they do not underflow), and no face
+// collapsed to zero area or to a repeated position by float32
+// rounding. Lights whose volumes cannot be represented are valid lights: the Error says which keys
+// of `light_source` are to blame and what to do (far from the origin: --space light; a frustum
+// too thin, too large, or with far/near beyond what the precision holds: the keys to change).
+// Every builder's result should pass this before it is checked or written: it never writes NaN.
+Status check_representable(const Mesh& mesh, const Light& light, Space space,
+                           const std::string& light_source);
+
 }  // namespace lightvol

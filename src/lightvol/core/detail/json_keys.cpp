@@ -16,13 +16,54 @@ using nlohmann::json;
 
 bool is_finite_number(const json& x) { return x.is_number() && std::isfinite(x.get<double>()); }
 
-std::string describe(const json& v) {
-  std::string s = v.dump();
-  if (s.size() > 40) s = s.substr(0, 37) + "...";
+constexpr std::size_t kQuoteLimit = 80;
+
+// Appends `v`'s JSON text to `out` until `out` holds more than kQuoteLimit characters. Recursion
+// stops with the text: each level adds at least one character, so it is at most kQuoteLimit deep.
+void dump_bounded(const json& v, std::string* out) {
+  if (out->size() > kQuoteLimit) return;
+  if (v.is_array() || v.is_object()) {
+    const bool object = v.is_object();
+    *out += object ? '{' : '[';
+    bool first = true;
+    for (auto it = v.begin(); it != v.end() && out->size() <= kQuoteLimit; ++it) {
+      if (!first) *out += ',';
+      first = false;
+      if (object) *out += json(it.key()).dump() + ':';
+      dump_bounded(it.value(), out);
+    }
+    *out += object ? '}' : ']';
+  } else if (v.is_string()) {
+    const std::string& s = v.get_ref<const std::string&>();
+    *out += json(s.substr(0, kQuoteLimit + 1)).dump();
+  } else {
+    *out += v.dump();
+  }
+}
+
+std::string describe(const json& v) { return describe_json(v); }
+
+constexpr int kMaxDepth = 32;
+
+// Thrown from the parser's callback: the text is valid JSON but not an acceptable description.
+struct Refused {
+  std::string why;
+};
+
+}  // namespace
+
+std::string describe_json(const json& v) {
+  std::string s;
+  dump_bounded(v, &s);
+  if (s.size() > kQuoteLimit) s = s.substr(0, kQuoteLimit - 3) + "...";
   return std::string(v.type_name()) + " " + s;
 }
 
-}  // namespace
+std::string quote_text(std::string_view s) {
+  std::string q = json(std::string(s.substr(0, kQuoteLimit + 1))).dump();
+  if (q.size() > kQuoteLimit) q = q.substr(0, kQuoteLimit - 4) + "...\"";
+  return q;
+}
 
 std::string format_number(double x) {
   std::ostringstream out;
@@ -52,9 +93,33 @@ Result<std::string> read_text_file(const std::string& path, const char* what) {
 }
 
 Result<json> parse_json_object(std::string_view text, const std::string& source, const char* what) {
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos)
+    return Error{source + ": byte " + std::to_string(nul) +
+                 " is NUL; a description is JSON text, which has none"};
   json root;
+  // The callback sees the document as it is parsed: keys per open object (a repeated key would
+  // otherwise be resolved silently, the last one winning) and the nesting depth.
+  std::vector<std::vector<std::string>> open_keys;
+  const json::parser_callback_t check = [&](int depth, json::parse_event_t event, json& parsed) {
+    if (depth > kMaxDepth)
+      throw Refused{"nested deeper than " + std::to_string(kMaxDepth) + " levels"};
+    if (event == json::parse_event_t::object_start) {
+      open_keys.emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      if (!open_keys.empty()) open_keys.pop_back();
+    } else if (event == json::parse_event_t::key && !open_keys.empty()) {
+      const std::string& key = parsed.get_ref<const std::string&>();
+      std::vector<std::string>& seen = open_keys.back();
+      if (std::find(seen.begin(), seen.end(), key) != seen.end())
+        throw Refused{"key " + quote_text(key) + " appears twice in one object"};
+      seen.push_back(key);
+    }
+    return true;
+  };
   try {
-    root = json::parse(text.begin(), text.end());
+    root = json::parse(text.begin(), text.end(), check);
+  } catch (const Refused& r) {
+    return Error{source + ": " + r.why};
   } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
     const std::string message = e.what();
     const auto at = message.find("parse error");
@@ -66,7 +131,9 @@ Result<json> parse_json_object(std::string_view text, const std::string& source,
 }
 
 Error KeyReader::error(const std::string& key, const std::string& why) const {
-  return {source_ + ": key '" + prefix_ + key + "': " + why};
+  std::string name = prefix_ + key;  // unknown keys come from the input: quoted, not echoed whole
+  if (name.size() > kQuoteLimit) name = name.substr(0, kQuoteLimit - 3) + "...";
+  return {source_ + ": key '" + name + "': " + why};
 }
 
 Status KeyReader::only(std::initializer_list<std::string_view> known) const {

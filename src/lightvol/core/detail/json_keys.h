@@ -18,11 +18,18 @@ namespace lightvol {
 // `x` as a message shows it (stream formatting: 0.1, 1e+30).
 std::string format_number(double x);
 
+// `v` as a message quotes it: its type and at most about 80 characters of its JSON text (without
+// walking more of it than that, however deep or long it is).
+std::string describe_json(const nlohmann::json& v);
+// A string from the input as a message quotes it: at most about 80 characters, in double quotes.
+std::string quote_text(std::string_view s);
+
 // The whole text of a description file; `what` names it in errors ("light description").
 Result<std::string> read_text_file(const std::string& path, const char* what);
 
-// `text` as a JSON object. Malformed JSON, numbers beyond double's range (1e99999) and anything
-// but an object are errors naming `source`; `what` says what the object describes ("a light").
+// `text` as a JSON object. Malformed JSON, numbers beyond double's range (1e99999), a NUL byte,
+// a key repeated in one object, nesting deeper than 32 levels and anything but an object are
+// errors naming `source`; `what` says what the object describes ("a light").
 Result<nlohmann::json> parse_json_object(std::string_view text, const std::string& source,
                                          const char* what);
 

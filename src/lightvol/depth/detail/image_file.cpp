@@ -1,4 +1,7 @@
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -6,7 +9,10 @@
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <thread>
 #include <vector>
+
+#include <OpenImageIO/thread.h>
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
@@ -238,6 +244,26 @@ Result<std::string> image_format(const std::string& path, const std::string& mag
                "ZFile, by its first bytes or its extension)"};
 }
 
+// PFM's third header line: its sign is the byte order (negative: little-endian), its magnitude
+// the scale factor that multiplies every stored value (as Netpbm describes it, and as
+// OpenImageIO reads it). A scale of 0 (every depth 0), or one that is not a finite number, is
+// refused.
+Status check_pfm_scale(const std::string& path, const std::string& magic) {
+  if (magic.rfind("Pf", 0) != 0 && magic.rfind("PF", 0) != 0) return {};
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 256);
+  std::istringstream words(head);
+  std::string id, width, height, scale;
+  words >> id >> width >> height >> scale;
+  char* end = nullptr;
+  const double value = std::strtod(scale.c_str(), &end);
+  if (scale.empty() || end != scale.c_str() + scale.size() || !std::isfinite(value) || value == 0)
+    return Error{path + ": PFM scale '" + scale.substr(0, 40) +
+                 "' is not a finite non-zero number (its sign is the byte order, -1 for "
+                 "little-endian; its magnitude multiplies the values)"};
+  return {};
+}
+
 }  // namespace
 
 Result<ImageFile> check_image_file(const std::string& path) {
@@ -253,6 +279,7 @@ Result<ImageFile> check_image_file(const std::string& path) {
   if (!format) return format.error();
   if (Status s = check_exr_header(path); !s) return s.error();
   if (Status s = check_png_chunks(path); !s) return s.error();
+  if (Status s = check_pfm_scale(path, magic); !s) return s.error();
   return ImageFile{*format, magic};
 }
 
@@ -275,6 +302,8 @@ Result<OpenImage> open_checked_image(
   if (!image.input)
     return Error{path + ": cannot read image: no " + *format +
                  " reader: " + oiio_message(OIIO::geterror())};
+  // The reader runs in a forked child with one thread: ask it to do its work on that thread.
+  image.input->threads(1);
   if (!image.input->open(path, image.spec))
     return Error{path + ": cannot read image: " + oiio_message(image.input->geterror())};
   const OIIO::ImageSpec& spec = image.spec;
@@ -337,8 +366,36 @@ Result<OpenImage> open_checked_image(
                    std::to_string(decoded) + " bytes, in a file of " + std::to_string(file_size) +
                    ": more than any compression holds (truncated or forged)"};
   }
+  // The pixels stored (the data window) must be the view (the display window): a crop read as
+  // the whole view would stretch it over the frustum, silently wrong geometry.
+  if (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
+      spec.height != spec.full_height) {
+    const auto window = [](int x, int y, int w, int h) {
+      return std::to_string(w) + "x" + std::to_string(h) + " at (" + std::to_string(x) + ", " +
+             std::to_string(y) + ")";
+    };
+    return Error{path + ": its data window (" + window(spec.x, spec.y, spec.width, spec.height) +
+                 ") is not its display window (" +
+                 window(spec.full_x, spec.full_y, spec.full_width, spec.full_height) +
+                 "): it covers another part than the whole view; store the whole view, or make "
+                 "the data window the view (oiiotool in.exr --fullpixels -o out.exr)"};
+  }
   return image;
 }
+
+namespace {
+// Before forking a decoder child: every worker of OpenImageIO's thread pool idle. A worker that is
+// still starting holds the pool's spin lock while it registers itself; forked at that moment, the
+// child inherits the lock held by a thread it does not have, and its first use of the pool (TIFF
+// strips are decoded there) spins forever: about one read in ten hung with four test processes
+// writing and reading at once. Idle workers wait on a condition variable and hold nothing.
+void quiesce_thread_pool() {
+  const OIIO::thread_pool* pool = OIIO::default_thread_pool();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (pool->idle() < pool->size() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+}
+}  // namespace
 
 Result<ImageChannel> read_image_channel(
     const std::string& path, const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
@@ -412,6 +469,7 @@ Result<ImageChannel> read_image_channel(
                   memory_budget();  // the budget, and room for the libraries' own state
   limits.cpu_seconds = 5;
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
+  quiesce_thread_pool();
   if (Status run = run_isolated(path + ": OpenImageIO's reader", limits, child, parent); !run)
     return run.error();
   return result;

@@ -149,6 +149,16 @@ Result<Header> read_header(const std::string& path, std::uintmax_t size) {
       p.count_type = *count_type;
       p.type = *type;
       header.elements.back().properties.push_back(std::move(p));
+    } else if (header.elements.empty() &&
+               std::all_of(words.begin(), words.end(), [](std::string_view w) {
+                 return std::all_of(w.begin(), w.end(), [](char ch) {
+                   const auto u = static_cast<unsigned char>(ch);
+                   return u >= 0x20 && u != 0x7f;
+                 });
+               })) {
+      // Free text before the first element, without the 'comment' keyword: old Blender exporters
+      // wrote "Created by Blender3D 247 - www.blender.org, ..." there. Read as a comment.
+      continue;
     } else {
       return fail("unknown keyword " + quoted(keyword));
     }
