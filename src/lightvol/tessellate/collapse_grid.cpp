@@ -11,14 +11,14 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/collapse_grid.h>
+#include <lightvol/tessellate/detail/lattice.h>
 
 namespace lightvol {
 
 namespace {
 
-struct Pt {
-  int x = 0, y = 0;
-};
+using detail::Pt;
+using detail::triangle_row_span;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -43,27 +43,8 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
   const double limit = kUniform ? bound / t.uniform_scale() : bound;
   for (int y = y0; y <= y1; ++y) {
-    // Each directed edge p→q keeps the points with cross(q − p, x − p) ≥ 0: A·x + C ≥ 0.
-    std::int64_t lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
-    for (int k = 0; k < 3; ++k) {
-      const Pt p = v[k], q = v[(k + 1) % 3];
-      const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
-      const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
-      // Quotients of integers below 2^53 by divisors below 2^31: the rounded double quotient has
-      // the same floor and ceiling as the exact one (an exact integer stays exact; otherwise it is
-      // at least 1/|A| away from the nearest integer, far more than the rounding).
-      if (A > 0) {
-        lo = std::max(lo, static_cast<std::int64_t>(
-                              std::ceil(static_cast<double>(-C) / static_cast<double>(A))));
-      } else if (A < 0) {
-        hi = std::min(hi, static_cast<std::int64_t>(
-                              std::floor(static_cast<double>(C) / static_cast<double>(-A))));
-      } else if (C < 0) {
-        lo = 1, hi = 0;
-      }
-    }
-    if (lo > hi) continue;
-    const int x0 = static_cast<int>(lo), x1 = static_cast<int>(hi);
+    int x0 = 0, x1 = 0;
+    if (!triangle_row_span(v, y, &x0, &x1)) continue;
     const double* dt = t.depth_row(y);
     const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
     double m = 0;

@@ -13,11 +13,6 @@
 namespace lightvol::detail {
 namespace {
 
-std::int64_t floor_div(std::int64_t a, std::int64_t b) {  // b > 0
-  return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
-
 // The largest error over the texels (lattice points) of the closed triangle (a, b, c), rows
 // [y_begin, y_end) only. The triangle's window depth is the plane through its corners' depths:
 // exactly what the emitted flat triangle gives along each texel ray.
@@ -38,22 +33,8 @@ double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, 
   const Pt v[3] = {a, b, c};
   double worst = 0;
   for (int y = y_begin; y < y_end; ++y) {
-    // Each directed edge p→q keeps the points with cross(q − p, x − p) ≥ 0: A·x + C ≥ 0.
-    std::int64_t lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
-    for (int k = 0; k < 3; ++k) {
-      const Pt p = v[k], q = v[(k + 1) % 3];
-      const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
-      const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
-      if (A > 0) {
-        lo = std::max(lo, ceil_div(-C, A));
-      } else if (A < 0) {
-        hi = std::min(hi, floor_div(C, -A));
-      } else if (C < 0) {
-        lo = 1, hi = 0;
-      }
-    }
-    if (lo > hi) continue;
-    const int x0 = static_cast<int>(lo), x1 = static_cast<int>(hi);
+    int x0 = 0, x1 = 0;
+    if (!triangle_row_span(v, y, &x0, &x1)) continue;
     const double* dt = t.depth_row(y);
     const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
     double m = 0;

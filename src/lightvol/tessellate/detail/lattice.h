@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 
 #include <lightvol/tessellate/adaptive_grid.h>
 
@@ -39,6 +40,32 @@ struct Quadtree {
     return {i * s, j * s, std::min(i * s + s, cw), std::min(j * s + s, ch)};
   }
 };
+
+// The texels of row y inside the closed triangle v[0], v[1], v[2] (counter-clockwise in texel
+// space: each directed edge p→q keeps the points with cross(q − p, x − p) ≥ 0, i.e. A·x + C ≥ 0):
+// [*x0, *x1], or false when the row holds none. Exact: integer arithmetic throughout.
+inline bool triangle_row_span(const Pt v[3], int y, int* x0, int* x1) {
+  const auto floor_div = [](std::int64_t a, std::int64_t b) {  // b > 0
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+  };
+  std::int64_t lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
+  for (int k = 0; k < 3; ++k) {
+    const Pt p = v[k], q = v[(k + 1) % 3];
+    const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
+    const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
+    if (A > 0) {
+      lo = std::max(lo, -floor_div(C, A));  // ceil(−C / A)
+    } else if (A < 0) {
+      hi = std::min(hi, floor_div(C, -A));
+    } else if (C < 0) {
+      return false;
+    }
+  }
+  if (lo > hi) return false;
+  *x0 = static_cast<int>(lo);
+  *x1 = static_cast<int>(hi);
+  return true;
+}
 
 // The largest error (TexelDepths::error) over the texels (lattice points) of the closed triangle
 // (a, b, c), whose window depth is the plane through its corners' depths: exactly what the
