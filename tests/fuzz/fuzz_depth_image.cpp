@@ -5,11 +5,17 @@
 #include <cstdint>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/detail/image_helper.h>
 #include <lightvol/depth/depth_image.h>
+#include <lightvol/depth/detail/image_codec.h>
 
 #include "fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  // The decoder in forked children of this process (its coverage counts), not lightvol-image.
+  static const bool in_process =
+      (lightvol::detail::set_in_process_image_server(&lightvol::detail::serve_image_request), true);
+  (void)in_process;
   if (size < 1) return 0;
   // The formats read_depth_image reads, then three it refuses without opening.
   static const char* const kExtensions[] = {".exr",   ".png", ".tif", ".pfm", ".hdr",

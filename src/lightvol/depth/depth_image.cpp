@@ -4,9 +4,8 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
-
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
 #include <lightvol/depth/depth_image.h>
@@ -22,33 +21,33 @@ std::string join_names(const std::vector<std::string>& names) {
   return s;
 }
 
-Result<int> choose_channel(const OIIO::ImageSpec& spec, const DepthReadOptions& options,
+Result<int> choose_channel(const detail::ImageHeader& spec, const DepthReadOptions& options,
                            const std::string& path) {
-  const auto& names = spec.channelnames;
+  const auto& names = spec.names;
   if (!options.channel.empty()) {
-    for (int c = 0; c < spec.nchannels; ++c)
+    for (int c = 0; c < spec.nchannels(); ++c)
       if (names[c] == options.channel) return c;
     return Error{path + ": no channel named '" + options.channel +
                  "' (channels: " + join_names(names) + ")"};
   }
   const auto is_alpha = [&](int c) { return c == spec.alpha_channel || names[c] == "A"; };
-  if (spec.nchannels == 1 && !is_alpha(0)) return 0;
-  if (spec.nchannels == 1)
+  if (spec.nchannels() == 1 && !is_alpha(0)) return 0;
+  if (spec.nchannels() == 1)
     return Error{path + ": its only channel, '" + names[0] +
                  "', is alpha (coverage), not depth; to read it as depth anyway, name it with "
                  "--channel " +
                  names[0]};
   for (const char* preferred : {"Z", "depth", "Y"})
-    for (int c = 0; c < spec.nchannels; ++c)
+    for (int c = 0; c < spec.nchannels(); ++c)
       if (names[c] == preferred) return c;
   int candidate = -1, non_alpha = 0;
-  for (int c = 0; c < spec.nchannels; ++c) {
+  for (int c = 0; c < spec.nchannels(); ++c) {
     if (is_alpha(c)) continue;
     ++non_alpha;
     candidate = c;
   }
   if (non_alpha == 1) return candidate;
-  return Error{path + ": has " + std::to_string(spec.nchannels) + " channels (" +
+  return Error{path + ": has " + std::to_string(spec.nchannels()) + " channels (" +
                join_names(names) + "): choose the depth channel with DepthReadOptions::channel"};
 }
 
@@ -70,18 +69,17 @@ Status validate_depths(const DepthImage& image, const std::string& source) {
 }
 
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options) {
-  const auto within_budget = [&](const OIIO::ImageSpec& spec) {
+  const auto within_budget = [&](const detail::ImageHeader& spec) {
     return check_memory(depth_build_memory_bytes(spec.width, spec.height, options.images), path,
                         "a volume from " + std::to_string(spec.width) + "x" +
                             std::to_string(spec.height) + " texels" +
                             (options.images > 1 ? " x " + std::to_string(options.images) : ""));
   };
-  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
+  const auto select = [&](const detail::ImageHeader& spec) -> Result<int> {
     const Result<int> channel = choose_channel(spec, options, path);
     if (!channel) return channel.error();
-    const OIIO::TypeDesc format = spec.channelformat(*channel);
-    if (format.basetype == OIIO::TypeDesc::UINT8 || format.basetype == OIIO::TypeDesc::INT8)
-      return Error{path + ": channel '" + spec.channelnames[*channel] +
+    if (spec.channel_eight_bit[static_cast<std::size_t>(*channel)] != 0)
+      return Error{path + ": channel '" + spec.names[static_cast<std::size_t>(*channel)] +
                    "' holds 8-bit values, too coarse for depth; use a float or 16-bit image"};
     return channel;
   };
@@ -98,16 +96,15 @@ Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOpti
 
 Result<ImageChannel> read_first_channel(const std::string& path,
                                         const ChannelReadOptions& options) {
-  const auto within_budget = [&](const OIIO::ImageSpec& spec) {
+  const auto within_budget = [&](const detail::ImageHeader& spec) {
     const auto texels =
         static_cast<std::uint64_t>(spec.width) * static_cast<std::uint64_t>(spec.height);
     return check_memory(
         texels * options.bytes_per_texel, path,
         "a " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " image");
   };
-  const auto select = [&](const OIIO::ImageSpec& spec) -> Result<int> {
-    if (!options.refuse_8_bit.empty() && (spec.format.basetype == OIIO::TypeDesc::UINT8 ||
-                                          spec.format.basetype == OIIO::TypeDesc::INT8))
+  const auto select = [&](const detail::ImageHeader& spec) -> Result<int> {
+    if (!options.refuse_8_bit.empty() && spec.eight_bit)
       return Error{path + ": " + options.refuse_8_bit};
     return 0;
   };
@@ -134,16 +131,20 @@ Status write_depth_image(const std::string& path, const DepthImage& image) {
   const std::string ext = lower_extension(path);
   if (ext == ".pfm") return write_pfm(path, image);
   return write_file_atomically(path, [&](const std::string& temp_path) -> Status {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out)
+    detail::ImageWrite pixels;
+    pixels.width = image.width;
+    pixels.height = image.height;
+    pixels.stored =
+        ext == ".png" ? detail::ImageWrite::Stored::u16 : detail::ImageWrite::Stored::f32;
+    pixels.names = {ext == ".exr" ? "Z" : "Y"};
+    pixels.floats = image.values.data();
+    const detail::ImageWriteResult written = detail::write_image_file(path, temp_path, pixels);
+    using Outcome = detail::ImageWriteResult::Outcome;
+    if (written.outcome == Outcome::no_writer)
       return Error{path +
-                   ": cannot write images of this type: " + detail::oiio_message(OIIO::geterror())};
-    OIIO::ImageSpec spec(image.width, image.height, 1, OIIO::TypeDesc::FLOAT);
-    if (ext == ".png") spec.set_format(OIIO::TypeDesc::UINT16);
-    spec.channelnames = {ext == ".exr" ? "Z" : "Y"};
-    if (!out->open(temp_path, spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, image.values.data()) || !out->close())
-      return Error{path + ": cannot write image: " + detail::oiio_message(out->geterror())};
+                   ": cannot write images of this type: " + detail::oiio_message(written.message)};
+    if (written.outcome == Outcome::failed)
+      return Error{path + ": cannot write image: " + detail::oiio_message(written.message)};
     return {};
   });
 }

@@ -1,5 +1,8 @@
+#include <dlfcn.h>
+
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
@@ -14,6 +17,41 @@ LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DEFINE)
 #undef LIGHTVOL_GL_DEFINE
 
 namespace {
+
+// libEGL is opened when the first context is created (dlopen), not linked: linking it made every
+// lightvol command load EGL, GLdispatch and GLX at start, rendering or not. These pointers, named
+// as EGL's functions, are what the calls below resolve to (this namespace is searched before the
+// global one).
+// clang-format off
+#define LIGHTVOL_EGL_FUNCTIONS(X)                                                      \
+  X(eglBindAPI) X(eglChooseConfig) X(eglCreateContext) X(eglDestroyContext)            \
+  X(eglGetDisplay) X(eglGetError) X(eglGetProcAddress) X(eglInitialize)                \
+  X(eglMakeCurrent) X(eglQueryString) X(eglTerminate)
+// clang-format on
+#define LIGHTVOL_EGL_DEFINE(name) decltype(&::name) name = nullptr;
+LIGHTVOL_EGL_FUNCTIONS(LIGHTVOL_EGL_DEFINE)
+#undef LIGHTVOL_EGL_DEFINE
+
+// Opens libEGL.so.1 and resolves the functions above, once; an Error saying why it could not.
+Status load_egl() {
+  static std::once_flag once;
+  static std::string failure;
+  std::call_once(once, [] {
+    void* library = ::dlopen("libEGL.so.1", RTLD_NOW | RTLD_LOCAL);
+    if (library == nullptr) {
+      const char* why = ::dlerror();
+      failure = "cannot load libEGL.so.1 (" + std::string(why ? why : "unknown reason") + ")";
+      return;
+    }
+#define LIGHTVOL_EGL_LOAD(name)                                     \
+  name = reinterpret_cast<decltype(name)>(::dlsym(library, #name)); \
+  if (name == nullptr && failure.empty()) failure = "libEGL.so.1 has no " #name;
+    LIGHTVOL_EGL_FUNCTIONS(LIGHTVOL_EGL_LOAD)
+#undef LIGHTVOL_EGL_LOAD
+  });
+  if (!failure.empty()) return Error{failure};
+  return {};
+}
 
 std::string egl_error_name(EGLint code) {
   switch (code) {
@@ -96,6 +134,7 @@ EGLDisplay open_display(std::string* platform, std::string* why) {
 }  // namespace
 
 Result<std::unique_ptr<Context>> Context::create() {
+  if (Status loaded = load_egl(); !loaded) return Error{"no OpenGL: " + loaded.error().message};
   std::string platform, why;
   EGLDisplay display = open_display(&platform, &why);
   if (display == EGL_NO_DISPLAY)

@@ -1,9 +1,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include <OpenImageIO/imageio.h>
-
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/path.h>
 #include <lightvol/depth/image_channel.h>
 #include <lightvol/render/image_io.h>
@@ -24,11 +23,13 @@ Status write_image(const std::string& path, const Image& image, double exposure)
       ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tga";
   const std::size_t n = image.values.size();
   return write_file_atomically(path, [&](const std::string& temp) -> Status {
-    auto out = OIIO::ImageOutput::create(temp);
-    if (!out) return Error{path + ": cannot write images of this type (" + OIIO::geterror() + ")"};
-    OIIO::ImageSpec spec(image.width, image.height, 3,
-                         eight_bit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
-    bool ok = out->open(temp, spec);
+    detail::ImageWrite write;
+    write.width = image.width;
+    write.height = image.height;
+    write.channels = 3;
+    write.stored = eight_bit ? detail::ImageWrite::Stored::u8 : detail::ImageWrite::Stored::f32;
+    std::vector<unsigned char> bytes;
+    std::vector<float> floats;
     if (eight_bit) {
       double scale = exposure;
       if (!(scale > 0)) {
@@ -44,22 +45,28 @@ Status write_image(const std::string& path, const Image& image, double exposure)
         }
         scale = p > 0 ? 4.0 / p : 1.0;
       }
-      std::vector<unsigned char> pixels(3 * n);
+      std::vector<unsigned char>& pixels = bytes;
+      pixels.resize(3 * n);
       for (std::size_t i = 0; i < n; ++i) {
         const double x = std::max(0.0, image.values[i] * scale);
         const double v = std::clamp(srgb(x / (1 + x)), 0.0, 1.0);
         pixels[3 * i] = pixels[3 * i + 1] = pixels[3 * i + 2] =
             static_cast<unsigned char>(std::lround(255 * v));
       }
-      ok = ok && out->write_image(OIIO::TypeDesc::UINT8, pixels.data());
+      write.bytes = pixels.data();
     } else {
-      std::vector<float> pixels(3 * n);
+      std::vector<float>& pixels = floats;
+      pixels.resize(3 * n);
       for (std::size_t i = 0; i < n; ++i)
         pixels[3 * i] = pixels[3 * i + 1] = pixels[3 * i + 2] = static_cast<float>(image.values[i]);
-      ok = ok && out->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+      write.floats = pixels.data();
     }
-    ok = out->close() && ok;
-    if (!ok) return Error{path + ": cannot write image: " + out->geterror()};
+    const detail::ImageWriteResult written = detail::write_image_file(temp, temp, write);
+    using Outcome = detail::ImageWriteResult::Outcome;
+    if (written.outcome == Outcome::no_writer)
+      return Error{path + ": cannot write images of this type (" + written.message + ")"};
+    if (written.outcome == Outcome::failed)
+      return Error{path + ": cannot write image: " + written.message};
     return {};
   });
 }

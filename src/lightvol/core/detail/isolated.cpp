@@ -1,6 +1,8 @@
 #include <fcntl.h>
 #include <poll.h>
+#include <spawn.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -13,7 +15,11 @@
 #include <cstring>
 #include <limits>
 #include <new>
+#include <string>
 
+extern char** environ;
+
+#include <lightvol/core/check.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 
@@ -32,21 +38,24 @@ namespace lightvol {
 namespace {
 
 // How the child ends when it cannot finish `child` (exit codes of its own, beside 0).
-constexpr int kOutOfMemory = 97, kThrew = 98, kBrokenPipe = 99;
+constexpr int kOutOfMemory = kChildOutOfMemory, kThrew = kChildThrew,
+              kBrokenPipe = kChildBrokenPipe;
 
 double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// The process's address space now (bytes), from /proc/self/statm; 0 if unknown.
-std::uint64_t address_space_bytes() {
-  std::FILE* f = std::fopen("/proc/self/statm", "r");
+// A process's address space now (bytes), from /proc/PID/statm; 0 if unknown.
+std::uint64_t process_address_space(pid_t pid) {
+  const std::string path = "/proc/" + std::to_string(pid) + "/statm";
+  std::FILE* f = std::fopen(path.c_str(), "r");
   if (!f) return 0;
   unsigned long long pages = 0;
   const bool ok = std::fscanf(f, "%llu", &pages) == 1;
   std::fclose(f);
   return ok ? pages * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
 }
+std::uint64_t address_space_bytes() { return process_address_space(::getpid()); }
 
 // RLIMIT_CPU for `seconds`: SIGXCPU, which ends the child, at the soft limit. The hard limit stays
 // open, so that the parent may raise the soft one later (ChildInput::allow_more) without
@@ -76,17 +85,68 @@ void limit_child(double cpu, std::uint64_t space) {
 #endif
 }
 
+// Sends on a socket without SIGPIPE (a peer that is gone is an error, not a signal).
+ssize_t send_some(int fd, const void* data, std::size_t bytes) {
+  return ::send(fd, data, bytes, MSG_NOSIGNAL);
+}
+
 }  // namespace
 
 void ChildOutput::write(const void* data, std::size_t bytes) {
   const char* p = static_cast<const char*>(data);
   while (bytes > 0) {
-    const ssize_t n = ::write(fd_, p, bytes);
+    const ssize_t n = send_some(fd_, p, bytes);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) _exit(kBrokenPipe);  // the parent stopped listening
     p += n;
     bytes -= static_cast<std::size_t>(n);
   }
+}
+
+bool ChildOutput::read(void* data, std::size_t bytes) {
+  char* p = static_cast<char*>(data);
+  while (bytes > 0) {
+    const ssize_t n = ::read(fd_, p, bytes);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool ChildOutput::read_string(std::string* text) {
+  std::uint64_t length = 0;
+  if (!read_value(&length) || length > kMaxString) return false;
+  text->assign(length, '\0');
+  return read(text->data(), length);
+}
+
+bool ChildInput::write(const void* data, std::size_t bytes) {
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    const double left = deadline_ - now_seconds();
+    if (left <= 0) {
+      timed_out_ = true;
+      return false;
+    }
+    pollfd ready{fd_, POLLOUT, 0};
+    const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000)));
+    if (polled < 0 && errno == EINTR) continue;
+    if (polled < 0) return false;
+    if (polled == 0) continue;  // the deadline is tested above
+    const ssize_t n = send_some(fd_, p, bytes);
+    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+    if (n <= 0) return false;  // the child ended
+    p += n;
+    bytes -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool ChildInput::write_string(const std::string& text) {
+  const std::uint64_t length = std::min(text.size(), ChildOutput::kMaxString);
+  return write_value(length) && write(text.data(), length);
 }
 
 void ChildOutput::write_string(const std::string& text) {
@@ -177,14 +237,124 @@ bool ChildInput::read(void* data, std::size_t bytes) {
   return true;
 }
 
+namespace {
+
+// Reaps `pid` (killed first unless it `ended` by itself), and returns the Error its end is, or
+// `answer`. `cpu_base` is the processor time it had used before this request (a server's).
+Status reap(const std::string& what, const IsolationLimits& limits, std::uint64_t memory, pid_t pid,
+            const ChildInput& in, bool ended, double cpu_base, const Status& answer) {
+  if (!ended) ::kill(pid, SIGKILL);
+  int status = 0;
+  rusage usage{};
+  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
+  }
+
+  const auto seconds = [](double s) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", s);
+    return std::string(text);
+  };
+  const double used = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                      1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  const auto cpu = static_cast<double>(cpu_limit(in.cpu_seconds()).rlim_cur);
+  if (WIFSIGNALED(status) &&
+      (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= cpu)))
+    return Error{what + " used more than " +
+                 seconds(std::floor(std::max(1.0, in.cpu_seconds() - cpu_base))) +
+                 " s of processor time on this input and was stopped"};
+  if (in.timed_out())
+    return Error{what + " took longer than " +
+                 seconds(limits.wall_seconds + in.wall_seconds_added()) +
+                 " s on this input and was stopped"};
+  const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+  if (WIFSIGNALED(status) && !killed_by_us) {
+    const int sig = WTERMSIG(status);
+    const char* name = ::strsignal(sig);
+    return Error{what + " crashed on this input (signal " + std::to_string(sig) +
+                 (name ? std::string(": ") + name : "") + ")"};
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
+    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " +
+                 limits.memory_advice + ")"};
+  if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
+    return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
+  return answer;
+}
+
+// After the child or program started: `parent` on its answer, the end of the answer, the child
+// reaped, and its fate as the result.
+Status supervise(const std::string& what, const IsolationLimits& limits, std::uint64_t memory,
+                 pid_t pid, ChildInput& in, const std::function<Status(ChildInput&)>& parent) {
+  const Status answer = parent(in);
+  // The child's answer is whole: it must end (close its end) before the deadline too.
+  bool ended = false;
+  if (answer) {
+    char extra = 0;
+    while (in.read(&extra, 1)) {
+      // Bytes beyond the answer are read to the end and ignored: the answer is the one parsed.
+    }
+    ended = !in.timed_out();
+  }
+  return reap(what, limits, memory, pid, in, ended, 0, answer);
+}
+
+// The processor time a process has used (its user and system time, seconds); 0 if unknown.
+double process_cpu_seconds(pid_t pid) {
+  const std::string path = "/proc/" + std::to_string(pid) + "/stat";
+  std::FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) return 0;
+  char line[1024];
+  const std::size_t n = std::fread(line, 1, sizeof(line) - 1, f);
+  std::fclose(f);
+  line[n] = '\0';
+  const char* p = std::strrchr(line, ')');  // after the command name, which may hold spaces
+  unsigned long long utime = 0, stime = 0;
+  if (!p || std::sscanf(p + 1, " %*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &utime,
+                        &stime) != 2)
+    return 0;
+  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+// The limits of a started program for work of `cpu` more seconds and `memory` more bytes.
+void limit_program(pid_t pid, double cpu_used, double cpu, std::uint64_t memory) {
+  const rlimit no_core{0, 0};
+  ::prlimit(pid, RLIMIT_CORE, &no_core, nullptr);
+  const rlimit processor = cpu_limit(cpu_used + cpu);
+  ::prlimit(pid, RLIMIT_CPU, &processor, nullptr);
+#ifndef LV_ASAN
+  const std::uint64_t space = process_address_space(pid) + memory;
+  const rlimit bytes{static_cast<rlim_t>(space), static_cast<rlim_t>(space)};
+  ::prlimit(pid, RLIMIT_AS, &bytes, nullptr);
+#else
+  (void)memory;
+#endif
+}
+
+// A socket pair for parent and child, both ends above the standard descriptors and the program's
+// channel, close-on-exec.
+bool channel_pair(int fds[2]) {
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) return false;
+  for (int i = 0; i < 2; ++i) {
+    if (fds[i] > kProgramChannel) continue;
+    const int moved = ::fcntl(fds[i], F_DUPFD_CLOEXEC, kProgramChannel + 1);
+    ::close(fds[i]);
+    fds[i] = moved;
+  }
+  if (fds[0] >= 0 && fds[1] >= 0) return true;
+  for (int i = 0; i < 2; ++i)
+    if (fds[i] >= 0) ::close(fds[i]);
+  return false;
+}
+
+}  // namespace
+
 Status run_isolated(const std::string& what, const IsolationLimits& limits,
                     const std::function<void(ChildOutput&)>& child,
                     const std::function<Status(ChildInput&)>& parent) {
   const std::uint64_t memory = limits.memory > 0 ? limits.memory : memory_budget();
   const std::uint64_t space = address_space_bytes() + memory;
   int fds[2];
-  if (::pipe2(fds, O_CLOEXEC) != 0)
-    return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
+  if (!channel_pair(fds)) return Error{what + ": cannot create a pipe: " + std::strerror(errno)};
   const double deadline = now_seconds() + limits.wall_seconds;
   const pid_t pid = ::fork();
   if (pid < 0) {
@@ -209,52 +379,107 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
   }
   ::close(fds[1]);
   ChildInput in(fds[0], pid, limits.cpu_seconds, deadline);
-  const Status answer = parent(in);
-  // The child's answer is whole: it must end (close the pipe) before the deadline too.
-  bool ended = false;
-  if (answer) {
-    char extra = 0;
-    while (in.read(&extra, 1)) {
-      // Bytes beyond the answer are read to the end and ignored: the answer is the one parsed.
-    }
-    ended = !in.timed_out();
-  }
-  if (!ended) ::kill(pid, SIGKILL);
-  int status = 0;
-  rusage usage{};
-  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
-  }
+  const Status result = supervise(what, limits, memory, pid, in, parent);
   ::close(fds[0]);
+  return result;
+}
 
-  const auto seconds = [](double s) {
-    char text[32];
-    std::snprintf(text, sizeof(text), "%g", s);
-    return std::string(text);
-  };
-  const double used = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-                      1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  const auto cpu = static_cast<double>(cpu_limit(in.cpu_seconds()).rlim_cur);
-  if (WIFSIGNALED(status) &&
-      (WTERMSIG(status) == SIGXCPU || (WTERMSIG(status) == SIGKILL && used >= cpu)))
-    return Error{what + " used more than " + seconds(cpu) +
-                 " s of processor time on this input and was stopped"};
-  if (in.timed_out())
-    return Error{what + " took longer than " +
-                 seconds(limits.wall_seconds + in.wall_seconds_added()) +
-                 " s on this input and was stopped"};
-  const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
-  if (WIFSIGNALED(status) && !killed_by_us) {
-    const int sig = WTERMSIG(status);
-    const char* name = ::strsignal(sig);
-    return Error{what + " crashed on this input (signal " + std::to_string(sig) +
-                 (name ? std::string(": ") + name : "") + ")"};
+namespace {
+
+// Starts `argv[0]` with the channel as kProgramChannel; the parent's end in `*fd`.
+Status spawn_program(const std::string& cannot, const std::vector<std::string>& argv, pid_t* pid,
+                     int* fd) {
+  LV_CHECK(!argv.empty());
+  int fds[2];
+  if (!channel_pair(fds)) return Error{cannot + std::strerror(errno) + ")"};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], kProgramChannel);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  sigset_t none;
+  sigemptyset(&none);
+  posix_spawnattr_setsigmask(&attributes, &none);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const int spawned =
+      ::posix_spawn(pid, argv[0].c_str(), &actions, &attributes, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
+  ::close(fds[1]);
+  if (spawned != 0) {
+    ::close(fds[0]);
+    return Error{cannot + std::strerror(spawned) + ")"};
   }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
-    return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " +
-                 limits.memory_advice + ")"};
-  if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
-    return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
-  return answer;
+  *fd = fds[0];
+  return {};
+}
+
+// Waits for the program's kProgramReady; else kills and reaps it and says why it is not ready.
+Status await_ready(const std::string& cannot, pid_t pid, ChildInput& in) {
+  std::uint8_t ready = 0;
+  if (in.read_value(&ready) && ready == kProgramReady) return {};
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (in.timed_out()) return Error{cannot + "it did not get ready in time)"};
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+    return Error{cannot + "it could not be executed)"};
+  return Error{cannot + "it ended before it was ready)"};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<IsolatedServer>> IsolatedServer::start(const std::string& what,
+                                                              const std::vector<std::string>& argv,
+                                                              double wall_seconds) {
+  const std::string cannot = what + " could not be started (" + argv.at(0) + ": ";
+  pid_t pid = -1;
+  int fd = -1;
+  if (Status s = spawn_program(cannot, argv, &pid, &fd); !s) return s.error();
+  ChildInput in(fd, pid, 0, now_seconds() + wall_seconds);
+  if (Status s = await_ready(cannot, pid, in); !s) {
+    ::close(fd);
+    return s.error();
+  }
+  return std::unique_ptr<IsolatedServer>(new IsolatedServer(pid, fd));
+}
+
+IsolatedServer::~IsolatedServer() {
+  if (fd_ >= 0) ::close(fd_);
+  if (pid_ > 0) {
+    // It ends when it reads the end of its channel; wait a moment for that, then end it.
+    int status = 0;
+    for (int i = 0; i < 100; ++i) {
+      const pid_t done = ::waitpid(pid_, &status, WNOHANG);
+      if (done == pid_ || (done < 0 && errno != EINTR)) return;
+      ::usleep(1000);
+    }
+    ::kill(pid_, SIGKILL);
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+  }
+}
+
+Status IsolatedServer::request(const std::string& what, const IsolationLimits& limits,
+                               const std::function<Status(ChildInput&)>& parent) {
+  LV_CHECK(alive());
+  const std::uint64_t memory = limits.memory > 0 ? limits.memory : memory_budget();
+  const double used = process_cpu_seconds(pid_);
+  limit_program(pid_, used, limits.cpu_seconds, memory);
+  ChildInput in(fd_, pid_, used + limits.cpu_seconds, now_seconds() + limits.wall_seconds);
+  const Status answer = parent(in);
+  std::uint8_t ready = 0;
+  if (answer && in.read_value(&ready) && ready == kProgramReady) return answer;
+  // Its answer broke off, or it did not come back: it ends here, and its end is the error.
+  const Status result = reap(what, limits, memory, pid_, in, false, used, answer);
+  pid_ = -1;
+  return result;
 }
 
 }  // namespace lightvol

@@ -13,19 +13,29 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 
 namespace lightvol {
 
-// The child's end of the pipe. Writes go straight to the parent; a parent that stopped reading
-// ends the child.
+// The child's end of the channel (a socket pair). Writes go straight to the parent; a parent that
+// stopped reading ends the child. Reads are what the parent sends (requests, its decisions).
 class ChildOutput {
  public:
   explicit ChildOutput(int fd) : fd_(fd) {}
   void write(const void* data, std::size_t bytes);
+  // Exactly `bytes` from the parent; false when the parent closed its end first.
+  bool read(void* data, std::size_t bytes);
+  template <class T>
+  bool read_value(T* value) {
+    return read(value, sizeof(*value));
+  }
+  // A string as ChildInput::write_string sends it (at most kMaxString bytes).
+  bool read_string(std::string* text);
   template <class T>
   void write_value(const T& value) {
     write(&value, sizeof(value));
@@ -56,6 +66,14 @@ class ChildInput {
   }
   // A string as ChildOutput::write_string sends it; false if it breaks off or is too long.
   bool read_string(std::string* text);
+  // Sends bytes to the child (a request, a decision) before the deadline; false if the child
+  // ended or stopped reading first.
+  bool write(const void* data, std::size_t bytes);
+  template <class T>
+  bool write_value(const T& value) {
+    return write(&value, sizeof(value));
+  }
+  bool write_string(const std::string& text);
   // A mesh as ChildOutput::write_mesh sends it, checked: whole triangles, every index naming a
   // vertex, fewer than 2^32 vertices, the arrays within the memory budget (an Error naming
   // `source` if not). False if the answer breaks off or does not hold together.
@@ -101,5 +119,44 @@ struct IsolationLimits {
 Status run_isolated(const std::string& what, const IsolationLimits& limits,
                     const std::function<void(ChildOutput&)>& child,
                     const std::function<Status(ChildInput&)>& parent);
+
+// The program side of a server (IsolatedServer): `argv[0]` (a path) started with posix_spawn, a
+// fresh process that inherits nothing but its environment, its standard error (also as its
+// standard output, so that nothing it prints mixes with ours) and the channel as file descriptor
+// kProgramChannel. It may use threads. It writes kProgramReady once loaded and after each request.
+constexpr int kProgramChannel = 3;
+constexpr std::uint8_t kProgramReady = 0x6c;
+
+// A program that answers many requests, one at a time: started once, kept while it answers each
+// request whole. Before each request the parent sets the
+// program's limits afresh (its processor time so far plus `cpu_seconds`, its address space now
+// plus `memory`); after it, the program writes kProgramReady again. A request that fails in the
+// program (a crash, a limit, a broken answer, no kProgramReady) ends it, reaps it, and is the
+// Error run_isolated would report; the server is then no longer alive. Not thread-safe: one
+// request at a time (callers keep a pool).
+class IsolatedServer {
+ public:
+  // Starts `argv[0]` and waits (up to `wall_seconds`) until it is loaded; an Error "<what> could
+  // not be started (<argv[0]>: <reason>)" if it cannot be, or ends before it is ready.
+  static Result<std::unique_ptr<IsolatedServer>> start(const std::string& what,
+                                                       const std::vector<std::string>& argv,
+                                                       double wall_seconds);
+  ~IsolatedServer();  // closes the channel (the program then ends) and reaps it
+  IsolatedServer(const IsolatedServer&) = delete;
+  IsolatedServer& operator=(const IsolatedServer&) = delete;
+  Status request(const std::string& what, const IsolationLimits& limits,
+                 const std::function<Status(ChildInput&)>& parent);
+  bool alive() const { return pid_ > 0; }
+  int pid() const { return pid_; }
+
+ private:
+  IsolatedServer(int pid, int fd) : pid_(pid), fd_(fd) {}
+  int pid_;
+  int fd_;
+};
+
+// Exit statuses of a child (or program) that could not finish its work, beside 0: out of memory
+// (std::bad_alloc), an exception, the parent gone.
+constexpr int kChildOutOfMemory = 97, kChildThrew = 98, kChildBrokenPipe = 99;
 
 }  // namespace lightvol

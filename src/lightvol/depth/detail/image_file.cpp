@@ -1,5 +1,4 @@
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -9,11 +8,9 @@
 #include <set>
 #include <sstream>
 #include <string_view>
-#include <thread>
 #include <vector>
 
-#include <OpenImageIO/thread.h>
-
+#include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
@@ -283,153 +280,18 @@ Result<ImageFile> check_image_file(const std::string& path) {
   return ImageFile{*format, magic};
 }
 
-// Long (over 80 lines) on purpose: OpenImageIO's open, then each check of the header it read,
-// in order, each with its own message.
-Result<OpenImage> open_checked_image(
-    const std::string& path, const ImageFile& file,
-    const std::function<Status(const OIIO::ImageSpec&)>& within_budget) {
-  const std::string& magic = file.magic;
-  const std::string* const format = &file.format;
-  std::error_code ec;
-  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader
-  // allocates unknown attributes at whatever size the file claims and reads known ones (channel
-  // lists) past their stated size. The core checks most sizes; check_exr_header refuses what
-  // made either of them lose its place in fuzzing.
-  static const bool exr_core = OIIO::attribute("openexr:core", 1);
-  (void)exr_core;
-  OpenImage image;
-  image.input = OIIO::ImageInput::create(*format);
-  if (!image.input)
-    return Error{path + ": cannot read image: no " + *format +
-                 " reader: " + oiio_message(OIIO::geterror())};
-  // The reader runs in a forked child with one thread: ask it to do its work on that thread.
-  image.input->threads(1);
-  if (!image.input->open(path, image.spec))
-    return Error{path + ": cannot read image: " + oiio_message(image.input->geterror())};
-  const OIIO::ImageSpec& spec = image.spec;
-  if (spec.width < 2 || spec.height < 2)
-    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                 "; an image needs at least 2x2 texels"};
-  if (spec.depth > 1) return Error{path + ": is a volume image, not a 2D one"};
-  const std::int64_t texels = static_cast<std::int64_t>(spec.width) * spec.height;
-  if (Status s = within_budget(spec); !s) return s.error();
-  if (texels > (std::int64_t{1} << 30))
-    return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                 ", more than 2^30 texels; lightvol's 32-bit indices cannot hold its volume"};
-  // The header against the file it came with: PFM exactly, EXR by its chunk table, every format
-  // by the most any compression packs into a byte.
-  const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
-  const bool sized = !ec;
-  // PFM is uncompressed: a header that promises more floats than the file holds is truncated (or
-  // forged); refuse it before allocating what it promises.
-  if (magic.rfind("Pf", 0) == 0 || magic.rfind("PF", 0) == 0) {
-    const std::uintmax_t needed = static_cast<std::uintmax_t>(texels) *
-                                  static_cast<std::uintmax_t>(spec.nchannels) * sizeof(float);
-    if (sized && file_size < needed)
-      return Error{path + ": PFM header says " + std::to_string(spec.width) + "x" +
-                   std::to_string(spec.height) + " (" + std::to_string(needed) +
-                   " bytes of floats), but the file has " + std::to_string(file_size) +
-                   " bytes (truncated file?)"};
-  }
-  // EXR stores an offset table of 8 bytes per chunk (scanline blocks or tiles) and each chunk
-  // starts with at least 8 bytes: a file smaller than that for its size is truncated or forged.
-  // Refuse it before OpenEXR walks (and allocates for) every missing chunk (fuzz finding).
-  if (*format == "openexr") {
-    const std::string compression = spec.get_string_attribute("compression", "none");
-    std::int64_t lines = 1;  // scanlines per chunk, by compression
-    if (compression == "zip" || compression == "pxr24") lines = 16;
-    if (compression == "piz" || compression == "b44" || compression == "b44a" ||
-        compression == "dwaa")
-      lines = 32;
-    if (compression == "dwab") lines = 256;
-    const std::int64_t chunks =
-        spec.tile_width > 0 && spec.tile_height > 0
-            ? ((spec.width + spec.tile_width - 1) / spec.tile_width) *
-                  std::int64_t{(spec.height + spec.tile_height - 1) / spec.tile_height}
-            : (spec.height + lines - 1) / lines;
-    if (sized && static_cast<std::uintmax_t>(chunks) * 16 > file_size)
-      return Error{path + ": EXR of " + std::to_string(spec.width) + "x" +
-                   std::to_string(spec.height) + " has " + std::to_string(chunks) +
-                   " chunks, needing at least " + std::to_string(chunks * 16) +
-                   " bytes, but the file has " + std::to_string(file_size) + " (truncated file?)"};
-  }
-  // No image format packs more than about 1,100 decoded bytes into a compressed byte (deflate,
-  // LZW, PIZ and DWA on constant data, measured); a header promising much more than that from a
-  // small file is forged (fuzz finding: 446 bytes of EXR claiming 6894084x17, and a 7 GB
-  // allocation in OpenImageIO).
-  {
-    constexpr std::uintmax_t kMaxRatio = 4096;
-    const std::uintmax_t decoded = static_cast<std::uintmax_t>(spec.image_bytes(true));
-    if (sized && decoded / kMaxRatio > file_size)
-      return Error{path + ": is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                   " with " + std::to_string(spec.nchannels) + " channels, " +
-                   std::to_string(decoded) + " bytes, in a file of " + std::to_string(file_size) +
-                   ": more than any compression holds (truncated or forged)"};
-  }
-  // The pixels stored (the data window) must be the view (the display window): a crop read as
-  // the whole view would stretch it over the frustum, silently wrong geometry.
-  if (spec.x != spec.full_x || spec.y != spec.full_y || spec.width != spec.full_width ||
-      spec.height != spec.full_height) {
-    const auto window = [](int x, int y, int w, int h) {
-      return std::to_string(w) + "x" + std::to_string(h) + " at (" + std::to_string(x) + ", " +
-             std::to_string(y) + ")";
-    };
-    return Error{path + ": its data window (" + window(spec.x, spec.y, spec.width, spec.height) +
-                 ") is not its display window (" +
-                 window(spec.full_x, spec.full_y, spec.full_width, spec.full_height) +
-                 "): it covers another part than the whole view; store the whole view, or make "
-                 "the data window the view (oiiotool in.exr --fullpixels -o out.exr)"};
-  }
-  return image;
-}
-
-namespace {
-// Before forking a decoder child: every worker of OpenImageIO's thread pool idle. A worker that is
-// still starting holds the pool's spin lock while it registers itself; forked at that moment, the
-// child inherits the lock held by a thread it does not have, and its first use of the pool (TIFF
-// strips are decoded there) spins forever: about one read in ten hung with four test processes
-// writing and reading at once. Idle workers wait on a condition variable and hold nothing.
-void quiesce_thread_pool() {
-  const OIIO::thread_pool* pool = OIIO::default_thread_pool();
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (pool->idle() < pool->size() && std::chrono::steady_clock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::microseconds(200));
-}
-}  // namespace
-
 Result<ImageChannel> read_image_channel(
-    const std::string& path, const std::function<Status(const OIIO::ImageSpec&)>& within_budget,
-    const std::function<Result<int>(const OIIO::ImageSpec&)>& select,
-    const std::string& read_failure) {
-  // lightvol's own checks of the file run here, where fuzzing sees them; OpenImageIO in the child.
+    const std::string& path, const std::function<Status(const ImageHeader&)>& within_budget,
+    const std::function<Result<int>(const ImageHeader&)>& select, const std::string& read_failure) {
+  // lightvol's own checks of the file run here, where fuzzing sees them; OpenImageIO in
+  // lightvol-image.
   const Result<ImageFile> file = check_image_file(path);
   if (!file) return file.error();
-  // The child's answer: a verdict, the size, a second verdict, the pixels.
-  const auto child = [&](ChildOutput& out) {
-    Result<OpenImage> opened = open_checked_image(path, *file, within_budget);
-    if (!opened) return out.refuse(opened.error());
-    const Result<int> channel = select(opened->spec);
-    if (!channel) return out.refuse(channel.error());
-    const OIIO::ImageSpec& spec = opened->spec;
-    out.accept();
-    out.write_value(static_cast<std::int32_t>(spec.width));
-    out.write_value(static_cast<std::int32_t>(spec.height));
-    std::vector<float> values(static_cast<std::size_t>(spec.width) *
-                              static_cast<std::size_t>(spec.height));
-    OIIO::ImageInput* const in = opened->input.get();
-    // A truncated file can come back "read" with the damage reported only in the error queue.
-    if (!in->read_image(0, 0, *channel, *channel + 1, OIIO::TypeDesc::FLOAT, values.data()) ||
-        in->has_error())
-      return out.refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
-    in->close();
-    out.accept();
-    out.write(values.data(), values.size() * sizeof(float));
-  };
 
   Result<ImageChannel> result = Error{""};
   const Error broken{path + ": the image reader broke off its answer"};
-  // A verdict: true when the child went on; else `*answer` says how this reading ends (the child's
-  // refusal is the result, a broken answer the error).
+  // A verdict: true when the reader went on; else `*answer` says how this reading ends (the
+  // reader's refusal is the result, a broken answer the error).
   const auto accepted = [&](ChildInput& in, Status* answer) {
     Error refusal;
     switch (in.read_verdict(&refusal)) {
@@ -445,20 +307,51 @@ Result<ImageChannel> read_image_channel(
     }
     return false;
   };
+  // The conversation of image_codec.h serve_image_request.
   const auto parent = [&](ChildInput& in) -> Status {
+    if (!in.write_value(ImageRequest::read) || !in.write_string(path) ||
+        !in.write_string(file->format) || !in.write_string(file->magic) ||
+        !in.write_string(read_failure))
+      return broken;
     Status answer;
     if (!accepted(in, &answer)) return answer;
-    std::int32_t width = 0, height = 0;
-    if (!in.read_value(&width) || !in.read_value(&height) || width < 2 || height < 2 ||
-        static_cast<std::int64_t>(width) * height > (std::int64_t{1} << 30))
+    ImageHeader header;
+    std::int32_t channels = 0;
+    std::uint8_t eight_bit = 0;
+    if (!in.read_value(&header.width) || !in.read_value(&header.height) ||
+        !in.read_value(&header.alpha_channel) || !in.read_value(&eight_bit) ||
+        !in.read_value(&channels) || header.width < 2 || header.height < 2 || channels < 1 ||
+        channels > kMaxImageChannels || header.alpha_channel < -1 ||
+        header.alpha_channel >= channels)
       return broken;
-    const auto texels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-    if (Status s = check_memory(texels * sizeof(float), path, "its pixels"); !s) return s;
+    header.eight_bit = eight_bit != 0;
+    header.names.resize(static_cast<std::size_t>(channels));
+    header.channel_eight_bit.resize(static_cast<std::size_t>(channels));
+    for (int c = 0; c < channels; ++c)
+      if (!in.read_string(&header.names[c]) || !in.read_value(&header.channel_eight_bit[c]))
+        return broken;
+    // Each refusal tells the reader to stop before the error ends the conversation.
+    const auto stop = [&](const Error& error) -> Status {
+      in.write_value(std::int32_t{-1});
+      result = error;
+      return {};
+    };
+    if (Status s = within_budget(header); !s) return stop(s.error());
+    if (!in.write_value(std::int32_t{1})) return broken;
+    if (!accepted(in, &answer)) return answer;
+    const Result<int> channel = select(header);
+    if (!channel) return stop(channel.error());
+    if (*channel < 0 || *channel >= channels) return stop(Error{path + ": no such channel"});
+    const auto texels =
+        static_cast<std::size_t>(header.width) * static_cast<std::size_t>(header.height);
+    if (Status s = check_memory(texels * sizeof(float), path, "its pixels"); !s)
+      return stop(s.error());
     in.allow_more(2 + 200e-9 * static_cast<double>(texels));
+    if (!in.write_value(std::int32_t{*channel})) return broken;
     if (!accepted(in, &answer)) return answer;
     ImageChannel image;
-    image.width = width;
-    image.height = height;
+    image.width = header.width;
+    image.height = header.height;
     image.values.resize(texels);
     if (!in.read(image.values.data(), texels * sizeof(float))) return broken;
     result = std::move(image);
@@ -469,8 +362,7 @@ Result<ImageChannel> read_image_channel(
                   memory_budget();  // the budget, and room for the libraries' own state
   limits.cpu_seconds = 5;
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
-  quiesce_thread_pool();
-  if (Status run = run_isolated(path + ": OpenImageIO's reader", limits, child, parent); !run)
+  if (Status run = run_image_helper(path + ": OpenImageIO's reader", limits, parent); !run)
     return run.error();
   return result;
 }

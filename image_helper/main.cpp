@@ -1,0 +1,33 @@
+// lightvol-image: decodes and encodes images for the lightvol library, answering requests one after
+// another on file descriptor 3 (core/detail/isolated.h IsolatedServer; the requests are
+// core/detail/image_helper.h's, the answers depth/detail/image_codec.h's) until it closes. The only program of
+// lightvol that links OpenImageIO; not meant to be run by hand.
+#include <cstdio>
+#include <cstring>
+#include <new>
+
+#include <lightvol/core/detail/image_helper.h>
+#include <lightvol/core/detail/isolated.h>
+#include <lightvol/depth/detail/image_codec.h>
+
+int main(int argc, char** argv) {
+  if (argc > 1) {
+    std::fprintf(stderr,
+                 "lightvol-image: the lightvol library's image decoder; it takes no arguments and "
+                 "answers requests on file descriptor %d\n",
+                 lightvol::kProgramChannel);
+    return std::strcmp(argv[1], "--help") == 0 ? 0 : 2;
+  }
+  lightvol::ChildOutput channel(lightvol::kProgramChannel);
+  try {
+    // Loaded, or done with a request: the parent sets the limits for the next one now.
+    channel.write_value(lightvol::kProgramReady);
+    while (lightvol::detail::serve_image_request(channel, 0))
+      channel.write_value(lightvol::kProgramReady);
+  } catch (const std::bad_alloc&) {
+    return lightvol::kChildOutOfMemory;
+  } catch (...) {
+    return lightvol::kChildThrew;
+  }
+  return 0;
+}

@@ -1,0 +1,139 @@
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+
+#include <lightvol/core/detail/image_helper.h>
+
+#ifndef LIGHTVOL_IMAGE_HELPER_INSTALLED
+#define LIGHTVOL_IMAGE_HELPER_INSTALLED ""
+#endif
+#ifndef LIGHTVOL_IMAGE_HELPER_BUILT
+#define LIGHTVOL_IMAGE_HELPER_BUILT ""
+#endif
+
+namespace lightvol::detail {
+namespace {
+
+std::atomic<ImageServer> in_process_server{nullptr};
+
+// Idle lightvol-image servers. A request takes one (or starts one when none is idle: concurrent
+// readers each get their own) and puts it back when it answered whole; a server that failed has
+// ended. At most kIdle are kept; the rest are closed. Never destroyed: the servers end when this
+// process does (their channel closes).
+class ServerPool {
+ public:
+  static constexpr std::size_t kIdle = 4;
+  std::unique_ptr<IsolatedServer> take() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (idle_.empty()) return nullptr;
+    std::unique_ptr<IsolatedServer> server = std::move(idle_.back());
+    idle_.pop_back();
+    return server;
+  }
+  void give_back(std::unique_ptr<IsolatedServer> server) {
+    if (!server->alive()) return;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (idle_.size() < kIdle) idle_.push_back(std::move(server));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<IsolatedServer>> idle_;
+};
+
+ServerPool& server_pool() {
+  static ServerPool* const pool = new ServerPool;
+  return *pool;
+}
+
+bool executable(const std::string& path) {
+  std::error_code ec;
+  return !path.empty() && std::filesystem::is_regular_file(path, ec) &&
+         ::access(path.c_str(), X_OK) == 0;
+}
+
+}  // namespace
+
+Result<std::string> image_helper_path() {
+  std::vector<std::string> tried;
+  if (const char* env = std::getenv("LIGHTVOL_IMAGE_HELPER"); env && *env) {
+    if (executable(env)) return std::string(env);
+    return Error{std::string("LIGHTVOL_IMAGE_HELPER names ") + env +
+                 ", which is not an executable file"};
+  }
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    tried.push_back((self.parent_path() / "lightvol-image").string());
+    tried.push_back(
+        (self.parent_path() / ".." / "libexec" / "lightvol" / "lightvol-image").lexically_normal());
+  }
+  tried.emplace_back(LIGHTVOL_IMAGE_HELPER_INSTALLED);
+  tried.emplace_back(LIGHTVOL_IMAGE_HELPER_BUILT);
+  std::string where;
+  for (const std::string& path : tried) {
+    if (executable(path)) return path;
+    if (!path.empty()) where += (where.empty() ? "" : ", ") + path;
+  }
+  return Error{"cannot find lightvol-image, the program that reads and writes images (looked at " +
+               where + "); set LIGHTVOL_IMAGE_HELPER to its path"};
+}
+
+void set_in_process_image_server(ImageServer server) { in_process_server.store(server); }
+
+Status run_image_helper(const std::string& what, const IsolationLimits& limits,
+                        const std::function<Status(ChildInput&)>& parent) {
+  if (const ImageServer server = in_process_server.load())
+    return run_isolated(
+        what, limits, [&](ChildOutput& channel) { server(channel, 1); }, parent);
+  std::unique_ptr<IsolatedServer> server = server_pool().take();
+  if (!server) {
+    const Result<std::string> program = image_helper_path();
+    if (!program) return Error{what + ": " + program.error().message};
+    Result<std::unique_ptr<IsolatedServer>> started =
+        IsolatedServer::start("lightvol-image", {*program}, limits.wall_seconds);
+    if (!started) return Error{what + ": " + started.error().message};
+    server = std::move(*started);
+  }
+  Status answer = server->request(what, limits, parent);
+  server_pool().give_back(std::move(server));
+  return answer;
+}
+
+ImageWriteResult write_image_file(const std::string& create_name, const std::string& temp,
+                                  const ImageWrite& image) {
+  ImageWriteResult result;
+  const std::size_t values = static_cast<std::size_t>(image.width) *
+                             static_cast<std::size_t>(image.height) *
+                             static_cast<std::size_t>(image.channels);
+  const auto parent = [&](ChildInput& in) -> Status {
+    const bool floats = image.floats != nullptr;
+    bool sent = in.write_value(ImageRequest::write) && in.write_string(create_name) &&
+                in.write_string(temp) && in.write_value(std::int32_t{image.width}) &&
+                in.write_value(std::int32_t{image.height}) &&
+                in.write_value(std::int32_t{image.channels}) && in.write_value(image.stored) &&
+                in.write_value(std::uint8_t{floats ? std::uint8_t{0} : std::uint8_t{1}}) &&
+                in.write_value(static_cast<std::uint32_t>(image.names.size()));
+    for (const std::string& name : image.names) sent = sent && in.write_string(name);
+    sent = sent && (floats ? in.write(image.floats, values * sizeof(float))
+                           : in.write(image.bytes, values));
+    std::uint8_t outcome = 0;
+    if (!sent || !in.read_value(&outcome) || outcome > 2 || !in.read_string(&result.message))
+      return Error{"lightvol-image broke off its answer"};
+    result.outcome = static_cast<ImageWriteResult::Outcome>(outcome);
+    return {};
+  };
+  IsolationLimits limits;
+  limits.cpu_seconds = 30 + 100e-9 * static_cast<double>(values);
+  limits.wall_seconds = 60 + 4 * limits.cpu_seconds;
+  limits.memory = (std::uint64_t{256} << 20) + 4 * values * sizeof(float);
+  if (Status run = run_image_helper(temp + ": OpenImageIO's writer", limits, parent); !run)
+    return {ImageWriteResult::Outcome::failed, run.error().message};
+  return result;
+}
+
+}  // namespace lightvol::detail

@@ -1,0 +1,74 @@
+// lightvol-image, the image decoder and encoder program: the only part of lightvol that links
+// OpenImageIO (and through it GDAL, OpenVDB, ffmpeg, ...), so that a command that reads or writes
+// no image never loads those libraries. The library starts it by posix_spawn for each image it
+// reads or writes (core/detail/isolated.h run_isolated_program: a fresh process, its own limits),
+// sends one request over a socket pair and reads the answer. Internal to the library: the depth
+// stage reads images through it (depth/detail/image_file.h), the depth and render stages write
+// images through write_image_file.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <lightvol/core/detail/isolated.h>
+#include <lightvol/core/result.h>
+
+namespace lightvol::detail {
+
+// The first byte of a request.
+enum class ImageRequest : std::uint8_t { read = 'R', write = 'W' };
+
+// The program's path, the first of these that is an executable file: $LIGHTVOL_IMAGE_HELPER;
+// lightvol-image beside the running executable (/proc/self/exe); ../libexec/lightvol/ relative
+// to it; the installed libexec directory; the build tree's. An Error saying where it looked
+// otherwise.
+Result<std::string> image_helper_path();
+
+// Serves one request on `channel` (what lightvol-image's main does); `threads` is the decoder's
+// thread count (0: every core).
+using ImageServer = bool (*)(ChildOutput& channel, int threads);
+
+// Runs `parent` (which sends the request and reads the answer) against a fresh lightvol-image,
+// with `limits` (run_isolated_program); or, when this process serves images itself
+// (set_in_process_image_server), against a forked child running that server on one thread
+// (run_isolated). Errors name `what`.
+Status run_image_helper(const std::string& what, const IsolationLimits& limits,
+                        const std::function<Status(ChildInput&)>& parent);
+
+// For programs that link the decoder (the fuzz targets, whose coverage must include it, and
+// which read thousands of inputs): images are then read in a forked child of this process, as
+// before lightvol-image existed, not by starting the program. nullptr restores the program.
+void set_in_process_image_server(ImageServer server);
+
+// An image to write: `channels` values per texel, rows top to bottom, as floats or 8-bit values;
+// stored as `stored` (the file's type), with these channel names (empty: the format's).
+struct ImageWrite {
+  enum class Stored : std::uint8_t { f32 = 0, u8 = 1, u16 = 2 };
+  int width = 0;
+  int height = 0;
+  int channels = 1;
+  Stored stored = Stored::f32;
+  std::vector<std::string> names;
+  const float* floats = nullptr;        // width × height × channels floats, or
+  const std::uint8_t* bytes = nullptr;  // as many 8-bit values
+};
+
+// How a write ended: written, no writer for the format `create_name`'s extension names, or the
+// writer failed; `message` is OpenImageIO's (or why the program failed).
+struct ImageWriteResult {
+  enum class Outcome : std::uint8_t {
+    written = 0,
+    no_writer = 1,
+    failed = 2
+  } outcome = Outcome::written;
+  std::string message;
+};
+
+// Writes `image` to the file `temp` in the format of `create_name`'s extension, through
+// lightvol-image. A program that cannot be started or dies is `failed` with its Error's message.
+ImageWriteResult write_image_file(const std::string& create_name, const std::string& temp,
+                                  const ImageWrite& image);
+
+}  // namespace lightvol::detail
