@@ -20,10 +20,14 @@ namespace {
 
 std::atomic<ImageServer> in_process_server{nullptr};
 
+// How long lightvol-image may take to load (about 0.2 s on a quiet machine; its 260 libraries on a
+// loaded one take longer): a backstop, apart from the limits of each request.
+constexpr double kStartSeconds = 60;
+
 // Idle lightvol-image servers. A request takes one (or starts one when none is idle: concurrent
 // readers each get their own) and puts it back when it answered whole; a server that failed has
-// ended. At most kIdle are kept; the rest are closed. Never destroyed: the servers end when this
-// process does (their channel closes).
+// ended. At most kIdle are kept; the rest are closed. At exit the idle ones are closed and reaped
+// (so that a process's resource usage includes theirs, and none outlives it).
 class ServerPool {
  public:
   static constexpr std::size_t kIdle = 4;
@@ -39,6 +43,13 @@ class ServerPool {
     const std::lock_guard<std::mutex> lock(mutex_);
     if (idle_.size() < kIdle) idle_.push_back(std::move(server));
   }
+  void clear() {
+    std::vector<std::unique_ptr<IsolatedServer>> idle;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      idle.swap(idle_);
+    }
+  }
 
  private:
   std::mutex mutex_;
@@ -46,7 +57,11 @@ class ServerPool {
 };
 
 ServerPool& server_pool() {
-  static ServerPool* const pool = new ServerPool;
+  static ServerPool* const pool = [] {
+    auto* created = new ServerPool;
+    std::atexit([] { server_pool().clear(); });
+    return created;
+  }();
   return *pool;
 }
 
@@ -85,6 +100,8 @@ Result<std::string> image_helper_path() {
 
 void set_in_process_image_server(ImageServer server) { in_process_server.store(server); }
 
+void close_idle_image_servers() { server_pool().clear(); }
+
 Status run_image_helper(const std::string& what, const IsolationLimits& limits,
                         const std::function<Status(ChildInput&)>& parent) {
   if (const ImageServer server = in_process_server.load())
@@ -95,7 +112,7 @@ Status run_image_helper(const std::string& what, const IsolationLimits& limits,
     const Result<std::string> program = image_helper_path();
     if (!program) return Error{what + ": " + program.error().message};
     Result<std::unique_ptr<IsolatedServer>> started =
-        IsolatedServer::start("lightvol-image", {*program}, limits.wall_seconds);
+        IsolatedServer::start("lightvol-image", {*program}, kStartSeconds);
     if (!started) return Error{what + ": " + started.error().message};
     server = std::move(*started);
   }

@@ -1,8 +1,9 @@
 // lightvol-image, the image decoder and encoder program: the only part of lightvol that links
 // OpenImageIO (and through it GDAL, OpenVDB, ffmpeg, ...), so that a command that reads or writes
-// no image never loads those libraries. The library starts it by posix_spawn for each image it
-// reads or writes (core/detail/isolated.h run_isolated_program: a fresh process, its own limits),
-// sends one request over a socket pair and reads the answer. Internal to the library: the depth
+// no image never loads those libraries. The library starts it by posix_spawn when it first reads
+// or writes an image (core/detail/isolated.h IsolatedServer: a fresh process, limits of its own
+// for each request) and keeps it for the next request; requests and answers go over a socket
+// pair. Internal to the library: the depth
 // stage reads images through it (depth/detail/image_file.h), the depth and render stages write
 // images through write_image_file.
 #pragma once
@@ -41,6 +42,10 @@ Status run_image_helper(const std::string& what, const IsolationLimits& limits,
 // which read thousands of inputs): images are then read in a forked child of this process, as
 // before lightvol-image existed, not by starting the program. nullptr restores the program.
 void set_in_process_image_server(ImageServer server);
+
+// Ends the idle lightvol-image servers (the next request starts a fresh one): for tests that
+// change LIGHTVOL_IMAGE_HELPER.
+void close_idle_image_servers();
 
 // An image to write: `channels` values per texel, rows top to bottom, as floats or 8-bit values;
 // stored as `stored` (the file's type), with these channel names (empty: the format's).

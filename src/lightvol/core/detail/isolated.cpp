@@ -322,8 +322,10 @@ void limit_program(pid_t pid, double cpu_used, double cpu, std::uint64_t memory)
   const rlimit processor = cpu_limit(cpu_used + cpu);
   ::prlimit(pid, RLIMIT_CPU, &processor, nullptr);
 #ifndef LV_ASAN
+  // The soft limit only, as for the processor time: the next request sets it afresh (raising a
+  // hard limit takes privileges); the program's own code never raises it.
   const std::uint64_t space = process_address_space(pid) + memory;
-  const rlimit bytes{static_cast<rlim_t>(space), static_cast<rlim_t>(space)};
+  const rlimit bytes{static_cast<rlim_t>(space), RLIM_INFINITY};
   ::prlimit(pid, RLIMIT_AS, &bytes, nullptr);
 #else
   (void)memory;
