@@ -24,15 +24,27 @@ JSON
 "$a/lightvol" build d64.exr --light spot.json --out small.ply --quiet
 median() { sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
 
-# One run of `lightvol ARGS` from build $1, appended to $work/$2.{wall,cpu,rss}.
+# One run of `lightvol ARGS` from build $1, appended to $work/$2.{wall,cpu,rss}: wall time around
+# the process and its user+sys time from wait4 (which include the lightvol-image it started and
+# reaped), to the microsecond; peak RSS (the largest process's) from /usr/bin/time.
 run() {
-  local build=$1 tag=$2; shift 2
-  /usr/bin/time -f '%e %U %S %M' -o t "$build/lightvol" "$@" > /dev/null 2> err || {
-    cat err >&2; exit 1; }
-  read -r wall user sys rss < t
-  echo "$wall" >> "$tag.wall"
-  echo "$user + $sys" | bc -l >> "$tag.cpu"
-  echo "$rss" >> "$tag.rss"
+  python3 - "$@" <<'PY'
+import os, subprocess, sys, time
+build, tag, *args = sys.argv[1:]
+with open("err", "w") as err:
+    start = time.perf_counter()
+    # Peak RSS from /usr/bin/time, a small process: a fork of this Python would carry its own
+    # high-water mark into lightvol's.
+    p = subprocess.Popen(["/usr/bin/time", "-f", "%M", "-o", "rss", build + "/lightvol", *args],
+                         stdout=subprocess.DEVNULL, stderr=err)
+    _, status, usage = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - start
+if status != 0:
+    sys.exit(open("err").read())
+rss = int(open("rss").read().split()[-1])
+for ext, value in (("wall", wall), ("cpu", usage.ru_utime + usage.ru_stime), ("rss", rss)):
+    open(tag + "." + ext, "a").write("%.6f\n" % value)
+PY
 }
 ms() { echo "$(median < "$1") * 1000" | bc -l; }
 mib() { echo "$(median < "$1") / 1024" | bc -l; }
