@@ -1,6 +1,8 @@
 // tessellation_tool N E: the tessellations of the synthetic N×N map (synthetic_scene.h) under the
 // benchmark's directional light (near 0, far 1, linear depth) at max error E, in memory: triangles,
 // reached error (RefinementPyramid::measure), time of each stage, smallest angle and area.
+#include <sys/resource.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +29,16 @@ double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+// CPU seconds (user + sys) of the whole process so far: on a shared machine the comparable time.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  const auto s = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
+  return s(u.ru_utime) + s(u.ru_stime);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -38,27 +50,32 @@ int main(int argc, char** argv) {
   const double e = std::atof(argv[2]);
   const lightvol::DepthImage depth = lightvol::bench::synthetic_scene(n, n);
   const lightvol::Light light = bench_light(n);
+  double c0 = cpu_seconds();
   auto t0 = std::chrono::steady_clock::now();
   auto texels = lightvol::TexelDepths::create(light, depth, 0, "bench");
   const lightvol::RefinementPyramid pyramid(std::move(*texels), lightvol::Refinement::max_error);
-  const double tp = since(t0);
+  const double tp = since(t0), cp = cpu_seconds() - c0;
+  c0 = cpu_seconds();
   t0 = std::chrono::steady_clock::now();
   const lightvol::AdaptiveGrid quad = pyramid.tessellate(e, true);
-  const double tq = since(t0);
+  const double tq = since(t0), cq = cpu_seconds() - c0;
   const lightvol::GridQuality qq = lightvol::grid_quality(quad);
   std::printf(
-      "quadtree  triangles %zu  reached %.8f  pyramid %.3f s  tessellate %.3f s  angle %.3f area "
-      "%.1f\n",
-      quad.num_triangles(), pyramid.measure(quad), tp, tq, qq.min_angle_degrees, qq.min_area);
+      "quadtree  triangles %zu  reached %.8f  pyramid %.3f s (CPU %.3f s)  tessellate %.3f s (CPU "
+      "%.3f s)  angle %.3f area %.1f\n",
+      quad.num_triangles(), pyramid.measure(quad), tp, cp, tq, cq, qq.min_angle_degrees,
+      qq.min_area);
   lightvol::CollapseReport r;
   lightvol::CollapseOptions o;
   if (argc == 4) o.max_star_area = std::atof(argv[3]);
+  c0 = cpu_seconds();
   const lightvol::AdaptiveGrid col = lightvol::collapse_grid(pyramid.texels(), quad, e, o, &r);
+  const double cc = cpu_seconds() - c0;
   const lightvol::GridQuality qc = lightvol::grid_quality(col);
   std::printf(
-      "collapse  triangles %zu  reached %.8f  collapse %.3f s (%d rounds, %llu attempts, %llu "
-      "collapses)  angle %.3f area %.1f\n",
-      col.num_triangles(), pyramid.measure(col), r.seconds, r.rounds,
+      "collapse  triangles %zu  reached %.8f  collapse %.3f s (CPU %.3f s; %d rounds, %llu "
+      "attempts, %llu collapses)  angle %.3f area %.1f\n",
+      col.num_triangles(), pyramid.measure(col), r.seconds, cc, r.rounds,
       static_cast<unsigned long long>(r.attempts), static_cast<unsigned long long>(r.collapses),
       qc.min_angle_degrees, qc.min_area);
   return 0;

@@ -18,7 +18,7 @@ namespace lightvol {
 namespace {
 
 using detail::Pt;
-using detail::triangle_row_span;
+using detail::RowSpanWalker;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -26,6 +26,8 @@ std::int64_t cross(Pt a, Pt b, Pt c) {
 
 // Whether every texel (lattice point) of the closed triangle (a, b, c) lies within `bound` of the
 // triangle's plane in window depth (TexelDepths::error). Stops at the first row that breaks it.
+// Rows are walked with RowSpanWalker (no division per row: most triangles here are a few texels
+// wide, so the per-row work is most of the cost).
 template <bool kUniform>
 bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   std::int64_t area2 = cross(a, b, c);
@@ -42,9 +44,10 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   const Pt v[3] = {a, b, c};
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
   const double limit = kUniform ? bound / t.uniform_scale() : bound;
+  RowSpanWalker walk(v, y0);
   for (int y = y0; y <= y1; ++y) {
     int x0 = 0, x1 = 0;
-    if (!triangle_row_span(v, y, &x0, &x1)) continue;
+    if (!walk.next(&x0, &x1)) continue;
     const double* dt = t.depth_row(y);
     const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
     double m = 0;
@@ -221,6 +224,7 @@ class Collapser {
 
   struct Scratch {
     std::vector<std::uint32_t> candidates, touched;
+    std::vector<std::uint64_t> keys;
   };
 
   bool star_within_rows(std::uint32_t u, int y0, int y1) const {
@@ -257,25 +261,23 @@ class Collapser {
     for (const std::uint32_t k : star_[u])
       star2 += std::abs(cross(pt_[tri_[k][0]], pt_[tri_[k][1]], pt_[tri_[k][2]]));
     if (0.5 * static_cast<double>(star2) > options_.max_star_area) return false;
-    // Neighbours of u, nearest first (ties by index: deterministic).
-    candidates_.clear();
+    // Neighbours of u, nearest first (ties by index: deterministic): sorted as one key each,
+    // squared distance (below 2^32 for any grid an index can address) above the index.
+    std::vector<std::uint64_t>& keys = scratch->keys;
+    keys.clear();
+    const Pt pu = pt_[u];
     for (const std::uint32_t k : star_[u])
       for (int c = 0; c < 3; ++c) {
         const std::uint32_t n = tri_[k][c];
         if (n == u) continue;
         if (side >= 0 && !(sides_[n] & (1u << side))) continue;  // border vertices slide along
-        candidates_.push_back(n);
+        const std::int64_t dx = pt_[n].x - pu.x, dy = pt_[n].y - pu.y;
+        keys.push_back(static_cast<std::uint64_t>(dx * dx + dy * dy) << 32 | n);
       }
-    const Pt pu = pt_[u];
-    const auto dist2 = [&](std::uint32_t n) {
-      const std::int64_t dx = pt_[n].x - pu.x, dy = pt_[n].y - pu.y;
-      return dx * dx + dy * dy;
-    };
-    std::sort(candidates_.begin(), candidates_.end(), [&](std::uint32_t a, std::uint32_t b) {
-      const std::int64_t da = dist2(a), db = dist2(b);
-      return da != db ? da < db : a < b;
-    });
-    candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    candidates_.clear();
+    for (const std::uint64_t key : keys) candidates_.push_back(static_cast<std::uint32_t>(key));
     for (const std::uint32_t v : candidates_) {
       // Orientation first (cheap), then the texels.
       bool ok = true;

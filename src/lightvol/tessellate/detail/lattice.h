@@ -67,6 +67,54 @@ inline bool triangle_row_span(const Pt v[3], int y, int* x0, int* x1) {
   return true;
 }
 
+// triangle_row_span for consecutive rows y, y + 1, ... of a triangle's row range (between its
+// lowest and highest corner), without a division per row: each edge's bound floor(C(y) / |A|) is
+// kept as a quotient and a remainder, and C grows by the same amount every row. A horizontal edge
+// (A = 0) excludes no row of that range, so only the two or three others are walked; with a single
+// edge on one side, it is walked twice (the max or min of equal bounds). Exact: the same spans as
+// triangle_row_span.
+class RowSpanWalker {
+ public:
+  RowSpanWalker(const Pt v[3], int y) {
+    const auto floor_div = [](std::int64_t a, std::int64_t b) {  // b > 0
+      return a >= 0 ? a / b : -((-a + b - 1) / b);
+    };
+    int nlo = 0, nhi = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Pt p = v[k], q = v[(k + 1) % 3];
+      const std::int64_t ex = q.x - p.x, ey = q.y - p.y;
+      const std::int64_t A = -ey, C = ex * (y - p.y) + ey * p.x;
+      if (A == 0) continue;
+      Edge& e = A > 0 ? lo_[nlo++] : hi_[nhi++];
+      e.d = A > 0 ? A : -A;
+      e.q = floor_div(C, e.d), e.r = C - e.q * e.d;
+      e.dq = floor_div(ex, e.d), e.dr = ex - e.dq * e.d;
+    }
+    if (nlo == 1) lo_[1] = lo_[0];
+    if (nhi == 1) hi_[1] = hi_[0];
+  }
+
+  // The span of the current row (false: none), then moves to the next row.
+  bool next(int* x0, int* x1) {
+    const std::int64_t lo = std::max(-lo_[0].q, -lo_[1].q), hi = std::min(hi_[0].q, hi_[1].q);
+    for (Edge& e : lo_) e.step();
+    for (Edge& e : hi_) e.step();
+    *x0 = static_cast<int>(lo);
+    *x1 = static_cast<int>(hi);
+    return lo <= hi;
+  }
+
+ private:
+  struct Edge {  // floor(C / d) = q, remainder r; per row C grows by dq·d + dr
+    std::int64_t q = 0, r = 0, d = 1, dq = 0, dr = 0;
+    void step() {
+      q += dq, r += dr;
+      if (r >= d) r -= d, ++q;
+    }
+  };
+  Edge lo_[2], hi_[2];  // edges with A > 0 (bound −q on x) and A < 0 (bound q)
+};
+
 // The largest error (TexelDepths::error) over the texels (lattice points) of the closed triangle
 // (a, b, c), whose window depth is the plane through its corners' depths: exactly what the
 // emitted flat triangle gives along each texel ray. Large triangles split their rows across
