@@ -252,7 +252,8 @@ TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
 }
 
 TEST(Collapse, SameBytesWithOneThreadAndMany) {
-  // 300 rows: five stripes of 64, coarsened in parallel two phases at a time.
+  // 300 rows: five stripes of 64 (and six shifted by 32), coarsened in parallel two phases at a
+  // time.
   const Case c = cases(97, 300)[1];
   const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
   const double e = pyramid.measure(pyramid.tessellate(1e30, true)) * 0.01;

@@ -119,56 +119,32 @@ class Collapser {
   // Sweeps. Each sweep visits its vertices in texel order, in horizontal stripes of kStripe rows:
   // first the even stripes in parallel, then the odd ones, each stripe in order, touching only
   // vertices whose whole star lies inside the stripe (so two stripes of one phase, a stripe
-  // apart, share no vertex and no triangle); then, sequentially, the vertices whose star crosses a
-  // stripe's edge. The schedule depends on the grid alone, never on the threads: same bytes.
+  // apart, share no vertex and no triangle). The vertices whose star crossed a stripe's edge are
+  // then visited the same way in stripes shifted by half a stripe (most stars that cross one
+  // stripe edge are inside a shifted stripe), and only those that cross both sequentially, in
+  // texel order. The schedule depends on the grid alone, never on the threads: same bytes.
   CollapseReport run() {
     CollapseReport r;
     const std::size_t nv = pt_.size();
     std::vector<std::uint32_t> todo(nv);
     for (std::size_t v = 0; v < nv; ++v) todo[v] = static_cast<std::uint32_t>(v);
     queued_.assign(nv, 0);
-    const int stripes = (grid_.height + kStripe - 1) / kStripe;
-    struct Work {
-      Scratch scratch;
-      CollapseReport report;
-      std::vector<std::uint32_t> next, crossing;
-      std::size_t begin = 0, end = 0;  // range of todo
-    };
+    // Stripe s of a pass with offset o holds rows [s·kStripe − o, (s + 1)·kStripe − o).
+    const int stripes = (grid_.height + kStripe / 2) / kStripe + 1;
     std::vector<Work> work(static_cast<std::size_t>(stripes));
-    std::vector<std::uint32_t> next;
+    std::vector<std::uint32_t> next, crossing, left;
     while (!todo.empty() && r.rounds < options_.max_rounds) {
       ++r.rounds;
-      // todo is ascending: vertex order is texel order, so each stripe is one range.
-      std::size_t at = 0;
-      for (int s = 0; s < stripes; ++s) {
-        Work& wk = work[static_cast<std::size_t>(s)];
-        wk.next.clear();
-        wk.crossing.clear();
-        wk.begin = at;
-        while (at < todo.size() && pt_[todo[at]].y < (s + 1) * kStripe) ++at;
-        wk.end = at;
-      }
-      for (int phase = 0; phase < 2; ++phase) {
-        tbb::parallel_for(0, (stripes + 1 - phase) / 2, [&](int k) {
-          const int s = 2 * k + phase;
-          Work& wk = work[static_cast<std::size_t>(s)];
-          const int y0 = s * kStripe, y1 = y0 + kStripe;
-          for (std::size_t i = wk.begin; i < wk.end; ++i) {
-            const std::uint32_t u = todo[i];
-            if (!vertex_alive_[u] || queued_[u]) continue;
-            if (!star_within_rows(u, y0, y1)) {
-              wk.crossing.push_back(u);
-              continue;
-            }
-            visit(u, &wk.scratch, &wk.report, &wk.next);
-          }
-        });
-      }
+      crossing.clear();
+      sweep_stripes(todo, 0, &work, &crossing);
+      left.clear();
+      sweep_stripes(crossing, kStripe / 2, &work, &left);
       Scratch scratch;
+      for (const std::uint32_t u : left)
+        if (vertex_alive_[u] && !queued_[u]) visit(u, &scratch, &r, &next);
       for (Work& wk : work) {
-        for (const std::uint32_t u : wk.crossing)
-          if (vertex_alive_[u] && !queued_[u]) visit(u, &scratch, &r, &next);
         next.insert(next.end(), wk.next.begin(), wk.next.end());
+        wk.next.clear();
         r.attempts += wk.report.attempts;
         r.collapses += wk.report.collapses;
         wk.report = {};
@@ -226,6 +202,48 @@ class Collapser {
     std::vector<std::uint32_t> candidates, touched;
     std::vector<std::uint64_t> keys;
   };
+
+  struct Work {
+    Scratch scratch;
+    CollapseReport report;
+    std::vector<std::uint32_t> next, crossing;
+    std::size_t begin = 0, end = 0;  // range of the sweep's list
+  };
+
+  // One pass over `list` (ascending: texel order) in stripes offset by `offset` rows, even
+  // stripes in parallel, then odd ones; appends to `crossing`, in order, the vertices whose star
+  // leaves their stripe.
+  void sweep_stripes(const std::vector<std::uint32_t>& list, int offset, std::vector<Work>* work,
+                     std::vector<std::uint32_t>* crossing) {
+    const int stripes = static_cast<int>(work->size());
+    std::size_t at = 0;
+    for (int s = 0; s < stripes; ++s) {
+      Work& wk = (*work)[static_cast<std::size_t>(s)];
+      wk.crossing.clear();
+      wk.begin = at;
+      while (at < list.size() && pt_[list[at]].y < (s + 1) * kStripe - offset) ++at;
+      wk.end = at;
+    }
+    LV_CHECK_EQ(at, list.size());
+    for (int phase = 0; phase < 2; ++phase) {
+      tbb::parallel_for(0, (stripes + 1 - phase) / 2, [&](int k) {
+        const int s = 2 * k + phase;
+        Work& wk = (*work)[static_cast<std::size_t>(s)];
+        const int y0 = s * kStripe - offset, y1 = y0 + kStripe;
+        for (std::size_t i = wk.begin; i < wk.end; ++i) {
+          const std::uint32_t u = list[i];
+          if (!vertex_alive_[u] || queued_[u]) continue;
+          if (!star_within_rows(u, y0, y1)) {
+            wk.crossing.push_back(u);
+            continue;
+          }
+          visit(u, &wk.scratch, &wk.report, &wk.next);
+        }
+      });
+    }
+    for (const Work& wk : *work)
+      crossing->insert(crossing->end(), wk.crossing.begin(), wk.crossing.end());
+  }
 
   bool star_within_rows(std::uint32_t u, int y0, int y1) const {
     for (const std::uint32_t k : star_[u])

@@ -12,8 +12,9 @@
 // Border vertices move only along their side (a corner never), and not at all on a locked side:
 // locked sides keep exactly the border vertices of the input (omni seams, fixed closures).
 // In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, alternate stripes in
-// parallel, vertices whose star crosses a stripe's edge afterwards in order): the same input gives
-// the same bytes on any machine and any thread count.
+// parallel; vertices whose star crosses a stripe's edge then in stripes shifted by 32 rows; those
+// that cross both afterwards in order): the same input gives the same bytes on any machine and
+// any thread count.
 #pragma once
 
 #include <cstdint>
