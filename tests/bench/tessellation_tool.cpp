@@ -1,9 +1,12 @@
-// tessellation_tool N E: the tessellations of the synthetic N×N map (synthetic_scene.h) under the
-// benchmark's directional light (near 0, far 1, linear depth) at max error E, in memory: triangles,
-// reached error (RefinementPyramid::measure), time of each stage, smallest angle and area.
+// tessellation_tool N E [FLIP_SWEEPS]: the tessellations of the synthetic N×N map
+// (synthetic_scene.h) under the benchmark's directional light (near 0, far 1, linear depth) at max
+// error E, in memory: triangles, reached error (RefinementPyramid::measure), time of each stage,
+// smallest angle and area.
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -43,7 +46,7 @@ double cpu_seconds() {
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
-    std::fprintf(stderr, "usage: tessellation_tool N E [MAX_STAR_AREA]\n");
+    std::fprintf(stderr, "usage: tessellation_tool N E [FLIP_SWEEPS]\n");
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -67,16 +70,36 @@ int main(int argc, char** argv) {
       qq.min_area);
   lightvol::CollapseReport r;
   lightvol::CollapseOptions o;
-  if (argc == 4) o.max_star_area = std::atof(argv[3]);
+  if (argc == 4) o.flip_sweeps = std::atoi(argv[3]);
   c0 = cpu_seconds();
   const lightvol::AdaptiveGrid col = lightvol::collapse_grid(pyramid.texels(), quad, e, o, &r);
   const double cc = cpu_seconds() - c0;
   const lightvol::GridQuality qc = lightvol::grid_quality(col);
   std::printf(
       "collapse  triangles %zu  reached %.8f  collapse %.3f s (CPU %.3f s; %d rounds, %llu "
-      "attempts, %llu collapses)  angle %.3f area %.1f\n",
+      "attempts, %llu collapses, %llu flips)  angle %.3f area %.1f\n",
       col.num_triangles(), pyramid.measure(col), r.seconds, cc, r.rounds,
       static_cast<unsigned long long>(r.attempts), static_cast<unsigned long long>(r.collapses),
-      qc.min_angle_degrees, qc.min_area);
+      static_cast<unsigned long long>(r.flips), qc.min_angle_degrees, qc.min_area);
+  // Triangles with a smallest angle under 1° and 5° (texel space).
+  std::size_t under1 = 0, under5 = 0;
+  const auto w = static_cast<std::uint32_t>(col.width);
+  for (std::size_t k = 0; k < col.num_triangles(); ++k) {
+    double x[3], y[3];
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t id = col.vertices[col.indices[3 * k + c]];
+      x[c] = id % w, y[c] = id / w;
+    }
+    const double area2 = std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+    double smallest = 180;
+    for (int c = 0; c < 3; ++c) {
+      const int a = (c + 1) % 3, b = (c + 2) % 3;
+      const double dot = (x[a] - x[c]) * (x[b] - x[c]) + (y[a] - y[c]) * (y[b] - y[c]);
+      smallest = std::min(smallest, std::atan2(area2, dot) * 180 / M_PI);
+    }
+    under1 += smallest < 1;
+    under5 += smallest < 5;
+  }
+  std::printf("collapse  triangles under 1°: %zu, under 5°: %zu\n", under1, under5);
   return 0;
 }

@@ -229,6 +229,41 @@ TEST(Collapse, PlaneInWindowDepthIsTwoTriangles) {
   EXPECT_EQ(g.vertices.size(), 4u);
 }
 
+TEST(Collapse, FlipsTheLongDiagonalWhenTheBoundAllows) {
+  // A 11×3 grid on a plane in window depth (any triangle meets any bound), every side locked so no
+  // vertex can go: (0,0) (10,0) on top, (0,2) (5,2) (10,2) below, triangulated with the long
+  // diagonal (0,0)–(10,2) (smallest angle 10.5°, at (0,0)). Flipping it to (5,2)–(10,0) raises the
+  // smallest angle to 21.8°; with flips off it stays.
+  const Light light = light_from_json(directional_json("linear"));
+  const DepthImage depth =
+      make_depth(11, 3, [](int c, int r) { return float(3 + 0.01 * c + 0.02 * r); });
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "plane.exr");
+  ASSERT_TRUE(t.ok());
+  AdaptiveGrid in;
+  in.width = 11, in.height = 3;
+  in.vertices = {0, 10, 22, 27, 32};  // (0,0) (10,0) (0,2) (5,2) (10,2)
+  in.indices = {0, 2, 3, 0, 3, 4, 0, 4, 1};
+  in.border[kTop] = {0, 10};
+  in.border[kBottom] = {0, 5, 10};
+  in.border[kLeft] = {0, 2};
+  in.border[kRight] = {0, 2};
+  ASSERT_TRUE(is_conforming(in));
+  CollapseOptions o;
+  for (bool& side : o.locked) side = true;
+  CollapseReport report;
+  const AdaptiveGrid flipped = collapse_grid(*t, in, 1e-3, o, &report);
+  EXPECT_TRUE(is_conforming(flipped));
+  EXPECT_EQ(flipped.vertices, in.vertices);
+  EXPECT_EQ(report.flips, 1u);
+  EXPECT_NEAR(grid_quality(in).min_angle_degrees,
+              (std::atan2(2.0, 5.0) - std::atan2(2.0, 10.0)) * 180 / M_PI, 1e-9);
+  EXPECT_NEAR(grid_quality(flipped).min_angle_degrees, std::atan2(2.0, 5.0) * 180 / M_PI, 1e-9);
+  o.flip_sweeps = 0;
+  const AdaptiveGrid kept = collapse_grid(*t, in, 1e-3, o, &report);
+  EXPECT_EQ(report.flips, 0u);
+  EXPECT_EQ(kept.indices, in.indices);
+}
+
 TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
   const Case c = cases(65, 65)[2];
   const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);

@@ -157,6 +157,26 @@ class Collapser {
     return r;
   }
 
+  // Edge flips (CollapseOptions::flip_sweeps), in triangle order, sweep after sweep until one
+  // flips nothing. Each flip strictly raises the smallest angle of its pair, so it ends.
+  std::uint64_t flip() {
+    std::uint64_t flips = 0;
+    for (int sweep = 0; sweep < options_.flip_sweeps; ++sweep) {
+      std::uint64_t made = 0;
+      for (std::size_t k = 0; k < tri_.size(); ++k) {
+        if (!alive_[k]) continue;
+        for (int e = 0; e < 3; ++e)
+          if (try_flip(static_cast<std::uint32_t>(k), e)) {
+            ++made;
+            break;
+          }
+      }
+      flips += made;
+      if (made == 0) break;
+    }
+    return flips;
+  }
+
   AdaptiveGrid result() const {
     AdaptiveGrid out;
     out.width = grid_.width;
@@ -341,6 +361,71 @@ class Collapser {
     return false;
   }
 
+  // The smallest interior angle (radians) of triangle p, q, r (texel space).
+  static double min_angle(Pt p, Pt q, Pt r) {
+    const Pt v[3] = {p, q, r};
+    const double area2 = std::abs(static_cast<double>(cross(p, q, r)));
+    double smallest = std::numbers::pi;
+    for (int c = 0; c < 3; ++c) {
+      const Pt a = v[c], b = v[(c + 1) % 3], d = v[(c + 2) % 3];
+      const double dot = static_cast<double>(b.x - a.x) * (d.x - a.x) +
+                         static_cast<double>(b.y - a.y) * (d.y - a.y);
+      smallest = std::min(smallest, std::atan2(area2, dot));
+    }
+    return smallest;
+  }
+
+  bool thin(Pt p, Pt q, Pt r) const {
+    const Pt v[3] = {p, q, r};
+    double longest2 = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double dx = v[(c + 1) % 3].x - v[c].x, dy = v[(c + 1) % 3].y - v[c].y;
+      longest2 = std::max(longest2, dx * dx + dy * dy);
+    }
+    const double a = static_cast<double>(cross(p, q, r));
+    return a * a < options_.min_height * options_.min_height * longest2;
+  }
+
+  // Flips the edge of triangle k from corner e to corner e + 1 if CollapseOptions::flip_sweeps
+  // allows it (see there).
+  bool try_flip(std::uint32_t k, int e) {
+    const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3], c = tri_[k][(e + 2) % 3];
+    // The other triangle on edge a–b: (b, a, d) in the same winding.
+    std::uint32_t m = kNone;
+    for (const std::uint32_t n : star_[a]) {
+      if (n == k) continue;
+      const std::array<std::uint32_t, 3>& t = tri_[n];
+      if (t[0] == b || t[1] == b || t[2] == b) {
+        m = n;
+        break;
+      }
+    }
+    if (m == kNone) return false;  // a border edge
+    std::uint32_t d = kNone;
+    for (const std::uint32_t x : tri_[m])
+      if (x != a && x != b) d = x;
+    const Pt pa = pt_[a], pb = pt_[b], pc = pt_[c], pd = pt_[d];
+    // Strictly convex: both new triangles (c, a, d) and (c, d, b) turn the old way.
+    const std::int64_t s1 = cross(pc, pa, pd), s2 = cross(pc, pd, pb);
+    if (sign_ > 0 ? (s1 <= 0 || s2 <= 0) : (s1 >= 0 || s2 >= 0)) return false;
+    const double before = std::min(min_angle(pa, pb, pc), min_angle(pb, pa, pd));
+    const double after = std::min(min_angle(pc, pa, pd), min_angle(pc, pd, pb));
+    if (!(after > before * (1 + 1e-9))) return false;
+    if (thin(pc, pa, pd) || thin(pc, pd, pb)) return false;
+    if (!within(pc, pa, pd) || !within(pc, pd, pb)) return false;
+    tri_[k] = {c, a, d};
+    tri_[m] = {c, d, b};
+    const auto drop = [&](std::uint32_t v, std::uint32_t t) {
+      std::vector<std::uint32_t>& st = star_[v];
+      st.erase(std::find(st.begin(), st.end(), t));
+    };
+    drop(a, m);
+    drop(b, k);
+    star_[c].push_back(m);
+    star_[d].push_back(k);
+    return true;
+  }
+
   void apply(std::uint32_t u, std::uint32_t v, std::vector<std::uint32_t>* touched) {
     std::vector<std::uint32_t>& touched_ = *touched;
     touched_.clear();
@@ -390,6 +475,7 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
   if (grid.num_triangles() == 0) return grid;
   Collapser collapser(texels, grid, bound, options);
   CollapseReport r = collapser.run();
+  r.flips = collapser.flip();
   AdaptiveGrid out = collapser.result();
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.emit_seconds = grid.emit_seconds;

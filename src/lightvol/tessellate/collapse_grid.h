@@ -9,6 +9,8 @@
 // (the metric of TexelDepths::error), stays within the bound. Triangles that do not change keep
 // their texels' errors, so the bound holds at every texel for the triangles emitted.
 //
+// Then edges are flipped where the bound allows and the smaller angle grows (flip_sweeps below).
+//
 // Border vertices move only along their side (a corner never), and not at all on a locked side:
 // locked sides keep exactly the border vertices of the input (omni seams, fixed closures).
 // In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, alternate stripes in
@@ -35,11 +37,18 @@ struct CollapseOptions {
   // rounded to float32 such a sliver could turn over. Thin strips along a step (height ≥ 1 texel)
   // stay allowed: they are what make the count small.
   double min_height = 0.25;
+  // Sweeps of bound-verified edge flips after the collapses (0: none). An interior edge is flipped
+  // when its two triangles form a strictly convex quadrilateral, the other diagonal raises the
+  // smaller of their smallest angles (texel space: Delaunay's local criterion), and the texels
+  // under both new triangles stay within the bound (and none is thinner than min_height). The
+  // count and the vertices stay; only slivers that the bound allows to turn go.
+  int flip_sweeps = 8;
 };
 
 struct CollapseReport {
   std::uint64_t attempts = 0;   // collapses whose error was evaluated
   std::uint64_t collapses = 0;  // collapses made
+  std::uint64_t flips = 0;      // edge flips made
   int rounds = 0;
   double seconds = 0;
 };
