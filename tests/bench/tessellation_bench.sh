@@ -10,17 +10,29 @@
 # Time and peak memory: the whole process (/usr/bin/time: wall, user+sys CPU, max RSS) — lightvol
 # build (read EXR, tessellate, check, write PLY) and node (read map, mesh, write the dump). Martini
 # is rerun at halved thresholds until its measured error meets E; only that row is printed.
+# Omni (OMNI_SIZE, default 512; 0 skips): lightvol's two tessellations of real omni volumes, six
+# faces of each scene from `lightvol shadowmap` (linear depth), bound E × far in world units;
+# reached error, triangles and smallest angle from `build --report`. Martini and Delatin are not
+# run per face: their union is no closed volume (each face meshes its borders on its own, so the
+# seams do not share vertices), and an omni face's error is a distance along perspective rays,
+# not a height.
 # Usage: tests/bench/tessellation_bench.sh BUILD_DIR [SIZES] [E] [REAL_SIZES] [SCENES_DIR]
 #   BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON (heightfield_tool); SIZES "1025 4097";
-#   E 0.001; REAL_SIZES "1025"; SCENES_DIR with sponza/sponza.obj and sibenik/sibenik.obj.
+#   E 0.001; REAL_SIZES "1025 4097"; SCENES_DIR with sponza/sponza.obj and sibenik/sibenik.obj.
+# Environment: MESHERS (default "collapse quadtree martini delatin") picks the rows; DELATIN_MAX
+# (default 0: no limit) skips Delatin above that size (about 280 s of CPU at 4097²).
 # The npm packages go into a scratch folder under /tmp (TIN_DIR), never into the source tree.
 # One run per cell (no repetition): on a shared machine, compare CPU time rather than wall time.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 build=$(realpath "${1:?usage: tessellation_bench.sh BUILD_DIR [SIZES] [E] [REAL_SIZES] [SCENES_DIR]}")
-sizes=${2:-"1025 4097"}
+sizes=${2-"1025 4097"}
 bound=${3:-0.001}
-real_sizes=${4:-"1025"}
+real_sizes=${4-"1025 4097"}
+meshers=${MESHERS:-"collapse quadtree martini delatin"}
+delatin_max=${DELATIN_MAX:-0}
+omni_size=${OMNI_SIZE:-512}
+runs() { [[ " $meshers " == *" $1 "* ]]; }
 scenes=${5:-$here/../../../shared/scenes}
 scratch=${TIN_DIR:-/tmp/lightvol-martini}
 mkdir -p "$scratch"
@@ -53,10 +65,16 @@ bench_map() {  # label: $work/map.exr and $work/map.f32 of size $n
  "ortho": [-0.5, $((n - 1)).5, -$((n - 1)).5, 0.5], "near": 0, "far": 1, "depth": "linear"}
 JSON
   for t in collapse quadtree; do
-    timed "$lv" build "$work/map.exr" --light "$work/light.json" --adaptive --max-error "$bound" \
-      --tessellation $t --out "$work/v.ply" --quiet
+    runs $t || continue
+    if ! timed "$lv" build "$work/map.exr" --light "$work/light.json" --adaptive --max-error "$bound" \
+      --tessellation $t --out "$work/v.ply" --quiet 2> "$work/err"; then
+      printf '| %s | lightvol %s | %s | (build failed: %s) |||||||\n' "$label" "$t" "$bound" \
+        "$(head -c 160 "$work/err")"
+      continue
+    fi
     row "$label" "lightvol $t" "$bound" "$work/v.ply"
   done
+  if runs martini; then
   local th=$bound
   for _ in 1 2 3 4 5 6 7; do
     timed node "$here/tin_bench.mjs" "$scratch" martini "$work/map.f32" "$n" "$work/m" "$th" > /dev/null
@@ -65,6 +83,12 @@ JSON
     th=$(awk -v t="$th" 'BEGIN { printf "%.9g", t / 2 }')
   done
   row "$label" "Martini" "$th" "$work/m0.mrt"
+  fi
+  runs delatin || return 0
+  if [ "$delatin_max" -gt 0 ] && [ "$n" -gt "$delatin_max" ]; then
+    printf '| %s | Delatin | %s | (not run: size above DELATIN_MAX=%s) |||||||\n' "$label" "$bound" "$delatin_max"
+    return 0
+  fi
   timed node "$here/tin_bench.mjs" "$scratch" delatin "$work/map.f32" "$n" "$work/d" "$bound" > /dev/null
   row "$label" "Delatin" "$bound" "$work/d0.mrt"
 }
@@ -94,5 +118,29 @@ JSON
     "$lv" shadowmap "$obj" --light "$work/spot.json" --size "$n" --out "$work/shadow.exr" --quiet
     "$tool" from "$work/shadow.exr" "$n" "$(awk -v f=$far 'BEGIN { print 1 / f }')" "$work/map.exr" "$work/map.f32"
     bench_map "$scene spot $n² (depth/far)"
+  done
+  [ "$omni_size" -gt 0 ] || continue
+  # Omni at the spot light's position, linear depth; bound E × far (world units).
+  pos=$(sed 's/.*"position": \(\[[^]]*\]\).*/\1/' <<< "$light")
+  cat > "$work/omni.json" <<JSON
+{ "type": "omni", "position": $pos, "near": $(sed 's/.*"near": \([0-9.]*\).*/\1/' <<< "$light"), "far": $far, "depth": "linear" }
+JSON
+  "$lv" shadowmap "$obj" --light "$work/omni.json" --size "$omni_size" --out "$work/omni_{face}.exr" --quiet
+  oe=$(awk -v e="$bound" -v f="$far" 'BEGIN { printf "%.9g", e * f }')
+  for t in collapse quadtree; do
+    runs $t || continue
+    if ! timed "$lv" build "$work/omni_{face}.exr" --light "$work/omni.json" --adaptive \
+      --max-error "$oe" --tessellation $t --out "$work/v.ply" --report "$work/r.json" --quiet \
+      2> "$work/err"; then
+      printf '| %s omni | lightvol %s | %s | (build failed: %s) |||||||\n' "$scene" "$t" "$oe" \
+        "$(head -c 160 "$work/err")"
+      continue
+    fi
+    read -r tris reached angle < <(python3 -c '
+import json, sys
+a = json.load(open(sys.argv[1]))["adaptive"]
+print(a["grid_triangles"], "%.6g" % a["max_error_reached"], a["min_angle_degrees"])' "$work/r.json")
+    printf '| %s omni 6×%s² (world) | lightvol %s | %s | %s | %s | – | %s s | %s s | %s MB | %.4g° |\n' "$scene" \
+      "$omni_size" "$t" "$oe" "$tris" "$reached" "$wall" "$cpu" "$mem" "$angle"
   done
 done
