@@ -44,12 +44,14 @@ trap 'rm -rf "$work"' EXIT
 tool="$build/tests/bench/heightfield_tool"
 lv="$build/lightvol"
 
-# timed CMD...: runs it under /usr/bin/time; sets wall, cpu (user+sys), mem (MB).
+# timed CMD...: runs it under /usr/bin/time; sets wall, cpu (user+sys), mem (MB); returns its status.
 timed() {
-  /usr/bin/time -f '%e %U %S %M' -o "$work/time" "$@"
-  read -r wall user sys kb < "$work/time"
+  local status=0
+  /usr/bin/time -f '%e %U %S %M' -o "$work/time" "$@" || status=$?
+  read -r wall user sys kb < <(tail -n 1 "$work/time")
   cpu=$(awk -v u="$user" -v s="$sys" 'BEGIN { printf "%.2f", u + s }')
   mem=$(awk -v k="$kb" 'BEGIN { printf "%.0f", k / 1024 }')
+  return $status
 }
 
 row() {  # map mesher threshold mesh
