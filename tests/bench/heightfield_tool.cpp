@@ -4,9 +4,10 @@
 //   heightfield_tool map N OUT.exr OUT.f32
 //       the synthetic scene (synthetic_scene.h) at N×N, as EXR for lightvol and raw float32 for
 //       node.
-//   heightfield_tool error MAP.f32 N MESH
+//   heightfield_tool error MAP.f32 N MESH [XY_SCALE]
 //       MESH is a lightvol PLY built with the benchmark's directional light (world point of texel
-//       (col, row) at depth z is (col, −row, −z)), or a Martini .mrt dump (uint32 vertex and
+//       (col, row) at depth z is (col, −row, −z) / (XY_SCALE, XY_SCALE, 1); XY_SCALE 1 unless
+//       given, N − 1 for a light box one unit across), or a Martini .mrt dump (uint32 vertex and
 //       triangle counts, uint32 (x, y) pairs, uint32 index triples; heights from the map). Prints
 //       "triangles N max_error E uncovered U": for every texel, the triangle over it is found by
 //       rasterizing each triangle's lattice points, its height interpolated linearly and compared
@@ -40,7 +41,7 @@ std::vector<char> slurp(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), {}};
 }
 
-bool read_ply(const std::string& path, std::vector<Tri>* out) {
+bool read_ply(const std::string& path, double xy_scale, std::vector<Tri>* out) {
   const std::vector<char> bytes = slurp(path);
   const std::string text(bytes.begin(), bytes.begin() + std::min<std::size_t>(bytes.size(), 4096));
   const std::size_t end = text.find("end_header\n");
@@ -58,8 +59,8 @@ bool read_ply(const std::string& path, std::vector<Tri>* out) {
     Tri t;
     bool closing = false;
     for (int k = 0; k < 3; ++k) {
-      t.x[k] = pos[3 * idx[k]];
-      t.y[k] = -pos[3 * idx[k] + 1];
+      t.x[k] = static_cast<float>(std::round(pos[3 * idx[k]] * xy_scale));
+      t.y[k] = static_cast<float>(std::round(-pos[3 * idx[k] + 1] * xy_scale));
       t.z[k] = -pos[3 * idx[k] + 2];
       closing = closing || t.z[k] <= 1e-7;
     }
@@ -91,7 +92,7 @@ bool read_mrt(const std::string& path, const std::vector<float>& map, int n,
   return true;
 }
 
-int measure(const std::string& map_path, int n, const std::string& mesh_path) {
+int measure(const std::string& map_path, int n, const std::string& mesh_path, double xy_scale) {
   std::vector<float> map(static_cast<std::size_t>(n) * n);
   {
     const std::vector<char> bytes = slurp(map_path);
@@ -104,7 +105,7 @@ int measure(const std::string& map_path, int n, const std::string& mesh_path) {
   }
   std::vector<Tri> tris;
   const bool ok = mesh_path.size() > 4 && mesh_path.substr(mesh_path.size() - 4) == ".ply"
-                      ? read_ply(mesh_path, &tris)
+                      ? read_ply(mesh_path, xy_scale, &tris)
                       : read_mrt(mesh_path, map, n, &tris);
   if (!ok) {
     std::fprintf(stderr, "heightfield_tool: cannot read %s\n", mesh_path.c_str());
@@ -183,10 +184,11 @@ int main(int argc, char** argv) {
                static_cast<std::streamsize>(4 * d->values.size()));
     return 0;
   }
-  if (argc == 5 && std::string(argv[1]) == "error")
-    return measure(argv[2], std::atoi(argv[3]), argv[4]);
-  std::fprintf(stderr,
-               "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt} | "
-               "from IN N SCALE OUT.exr OUT.f32\n");
+  if ((argc == 5 || argc == 6) && std::string(argv[1]) == "error")
+    return measure(argv[2], std::atoi(argv[3]), argv[4], argc == 6 ? std::atof(argv[5]) : 1.0);
+  std::fprintf(
+      stderr,
+      "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt} [XY_SCALE] | "
+      "from IN N SCALE OUT.exr OUT.f32\n");
   return 2;
 }

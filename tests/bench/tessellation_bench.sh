@@ -55,16 +55,20 @@ timed() {
 }
 
 row() {  # map mesher threshold mesh
-  read -r _ tris _ reached _ uncovered _ angle < <("$tool" error "$work/map.f32" "$n" "$4")
+  read -r _ tris _ reached _ uncovered _ angle < <("$tool" error "$work/map.f32" "$n" "$4" $((n - 1)))
   printf '| %s | %s | %s | %s | %s | %s | %s s | %s s | %s MB | %s° |\n' "$1" "$2" "$3" "$tris" \
     "$reached" "$uncovered" "$wall" "$cpu" "$mem" "$angle"
 }
 
 bench_map() {  # label: $work/map.exr and $work/map.f32 of size $n
   local label=$1
+  # A light box one unit across (texel (col, row) at (col, −row) / (N − 1)): heights in [0, 1] at
+  # coordinates up to N would be refused by build's float32 guard. The checker scales back.
+  local ortho
+  ortho=$(awk -v n="$n" 'BEGIN { s = n - 1; printf "%.17g, %.17g, %.17g, %.17g", -0.5 / s, (s + 0.5) / s, -(s + 0.5) / s, 0.5 / s }')
   cat > "$work/light.json" <<JSON
 {"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],
- "ortho": [-0.5, $((n - 1)).5, -$((n - 1)).5, 0.5], "near": 0, "far": 1, "depth": "linear"}
+ "ortho": [$ortho], "near": 0, "far": 1, "depth": "linear"}
 JSON
   for t in collapse quadtree; do
     runs $t || continue
