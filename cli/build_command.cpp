@@ -1,6 +1,8 @@
 // lightvol build: depth image(s) + light description → closed light volume on disk.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -19,33 +21,12 @@
 #include <lightvol/volume/build_volume.h>
 #include <lightvol/volume/static_volume.h>
 
+#include "build_job.h"
 #include "commands.h"
 #include "progress.h"
 
 namespace lightvol::cli {
 namespace {
-
-struct BuildCommandOptions {
-  std::vector<std::string> depth_paths;
-  std::string light_path;
-  std::string out_path;
-  std::string channel;
-  std::string space = "world";
-  std::string report_path;
-  std::string medium_path;  // --medium: recorded in a GLB's light node
-  bool ascii = false;
-  bool draco = false;
-  int draco_bits = 16;
-  bool quiet = false;
-  bool json = false;
-  bool adaptive = false;         // --adaptive
-  double max_error = -1;         // --max-error, world units
-  std::string refine = "error";  // --refine error|laplacian
-  double threshold = -1;         // --threshold, for --refine laplacian
-  std::string tessellation;      // --tessellation collapse|quadtree (default: collapse; laplacian:
-                                 // quadtree)
-  bool no_check = false;
-};
 
 // Flag combinations that make no sense; "" when the flags agree.
 std::string conflicting_flags(const BuildCommandOptions& o, MeshFormat format) {
@@ -107,7 +88,7 @@ nlohmann::json stage_json(const StageLog& log) {
 nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
                             const ShadowMaps& maps, const Mesh& mesh,
                             const AdaptiveReport* adaptive, const StageLog& log,
-                            const std::vector<std::string>& warnings) {
+                            const std::vector<std::string>& warnings, const nlohmann::json& extra) {
   const Bounds box = bounding_box(mesh);
   nlohmann::json report = {
       {"inputs", o.depth_paths},
@@ -129,6 +110,7 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
       {"peak_memory_bytes", peak_memory_bytes()},
       {"warnings", warnings},
   };
+  for (const auto& [key, value] : extra.items()) report[key] = value;
   if (!adaptive) return report;
   const AdaptiveReport& a = *adaptive;
   const bool laplacian = o.refine == "laplacian";
@@ -194,47 +176,150 @@ Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& m
   return report;
 }
 
+// The seconds of the step `progress` just ended.
+double last_step_seconds(const Progress& progress) {
+  return progress.log().stages().back().seconds;
+}
+
 int run_build(const BuildCommandOptions& o) {
   Progress progress(o.quiet);
+  const BuildJobResult r = run_build_job(o, progress);
+  // Warnings go to stderr (unless --quiet) and into the report.
+  if (!o.quiet)
+    for (const std::string& w : r.warnings)
+      std::fprintf(stderr, "lightvol: warning: %s\n", printable(w).c_str());
+  if (r.exit_code == 1) return invalid(r.error);
+  if (r.exit_code != 0) return fail(r.error);
+  if (o.json) {
+    std::printf("%s\n", r.report.dump(2).c_str());
+  } else if (!o.quiet) {
+    std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
+                o.out_path.c_str(), thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
+                r.report["volume"].get<double>(), progress.log().total_seconds(),
+                human_bytes(peak_memory_bytes()).c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
+  cmd.add_option("depth", o.depth_paths,
+                 "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
+                 "{face} path or one W x 6W strip)")
+      ->required();
+  cmd.add_option("--light", o.light_path, "Light description (LIGHT.json)")->required();
+  cmd.add_option("--out,-o", o.out_path, "Output mesh; the extension picks the format")->required();
+  cmd.add_option("--channel", o.channel, "Channel of a multi-channel image to read (e.g. Z, R)");
+  cmd.add_option("--space", o.space, "Frame of the output: world or light (the light's eye space)")
+      ->check(CLI::IsMember({"world", "light"}))
+      ->capture_default_str();
+  cmd.add_flag("--ascii", o.ascii, "Write ASCII PLY or STL instead of binary");
+  cmd.add_flag("--draco", o.draco, "Compress .glb output with KHR_draco_mesh_compression");
+  cmd.add_option("--draco-bits", o.draco_bits, "Position quantization bits for .drc and --draco")
+      ->check(CLI::Range(1, 30))
+      ->capture_default_str();
+  cmd.add_option("--medium", o.medium_path,
+                 "Medium JSON to record in a .glb beside the light (its intensity becomes the glTF "
+                 "light's)");
+  cmd.add_option("--report", o.report_path,
+                 "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
+  cmd.add_flag("--json", o.json, "Print the report as JSON on stdout");
+  cmd.add_flag(
+      "--adaptive", o.adaptive,
+      "Adaptive tessellation: every texel lies within --max-error world units of the surface (no "
+      "T-junctions; see --tessellation)");
+  cmd.add_option("--max-error", o.max_error,
+                 "Error bound of --adaptive, in world units along each texel ray")
+      ->check(finite_non_negative());
+  cmd.add_option(
+         "--refine", o.refine,
+         "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
+         "implies --adaptive)")
+      ->check(CLI::IsMember({"error", "laplacian"}));
+  cmd.add_option("--threshold", o.threshold,
+                 "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
+      ->check(finite_non_negative());
+  cmd.add_option("--tessellation", o.tessellation,
+                 "--adaptive: collapse (default: the quadtree coarsened by collapses verified at "
+                 "every texel, far fewer triangles) or quadtree (the paper's restricted quadtree; "
+                 "the only one for --refine laplacian)")
+      ->check(CLI::IsMember({"collapse", "quadtree"}));
+  cmd.add_flag(
+      "--no-check", o.no_check,
+      "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
+  cmd.add_flag("--quiet,-q", o.quiet, "No progress lines and no summary");
+}
+
+nlohmann::json output_options_json(const BuildCommandOptions& o) {
+  return {{"format", std::filesystem::path(o.out_path).extension().string()},
+          {"channel", o.channel},
+          {"space", o.space},
+          {"ascii", o.ascii},
+          {"draco", o.draco},
+          {"draco_bits", o.draco_bits},
+          {"adaptive", o.adaptive},
+          {"max_error", o.max_error},
+          {"refine", o.refine},
+          {"threshold", o.threshold},
+          {"tessellation", o.tessellation},
+          {"no_check", o.no_check},
+          {"medium", !o.medium_path.empty()}};
+}
+
+BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
+                             const BuildJobHooks& hooks) {
+  BuildJobResult r;
+  auto failed = [&r](int code, std::string message) {
+    r.exit_code = code;
+    r.error = std::move(message);
+    return r;
+  };
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
-  if (!format) return fail(format.error().message);
+  if (!format) return failed(2, format.error().message);
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())
-    return fail(conflict);
+    return failed(2, conflict);
   const BuildVolumeOptions options = volume_options(o);
   const bool adaptive = options.grid == VolumeGrid::adaptive;
 
   progress.begin("reading " + o.light_path);
   Result<Light> light = load_light(o.light_path);
-  if (!light) return fail(light.error().message);
+  if (!light) return failed(2, light.error().message);
   progress.end();
+  r.read_seconds += last_step_seconds(progress);
   Result<std::string> medium =
       o.medium_path.empty() ? Result<std::string>(std::string()) : medium_json(o.medium_path);
-  if (!medium) return fail(medium.error().message);
+  if (!medium) return failed(2, medium.error().message);
 
   const bool omni = light->type == LightType::omni;
   progress.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
   Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, {o.channel});
-  if (!maps) return fail(maps.error().message);
+  if (!maps) return failed(2, maps.error().message);
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
+  r.read_seconds += last_step_seconds(progress);
 
-  // Warnings go to stderr (unless --quiet) and into the report.
-  std::vector<std::string> warnings;
+  // Warnings go into the report (and the caller says them).
   if (const std::string note = omni ? "" : aspect_mismatch(*light, maps->width(), maps->height());
-      !note.empty()) {
-    warnings.push_back(o.depth_paths.front() + ": " + note);
-    if (!o.quiet)
-      std::fprintf(stderr, "lightvol: warning: %s\n", printable(warnings.back()).c_str());
+      !note.empty())
+    r.warnings.push_back(o.depth_paths.front() + ": " + note);
+
+  if (hooks.before_build) {
+    const auto waited_from = std::chrono::steady_clock::now();
+    hooks.before_build(*maps);
+    r.wait_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - waited_from).count();
   }
 
   progress.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
                  (omni ? "omni " : "") + "volume");
   AdaptiveReport adaptive_report;
   Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
-  if (!mesh) return fail(mesh.error().message);
+  if (!mesh) return failed(2, mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
+  r.build_seconds = last_step_seconds(progress);
   // A valid light whose volume float32 cannot hold is bad input (exit 2), not an invalid volume.
   if (Status s = check_representable(*mesh, *light, options.space, o.light_path); !s)
-    return fail(s.error().message);
+    return failed(2, s.error().message);
 
   const Light frame_light = light_in_space(*light, options.space);
   if (!o.no_check) {
@@ -242,9 +327,10 @@ int run_build(const BuildCommandOptions& o) {
     progress.begin("checking");
     const CheckReport check = check_volume_linear(*mesh, &frame_light);
     if (!check.valid())
-      return invalid(o.out_path + ": the built volume fails its checks, nothing written: " +
-                     check.first_failure());
+      return failed(1, o.out_path + ": the built volume fails its checks, nothing written: " +
+                           check.first_failure());
     progress.end("valid");
+    r.check_seconds = last_step_seconds(progress);
   }
 
   ExportOptions eo;
@@ -259,23 +345,16 @@ int run_build(const BuildCommandOptions& o) {
   eo.glb.light = &glb_light;
   eo.glb.medium_json = *medium;
   Result<nlohmann::json> report = write_outputs(o, *mesh, eo, progress, [&] {
+    r.write_seconds = last_step_seconds(progress);
     return build_report(o, *light, *maps, *mesh, adaptive ? &adaptive_report : nullptr,
-                        progress.log(), warnings);
+                        progress.log(), r.warnings, hooks.extra_report);
   });
-  if (!report) return fail(report.error().message);
-
-  if (o.json) {
-    std::printf("%s\n", report->dump(2).c_str());
-  } else if (!o.quiet) {
-    std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
-                o.out_path.c_str(), thousands(mesh->num_triangles()).c_str(),
-                thousands(mesh->num_vertices()).c_str(), (*report)["volume"].get<double>(),
-                progress.log().total_seconds(), human_bytes(peak_memory_bytes()).c_str());
-  }
-  return 0;
+  if (!report) return failed(2, report.error().message);
+  r.vertices = mesh->num_vertices();
+  r.triangles = mesh->num_triangles();
+  r.report = std::move(*report);
+  return r;
 }
-
-}  // namespace
 
 void add_build_command(CLI::App& app, Runner* run) {
   auto o = std::make_shared<BuildCommandOptions>();
@@ -292,55 +371,7 @@ void add_build_command(CLI::App& app, Runner* run) {
       "or one W x 6W strip with the faces top to bottom.\n"
       "Formats by extension: .ply .obj .off .stl .drc .glb. Exit 2 on bad input, with no file "
       "written.");
-  cmd->add_option(
-         "depth", o->depth_paths,
-         "Depth image: EXR, TIFF, PFM, 16-bit PNG or PGM, HDR, ZFile (omni: six faces, one "
-         "{face} path or one W x 6W strip)")
-      ->required();
-  cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)")->required();
-  cmd->add_option("--out,-o", o->out_path, "Output mesh; the extension picks the format")
-      ->required();
-  cmd->add_option("--channel", o->channel, "Channel of a multi-channel image to read (e.g. Z, R)");
-  cmd->add_option("--space", o->space,
-                  "Frame of the output: world or light (the light's eye space)")
-      ->check(CLI::IsMember({"world", "light"}))
-      ->capture_default_str();
-  cmd->add_flag("--ascii", o->ascii, "Write ASCII PLY or STL instead of binary");
-  cmd->add_flag("--draco", o->draco, "Compress .glb output with KHR_draco_mesh_compression");
-  cmd->add_option("--draco-bits", o->draco_bits, "Position quantization bits for .drc and --draco")
-      ->check(CLI::Range(1, 30))
-      ->capture_default_str();
-  cmd->add_option(
-      "--medium", o->medium_path,
-      "Medium JSON to record in a .glb beside the light (its intensity becomes the glTF "
-      "light's)");
-  cmd->add_option("--report", o->report_path,
-                  "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
-  cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");
-  cmd->add_flag(
-      "--adaptive", o->adaptive,
-      "Adaptive tessellation: every texel lies within --max-error world units of the surface (no "
-      "T-junctions; see --tessellation)");
-  cmd->add_option("--max-error", o->max_error,
-                  "Error bound of --adaptive, in world units along each texel ray")
-      ->check(finite_non_negative());
-  cmd->add_option(
-         "--refine", o->refine,
-         "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
-         "implies --adaptive)")
-      ->check(CLI::IsMember({"error", "laplacian"}));
-  cmd->add_option("--threshold", o->threshold,
-                  "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
-      ->check(finite_non_negative());
-  cmd->add_option("--tessellation", o->tessellation,
-                  "--adaptive: collapse (default: the quadtree coarsened by collapses verified at "
-                  "every texel, far fewer triangles) or quadtree (the paper's restricted quadtree; "
-                  "the only one for --refine laplacian)")
-      ->check(CLI::IsMember({"collapse", "quadtree"}));
-  cmd->add_flag(
-      "--no-check", o->no_check,
-      "Write without the linear-time checks (which otherwise refuse a failing volume, exit 1)");
-  cmd->add_flag("--quiet,-q", o->quiet, "No progress lines and no summary");
+  add_build_options(*cmd, *o);
   cmd->callback([o, run] { *run = [o] { return run_build(*o); }; });
 }
 

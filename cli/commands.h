@@ -10,7 +10,11 @@ namespace lightvol::cli {
 
 using Runner = std::function<int()>;
 
+// The version `--version` prints and batch records in its job hashes (CMake's project version).
+inline constexpr const char* kVersion = LIGHTVOL_VERSION;
+
 void add_build_command(CLI::App& app, Runner* run);
+void add_batch_command(CLI::App& app, Runner* run);
 void add_stats_command(CLI::App& app, Runner* run);
 void add_check_command(CLI::App& app, Runner* run);
 void add_demo_command(CLI::App& app, Runner* run);

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
       "blending.\n"};
   app.name("lightvol");
   app.require_subcommand(1);
-  app.set_version_flag("--version", "lightvol 0.1.0");
+  app.set_version_flag("--version", std::string("lightvol ") + kVersion);
   app.footer(
       "Run 'lightvol COMMAND --help' for a command's options. Exit codes: 0 success, "
       "1 invalid volume, 2 bad usage or input.");
@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
 
   Runner run;
   add_build_command(app, &run);
+  add_batch_command(app, &run);
   add_stats_command(app, &run);
   add_check_command(app, &run);
   add_demo_command(app, &run);

@@ -4,7 +4,8 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git time bc python3
   libopenmesh-dev libdraco-dev libtinygltf-dev libopenimageio-dev openimageio-tools
-  libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtbb-dev
+  libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtbb-dev libxxhash-dev
+  parallel  # lightvol batch --shard across hosts, in its test
   nlohmann-json3-dev libcli11-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -24,7 +24,8 @@ namespace fs = std::filesystem;
 // (state 2) only once its path is complete, and the handler unlinks only the temporaries of the
 // process that registered them (a forked child shares the table but not the files' fate).
 namespace {
-constexpr int kSignalSlots = 64;
+// Enough for `lightvol batch`: up to 64 jobs at once, each with a volume and a report staged.
+constexpr int kSignalSlots = 256;
 struct TempSlot {
   std::atomic<int> state{0};  // 0 free, 1 being filled or emptied, 2 armed
   pid_t owner = 0;

@@ -1,0 +1,489 @@
+// lightvol batch: many `build` jobs from one JSON-lines file, run in threads of one process, one
+// JSON line of result per job; --shard K/N runs one deterministic slice of them (docs/batch.md).
+#include <unistd.h>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include <lightvol/core/atomic_file.h>
+#include <lightvol/core/limits.h>
+#include <lightvol/depth/cube_faces.h>
+
+#include "build_job.h"
+#include "commands.h"
+#include "progress.h"
+
+namespace lightvol::cli {
+namespace {
+namespace fs = std::filesystem;
+using ordered_json = nlohmann::ordered_json;
+
+// The most jobs run at once: each holds up to two temporary files (the volume and its report),
+// which the signal cleanup of core/atomic_file.h tracks in a table of fixed size.
+constexpr int kMaxParallelJobs = 64;
+
+struct BatchOptions {
+  std::string jobs_path;
+  int jobs = 0;       // --jobs; 0: one per core
+  std::string shard;  // --shard K/N
+  std::string results_path;
+  bool quiet = false;
+};
+
+struct Shard {
+  long index = 0, count = 1;
+};
+
+// "K/N" with 0 <= K < N.
+Result<Shard> parse_shard(const std::string& text) {
+  const std::string usage = "--shard: expected K/N with 0 <= K < N (e.g. 0/4), got '" + text + "'";
+  const std::size_t slash = text.find('/');
+  if (slash == std::string::npos) return Error{usage};
+  auto number = [](const std::string& digits, long* value) {
+    if (digits.empty() || digits.size() > 9 ||
+        !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      return false;
+    *value = std::stol(digits);
+    return true;
+  };
+  Shard s;
+  if (!number(text.substr(0, slash), &s.index) || !number(text.substr(slash + 1), &s.count) ||
+      s.count < 1 || s.index >= s.count)
+    return Error{usage};
+  return s;
+}
+
+// One job line. A line that does not parse is still a job: it fails with `error`.
+struct Job {
+  int line = 0;                 // 1-based line number in the jobs file
+  std::size_t number = 0;       // 0-based among the jobs (lines that are not blank or comments)
+  ordered_json id;              // the line's "id", or null
+  ordered_json out;             // the line's "out" as written, or null
+  BuildCommandOptions options;  // paths resolved against the jobs file's folder
+  std::string error;            // why the line is not a job, with the file and line
+};
+
+std::string resolve(const fs::path& base, const std::string& path) {
+  if (path.empty() || fs::path(path).is_absolute() || base.empty()) return path;
+  return (base / path).string();
+}
+
+// A job line, parsed: JSON, its keys, then `args` by build's own option definitions.
+Job parse_job(const std::string& text, const std::string& where, const fs::path& base) {
+  Job job;
+  auto bad = [&](const std::string& why) {
+    job.error = where + ": " + why;
+    return job;
+  };
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    return bad("not valid JSON (at byte " + std::to_string(e.byte) + ")");
+  }
+  if (!j.is_object()) return bad("a job is a JSON object, e.g. {\"inputs\": [\"a.exr\"], ...}");
+  for (const auto& [key, value] : j.items())
+    if (key != "id" && key != "inputs" && key != "light" && key != "out" && key != "args")
+      return bad("key '" + key + "': unknown (a job has id, inputs, light, out, args)");
+  if (j.contains("id")) {
+    if (!j["id"].is_string()) return bad("key 'id': expected a string");
+    job.id = j["id"].get<std::string>();
+  }
+  auto strings = [&](const char* key, bool required, std::vector<std::string>* list) {
+    if (!j.contains(key)) return !required;
+    const nlohmann::json& v = j[key];
+    if (!v.is_array() || (required && v.empty())) return false;
+    for (const nlohmann::json& s : v) {
+      if (!s.is_string()) return false;
+      list->push_back(s.get<std::string>());
+    }
+    return true;
+  };
+  std::vector<std::string> inputs, args;
+  if (!strings("inputs", true, &inputs))
+    return bad("key 'inputs': expected a non-empty array of paths");
+  for (const char* key : {"light", "out"})
+    if (!j.contains(key) || !j[key].is_string() || j[key].get<std::string>().empty())
+      return bad(std::string("key '") + key + "': expected a path");
+  job.out = j["out"].get<std::string>();
+  if (!strings("args", false, &args)) return bad("key 'args': expected an array of strings");
+
+  // build's command line: the flags first, then "--" and the inputs (a path may start with '-').
+  std::vector<std::string> argv = {"--light", j["light"].get<std::string>(), "--out",
+                                   j["out"].get<std::string>()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  argv.push_back("--");
+  argv.insert(argv.end(), inputs.begin(), inputs.end());
+  std::reverse(argv.begin(), argv.end());  // CLI11 takes them last first
+  CLI::App build{"build"};
+  build.name("build");
+  build.set_help_flag();
+  BuildCommandOptions& o = job.options;
+  add_build_options(build, o);
+  build.allow_extras();  // an unknown flag is named below
+  try {
+    build.parse(argv);
+  } catch (const CLI::ParseError& e) {
+    return bad("key 'args': " + std::string(e.what()));
+  }
+  for (const std::string& extra : build.remaining())
+    if (extra != "--")
+      return bad("key 'args': " + extra + ": not a flag of build (see 'lightvol build --help')");
+  if (o.json) return bad("key 'args': --json: not in a batch (each job's result is a line)");
+  o.quiet = true;
+  for (std::string& p : o.depth_paths) p = resolve(base, p);
+  o.light_path = resolve(base, o.light_path);
+  o.out_path = resolve(base, o.out_path);
+  o.medium_path = resolve(base, o.medium_path);
+  // Every job writes a report: it holds the content hash that makes a rerun skip the job.
+  o.report_path =
+      o.report_path.empty() ? o.out_path + ".report.json" : resolve(base, o.report_path);
+  return job;
+}
+
+// The files a job reads, in order, each with what names it in the job line: the depth inputs
+// ({face} expanded to six), the light, the medium.
+std::vector<std::pair<std::string, std::string>> input_files(const BuildCommandOptions& o) {
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const std::string& p : o.depth_paths) {
+    if (p.find("{face}") == std::string::npos) {
+      files.emplace_back("inputs", p);
+      continue;
+    }
+    for (int face = 0; face < kOmniFaces; ++face)
+      files.emplace_back("inputs", expand_face_pattern(p, face));
+  }
+  files.emplace_back("light", o.light_path);
+  if (!o.medium_path.empty()) files.emplace_back("args: --medium", o.medium_path);
+  return files;
+}
+
+// The job's content hash, "xxh3-128:<32 hex digits>": of the bytes of every file it reads (each
+// with its length), the options that change the output, and the lightvol version.
+Result<std::string> content_hash(const BuildCommandOptions& o) {
+  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(),
+                                                                 &XXH3_freeState);
+  if (!state || XXH3_128bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+  auto add = [&](const std::string& bytes) {
+    const std::uint64_t size = bytes.size();
+    XXH3_128bits_update(state.get(), &size, sizeof size);
+    XXH3_128bits_update(state.get(), bytes.data(), bytes.size());
+  };
+  add(std::string("lightvol ") + kVersion);
+  add(output_options_json(o).dump());
+  std::vector<char> chunk(1 << 20);
+  for (const auto& [key, path] : input_files(o)) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return Error{"key '" + key + "': " + path + ": cannot open: " + std::strerror(errno)};
+    std::uint64_t size = 0;
+    const std::uint64_t marker = ~std::uint64_t{0};  // a file, then its length after its bytes
+    XXH3_128bits_update(state.get(), &marker, sizeof marker);
+    while (in) {
+      in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+      const auto got = static_cast<std::size_t>(in.gcount());
+      XXH3_128bits_update(state.get(), chunk.data(), got);
+      size += got;
+    }
+    if (in.bad())
+      return Error{"key '" + key + "': " + path + ": cannot read: " + std::strerror(errno)};
+    XXH3_128bits_update(state.get(), &size, sizeof size);
+  }
+  XXH128_canonical_t canonical;
+  XXH128_canonicalFromHash(&canonical, XXH3_128bits_digest(state.get()));
+  std::string hex = "xxh3-128:";
+  for (unsigned char byte : canonical.digest) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    hex += kHex[byte >> 4];
+    hex += kHex[byte & 15];
+  }
+  return hex;
+}
+
+// The report of an earlier run, if the output and its report exist and the report records `hash`.
+std::optional<nlohmann::json> finished_report(const BuildCommandOptions& o,
+                                              const std::string& hash) {
+  std::error_code ec;
+  if (!fs::is_regular_file(o.out_path, ec) || !fs::is_regular_file(o.report_path, ec)) return {};
+  std::ifstream in(o.report_path, std::ios::binary);
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  if (!report.is_object() || !report.contains("job_hash") || report["job_hash"] != hash) return {};
+  return report;
+}
+
+// Jobs wait here, after reading their maps, until the memory their build needs fits under the
+// budget beside the builds already running; the first one always runs.
+class MemoryGate {
+ public:
+  explicit MemoryGate(std::uint64_t budget) : budget_(budget) {}
+  void acquire(std::uint64_t bytes) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    fits_.wait(lock, [&] { return held_ == 0 || held_ + bytes <= budget_; });
+    held_ += bytes;
+  }
+  void release(std::uint64_t bytes) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      held_ -= bytes;
+    }
+    fits_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable fits_;
+  std::uint64_t budget_;
+  std::uint64_t held_ = 0;
+};
+
+enum class JobStatus { ok, skipped, failed };
+
+struct Outcome {
+  JobStatus status = JobStatus::failed;
+  int exit_code = 0;  // of a failed job: 1 invalid volume, 2 bad input
+  std::string error;
+  std::uint64_t vertices = 0, triangles = 0;
+  double hash_seconds = 0;
+  BuildJobResult build;  // its times
+};
+
+Outcome run_job(const Job& job, MemoryGate& gate) {
+  Outcome out;
+  if (!job.error.empty()) {
+    out.exit_code = 2;
+    out.error = job.error;
+    return out;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const Result<std::string> hash = content_hash(job.options);
+  out.hash_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  if (!hash) {
+    out.exit_code = 2;
+    out.error = hash.error().message;
+    return out;
+  }
+  if (const std::optional<nlohmann::json> report = finished_report(job.options, *hash)) {
+    out.status = JobStatus::skipped;
+    out.vertices = report->value("vertices", std::uint64_t{0});
+    out.triangles = report->value("triangles", std::uint64_t{0});
+    return out;
+  }
+  std::uint64_t held = 0;
+  BuildJobHooks hooks;
+  hooks.extra_report = {{"job_hash", *hash}};
+  hooks.before_build = [&](const ShadowMaps& maps) {
+    held = depth_build_memory_bytes(maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
+    gate.acquire(held);
+  };
+  Progress progress(true);
+  out.build = run_build_job(job.options, progress, hooks);
+  gate.release(held);
+  out.exit_code = out.build.exit_code;
+  out.error = out.build.error;
+  out.status = out.exit_code == 0 ? JobStatus::ok : JobStatus::failed;
+  out.vertices = out.build.vertices;
+  out.triangles = out.build.triangles;
+  return out;
+}
+
+std::string result_line(const Job& job, const Outcome& o) {
+  const BuildJobResult& b = o.build;
+  const bool failed = o.status == JobStatus::failed;
+  ordered_json line = {
+      {"line", job.line},
+      {"id", job.id},
+      {"status", o.status == JobStatus::ok        ? "ok"
+                 : o.status == JobStatus::skipped ? "skipped"
+                                                  : "failed"},
+      {"out", job.out},
+      {"vertices", failed ? ordered_json(nullptr) : ordered_json(o.vertices)},
+      {"triangles", failed ? ordered_json(nullptr) : ordered_json(o.triangles)},
+      {"seconds",
+       {{"hash", o.hash_seconds},
+        {"read", b.read_seconds},
+        {"wait", b.wait_seconds},
+        {"build", b.build_seconds},
+        {"check", b.check_seconds},
+        {"write", b.write_seconds}}},
+      {"error", o.error.empty() ? ordered_json(nullptr) : ordered_json(with_flags(o.error))}};
+  return line.dump();
+}
+
+// A job file's path as messages name it.
+std::string job_where(const std::string& jobs_path, int line) {
+  return jobs_path + ":" + std::to_string(line);
+}
+
+int run_batch(const BatchOptions& opts) {
+  Result<Shard> shard = opts.shard.empty() ? Result<Shard>(Shard{}) : parse_shard(opts.shard);
+  if (!shard) return fail(shard.error().message);
+  std::ifstream in(opts.jobs_path, std::ios::binary);
+  std::error_code ec;
+  if (!in || fs::is_directory(opts.jobs_path, ec))
+    return fail(opts.jobs_path + ": cannot open the jobs file");
+  const fs::path base = fs::path(opts.jobs_path).parent_path();
+
+  // Every job of the file, so that a job's number, and so its shard, is the same in every shard;
+  // an output named by an earlier job fails the later one, whichever shards they fall in.
+  std::vector<Job> all;
+  std::vector<std::pair<std::string, int>> written;  // identity of each output, and its line
+  std::string text;
+  for (int line = 1; std::getline(in, text); ++line) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    const std::size_t first = text.find_first_not_of(" \t");
+    if (first == std::string::npos || text[first] == '#') continue;  // blank, or a comment
+    Job job = parse_job(text, job_where(opts.jobs_path, line), base);
+    job.line = line;
+    job.number = all.size();
+    if (job.error.empty()) {
+      for (const std::string& path : {job.options.out_path, job.options.report_path}) {
+        const std::string identity = fs::weakly_canonical(fs::absolute(path, ec), ec).string();
+        const auto earlier = std::find_if(written.begin(), written.end(),
+                                          [&](const auto& w) { return w.first == identity; });
+        if (earlier != written.end()) {
+          job.error = job_where(opts.jobs_path, line) + ": " + path + ": also an output of line " +
+                      std::to_string(earlier->second) + "; give each job its own out (and report)";
+          break;
+        }
+      }
+      if (job.error.empty())
+        for (const std::string& path : {job.options.out_path, job.options.report_path})
+          written.emplace_back(fs::weakly_canonical(fs::absolute(path, ec), ec).string(), line);
+    }
+    all.push_back(std::move(job));
+  }
+  if (in.bad()) return fail(opts.jobs_path + ": cannot read the jobs file");
+
+  std::vector<const Job*> mine;  // this shard's: job i belongs to shard i mod N
+  for (const Job& job : all)
+    if (static_cast<long>(job.number % static_cast<std::size_t>(shard->count)) == shard->index)
+      mine.push_back(&job);
+
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int workers = static_cast<int>(
+      std::min<std::size_t>(std::min(opts.jobs > 0 ? opts.jobs : cores, kMaxParallelJobs),
+                            std::max<std::size_t>(1, mine.size())));
+  MemoryGate gate(memory_budget());
+  const bool tty = ::isatty(STDERR_FILENO) != 0;
+  const auto started = std::chrono::steady_clock::now();
+
+  std::mutex mutex;  // guards what follows, and the output
+  std::vector<std::optional<Outcome>> outcomes(mine.size());
+  std::vector<std::string> lines;  // for --results
+  std::size_t emitted = 0, done = 0, ok = 0, skipped = 0, failed = 0;
+  int exit_code = 0;
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < mine.size();) {
+      const Job& job = *mine[i];
+      Outcome o;
+      try {
+        o = run_job(job, gate);
+      } catch (const std::bad_alloc&) {
+        o.exit_code = 2;
+        o.error = "out of memory";
+      } catch (const std::exception& e) {
+        o.exit_code = 2;
+        o.error = e.what();
+      }
+      // A build's errors name its files; the job's line goes first.
+      if (o.status == JobStatus::failed && job.error.empty())
+        o.error = job_where(opts.jobs_path, job.line) + ": " + o.error;
+      std::lock_guard<std::mutex> lock(mutex);
+      ++done;
+      if (o.status == JobStatus::ok) ++ok;
+      if (o.status == JobStatus::skipped) ++skipped;
+      if (o.status == JobStatus::failed) {
+        ++failed;
+        exit_code = std::max(exit_code, o.exit_code);
+        if (!opts.quiet)
+          std::fprintf(stderr, "%slightvol: %s\n", tty ? "\r\033[K" : "",
+                       printable(with_flags(o.error)).c_str());
+      }
+      if (!opts.quiet && tty)
+        std::fprintf(stderr, "\r\033[Kbatch: %zu/%zu done, %zu failed", done, mine.size(), failed);
+      outcomes[i] = std::move(o);
+      // Result lines in job order, each as soon as it and every job before it are done.
+      for (; emitted < mine.size() && outcomes[emitted]; ++emitted) {
+        const std::string line = result_line(*mine[emitted], *outcomes[emitted]);
+        if (opts.results_path.empty()) {
+          std::printf("%s\n", line.c_str());
+          std::fflush(stdout);
+        } else {
+          lines.push_back(line);
+        }
+        outcomes[emitted]->build = {};  // the report is no longer needed
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < workers; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+
+  if (!opts.results_path.empty()) {
+    std::string all_lines;
+    for (const std::string& line : lines) all_lines += line + "\n";
+    if (Status s = write_bytes_atomically(opts.results_path, all_lines); !s)
+      return fail(s.error().message);
+  }
+  if (!opts.quiet) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const std::string which = opts.shard.empty()
+                                  ? std::to_string(mine.size()) + " jobs"
+                                  : "shard " + opts.shard + ": " + std::to_string(mine.size()) +
+                                        " of " + std::to_string(all.size()) + " jobs";
+    std::fprintf(stderr, "%sbatch: %s: %zu ok, %zu skipped, %zu failed, %.2f s\n",
+                 tty ? "\r\033[K" : "", which.c_str(), ok, skipped, failed, seconds);
+  }
+  return exit_code;
+}
+
+}  // namespace
+
+void add_batch_command(CLI::App& app, Runner* run) {
+  auto o = std::make_shared<BatchOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "batch", "Run many builds from a JSON-lines file, in parallel, one result line per job.");
+  cmd->footer(
+      "Each line of JOBS.jsonl is one build: {\"id\": \"a\", \"inputs\": [\"a.exr\"], \"light\": "
+      "\"l.json\",\n"
+      "\"out\": \"a.ply\", \"args\": [\"--adaptive\", \"--max-error\", \"0.01\"]}; args are "
+      "build's flags.\n"
+      "Paths are relative to the jobs file's folder. Blank lines and lines starting with # are "
+      "skipped.\n"
+      "A job whose output and report (<out>.report.json) exist with the same content hash is "
+      "skipped.\n"
+      "Results: one JSON line per job on stdout, in job order. Exit 0 when every job is ok or "
+      "skipped,\n"
+      "1 when a volume failed its checks, 2 when a job had bad input. See docs/batch.md.");
+  cmd->add_option("jobfile", o->jobs_path, "The jobs (JOBS.jsonl): one JSON object per line")
+      ->required();
+  cmd->add_option("--jobs,-j", o->jobs, "Jobs run at once (default: one per core; at most 64)")
+      ->check(CLI::Range(1, kMaxParallelJobs));
+  cmd->add_option("--shard", o->shard,
+                  "Run the K-th of N slices, K/N (0 <= K < N): the jobs i with i mod N = K");
+  cmd->add_option("--results", o->results_path,
+                  "Write the result lines to this file (atomically, at the end) instead of stdout");
+  cmd->add_flag("--quiet,-q", o->quiet, "No progress, failures or summary on stderr");
+  cmd->callback([o, run] { *run = [o] { return run_batch(*o); }; });
+}
+
+}  // namespace lightvol::cli
