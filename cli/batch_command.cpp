@@ -42,6 +42,7 @@ struct BatchOptions {
   std::string jobs_path;
   int jobs = 0;       // --jobs; 0: one per core
   std::string shard;  // --shard K/N
+  bool shard_given = false;
   std::string results_path;
   bool quiet = false;
 };
@@ -331,7 +332,7 @@ std::string job_where(const std::string& jobs_path, int line) {
 }
 
 int run_batch(const BatchOptions& opts) {
-  Result<Shard> shard = opts.shard.empty() ? Result<Shard>(Shard{}) : parse_shard(opts.shard);
+  Result<Shard> shard = !opts.shard_given ? Result<Shard>(Shard{}) : parse_shard(opts.shard);
   if (!shard) return fail(shard.error().message);
   std::ifstream in(opts.jobs_path, std::ios::binary);
   std::error_code ec;
@@ -446,7 +447,7 @@ int run_batch(const BatchOptions& opts) {
   if (!opts.quiet) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    const std::string which = opts.shard.empty()
+    const std::string which = !opts.shard_given
                                   ? std::to_string(mine.size()) + " jobs"
                                   : "shard " + opts.shard + ": " + std::to_string(mine.size()) +
                                         " of " + std::to_string(all.size()) + " jobs";
@@ -483,7 +484,10 @@ void add_batch_command(CLI::App& app, Runner* run) {
   cmd->add_option("--results", o->results_path,
                   "Write the result lines to this file (atomically, at the end) instead of stdout");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress, failures or summary on stderr");
-  cmd->callback([o, run] { *run = [o] { return run_batch(*o); }; });
+  cmd->callback([o, run, cmd] {
+    o->shard_given = cmd->count("--shard") > 0;
+    *run = [o] { return run_batch(*o); };
+  });
 }
 
 }  // namespace lightvol::cli

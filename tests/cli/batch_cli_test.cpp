@@ -1,0 +1,391 @@
+// `lightvol batch` as a user runs it: result lines, bad lines as failed jobs, idempotency by the
+// content hash, shards that partition the jobs, no partial output, parallel = serial, SIGINT.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <lightvol/depth/depth_image.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+namespace fs = std::filesystem;
+
+std::string q(const std::string& s) { return "'" + s + "'"; }
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+// A result line without its times (which vary), as compact JSON in the line's key order.
+std::string without_seconds(const std::string& line) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(line);
+  EXPECT_TRUE(j.contains("seconds")) << line;
+  for (const auto& [step, seconds] : j["seconds"].items()) EXPECT_GE(seconds.get<double>(), 0);
+  j.erase("seconds");
+  return j.dump();
+}
+
+bool has_temporaries(const std::string& dir) {
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.path().filename().string().rfind(".lv-", 0) == 0) return true;
+  return false;
+}
+
+// A folder with a jobs file: the 9×7 spot map of the build tests (124 triangles, 64 vertices),
+// a second map, a spot light (square texels) and a directional light.
+struct Batch {
+  test::TempDir dir;
+  std::string jobs;
+  Batch() {
+    jobs = dir.file("jobs.jsonl");
+    write_map("a.exr", 0.95f);
+    write_map("b.exr", 0.9f);
+    dir.write("spot.json", test::spot_json("window", 9.0 / 7.0));
+    dir.write("dir.json", test::directional_json());
+  }
+  void write_map(const std::string& name, float occluder) const {
+    const DepthImage d = test::make_depth(9, 7, [occluder](int c, int r) {
+      return (c > 2 && c < 6 && r > 1 && r < 5) ? occluder : 0.99f;
+    });
+    EXPECT_TRUE(write_depth_image(dir.file(name), d).ok());
+  }
+  void write_jobs(const std::vector<std::string>& lines) const {
+    std::string text;
+    for (const std::string& l : lines) text += l + "\n";
+    dir.write("jobs.jsonl", text);
+  }
+  test::CommandResult run(const std::string& extra = "") const {
+    return test::run_lightvol("batch " + q(jobs) + " --quiet " + extra);
+  }
+  // `<jobs>:LINE: ` as errors begin.
+  std::string at(int line) const { return jobs + ":" + std::to_string(line) + ": "; }
+};
+
+std::string job(const std::string& id, const std::string& map, const std::string& out,
+                const std::string& args = "", const std::string& light = "spot.json") {
+  return R"({"id": ")" + id + R"(", "inputs": [")" + map + R"("], "light": ")" + light +
+         R"(", "out": ")" + out + R"(")" + (args.empty() ? "" : ", \"args\": [" + args + "]") + "}";
+}
+
+std::string ok_line(int line, const std::string& id, const std::string& out,
+                    const std::string& status = "ok") {
+  return R"({"line":)" + std::to_string(line) + R"(,"id":")" + id + R"(","status":")" + status +
+         R"(","out":")" + out + R"(","vertices":64,"triangles":124,"error":null})";
+}
+
+std::string failed_line(int line, const nlohmann::json& id, const nlohmann::json& out,
+                        const std::string& error) {
+  return R"({"line":)" + std::to_string(line) + R"(,"id":)" + id.dump() +
+         R"(,"status":"failed","out":)" + out.dump() +
+         R"(,"vertices":null,"triangles":null,"error":)" + nlohmann::json(error).dump() + "}";
+}
+
+TEST(BatchCli, ResultLinesForOkFailedAndSkippedJobs) {
+  Batch b;
+  b.write_jobs({
+      "# comment lines and blank lines are not jobs",
+      job("a", "a.exr", "a.ply"),
+      "",
+      "{\"id\": \"x\", \"inputs\": [",
+      job("missing", "nope.exr", "m.ply"),
+      job("flag", "a.exr", "f.ply", R"("--frobnicate")"),
+      job("value", "a.exr", "v.ply", R"("--draco-bits", "99")"),
+      job("json", "a.exr", "j.ply", R"("--json")"),
+      R"({"inputs": ["a.exr"], "light": "spot.json", "out": "k.ply", "colour": 1})",
+      R"({"inputs": "a.exr", "light": "spot.json", "out": "k.ply"})",
+      R"({"inputs": ["a.exr"], "out": "k.ply"})",
+      job("twice", "b.exr", "a.ply"),
+      job("conflict", "a.exr", "c.ply", R"("--max-error", "0.1")"),
+      job("b", "b.exr", "b.obj", R"("--adaptive", "--max-error", "0.001")"),
+  });
+  const test::CommandResult r = b.run("--jobs 3");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err, "");  // --quiet
+  const std::vector<std::string> expected = {
+      ok_line(2, "a", "a.ply"),
+      failed_line(4, nullptr, nullptr, b.at(4) + "not valid JSON (at byte 24)"),
+      failed_line(5, "missing", "m.ply",
+                  b.at(5) + "key 'inputs': " + b.dir.file("nope.exr") +
+                      ": cannot open: No such file or directory"),
+      failed_line(6, "flag", "f.ply",
+                  b.at(6) + "key 'args': --frobnicate: not a flag of build (see 'lightvol build "
+                            "--help')"),
+      failed_line(7, "value", "v.ply",
+                  b.at(7) + "key 'args': --draco-bits: Value 99 not in range 1 to 30"),
+      failed_line(8, "json", "j.ply",
+                  b.at(8) + "key 'args': --json: not in a batch (each job's result is a line)"),
+      failed_line(9, nullptr, nullptr,
+                  b.at(9) + "key 'colour': unknown (a job has id, inputs, light, out, args)"),
+      failed_line(10, nullptr, nullptr,
+                  b.at(10) + "key 'inputs': expected a non-empty array of paths"),
+      failed_line(11, nullptr, nullptr, b.at(11) + "key 'light': expected a path"),
+      failed_line(12, "twice", "a.ply",
+                  b.at(12) + b.dir.file("a.ply") +
+                      ": also an output of line 2; give each job its own out (and report)"),
+      failed_line(13, "conflict", "c.ply", b.at(13) + "--max-error: applies with --adaptive only"),
+      R"({"line":14,"id":"b","status":"ok","out":"b.obj","vertices":)",
+  };
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), expected.size()) << r.out;
+  for (std::size_t i = 0; i + 1 < expected.size(); ++i)
+    EXPECT_EQ(without_seconds(lines[i]), expected[i]);
+  EXPECT_EQ(without_seconds(lines.back()).rfind(expected.back(), 0), 0u) << lines.back();
+
+  // The failed jobs wrote nothing; the two good ones wrote their volumes and reports.
+  for (const char* name : {"m.ply", "f.ply", "v.ply", "j.ply", "k.ply", "c.ply"})
+    EXPECT_FALSE(fs::exists(b.dir.file(name))) << name;
+  EXPECT_TRUE(fs::exists(b.dir.file("a.ply.report.json")));
+  EXPECT_TRUE(fs::exists(b.dir.file("b.obj.report.json")));
+  EXPECT_FALSE(has_temporaries(b.dir.path()));
+
+  // Again: the good jobs are skipped (with their counts), the bad ones fail the same way.
+  const test::CommandResult again = b.run();
+  EXPECT_EQ(again.exit_code, 2) << again.err;
+  const std::vector<std::string> second = lines_of(again.out);
+  ASSERT_EQ(second.size(), expected.size()) << again.out;
+  EXPECT_EQ(without_seconds(second[0]), ok_line(2, "a", "a.ply", "skipped"));
+  for (std::size_t i = 1; i + 1 < expected.size(); ++i)
+    EXPECT_EQ(without_seconds(second[i]), expected[i]);
+  EXPECT_EQ(nlohmann::json::parse(second.back())["status"], "skipped");
+}
+
+TEST(BatchCli, ExitZeroAndASummaryWhenEveryJobIsDone) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply"), job("d", "a.exr", "d.glb", "", "dir.json")});
+  const test::CommandResult r = test::run_lightvol("batch " + q(b.jobs));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(lines_of(r.out).size(), 2u);
+  EXPECT_EQ(r.err.rfind("batch: 2 jobs: 2 ok, 0 skipped, 0 failed, ", 0), 0u) << r.err;
+  const test::CommandResult again = test::run_lightvol("batch " + q(b.jobs));
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err.rfind("batch: 2 jobs: 0 ok, 2 skipped, 0 failed, ", 0), 0u) << again.err;
+  // The report records the job's hash; every output passes check.
+  const nlohmann::json report = nlohmann::json::parse(slurp(b.dir.file("d.glb.report.json")));
+  EXPECT_EQ(report["job_hash"].get<std::string>().rfind("xxh3-128:", 0), 0u);
+  EXPECT_EQ(report["job_hash"].get<std::string>().size(), 9u + 32u);
+  EXPECT_EQ(test::run_lightvol("check " + q(b.dir.file("a.ply")) + " --light " +
+                               q(b.dir.file("spot.json")) + " --quiet")
+                .exit_code,
+            0);
+}
+
+TEST(BatchCli, BadUsageRunsNothing) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  const int before = b.dir.entries();
+  for (const char* shard : {"2/2", "1", "-1/2", "a/b", "0/0", "1/2/3", ""}) {
+    const test::CommandResult r = b.run("--shard " + q(shard));
+    EXPECT_EQ(r.exit_code, 2) << shard;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "lightvol: --shard: expected K/N with 0 <= K < N (e.g. 0/4), got '" +
+                         std::string(shard) + "'\n");
+  }
+  const test::CommandResult missing = test::run_lightvol("batch " + q(b.dir.file("no.jsonl")));
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_EQ(missing.err, "lightvol: " + b.dir.file("no.jsonl") + ": cannot open the jobs file\n");
+  EXPECT_EQ(b.run("--jobs 0").exit_code, 2);
+  EXPECT_EQ(b.dir.entries(), before);
+}
+
+TEST(BatchCli, ARerunSkipsUnlessAnInputOrOptionChanged) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  auto status = [&] {
+    const test::CommandResult r = b.run();
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out)["status"].get<std::string>();
+  };
+  EXPECT_EQ(status(), "ok");
+  const std::string first = slurp(b.dir.file("a.ply"));
+  EXPECT_EQ(status(), "skipped");
+  EXPECT_EQ(slurp(b.dir.file("a.ply")), first);
+
+  b.write_map("a.exr", 0.9f);  // the input's bytes
+  EXPECT_EQ(status(), "ok");
+  EXPECT_NE(slurp(b.dir.file("a.ply")), first);
+  EXPECT_EQ(status(), "skipped");
+
+  b.write_jobs({job("a", "a.exr", "a.ply", R"("--space", "light")")});  // an option
+  EXPECT_EQ(status(), "ok");
+  EXPECT_EQ(status(), "skipped");
+
+  b.dir.write("spot.json", test::spot_json("linear", 9.0 / 7.0));  // the light
+  EXPECT_EQ(status(), "ok");
+  EXPECT_EQ(status(), "skipped");
+
+  fs::remove(b.dir.file("a.ply.report.json"));  // no report: the output cannot be vouched for
+  EXPECT_EQ(status(), "ok");
+  fs::remove(b.dir.file("a.ply"));  // no output
+  EXPECT_EQ(status(), "ok");
+  EXPECT_EQ(status(), "skipped");
+
+  // A report of its own (--report) holds the hash instead of <out>.report.json.
+  b.write_jobs({job("a", "a.exr", "a.ply", R"("--report", "a.json")")});
+  EXPECT_EQ(status(), "ok");
+  EXPECT_TRUE(fs::exists(b.dir.file("a.json")));
+  EXPECT_EQ(status(), "skipped");
+}
+
+TEST(BatchCli, ShardsPartitionTheJobs) {
+  Batch b;
+  std::vector<std::string> jobs = {"# not a job"};
+  for (int i = 0; i < 8; ++i)
+    jobs.push_back(job(std::to_string(i), i % 2 ? "b.exr" : "a.exr", std::to_string(i) + ".ply"));
+  jobs.insert(jobs.begin() + 4, "not json");  // a bad line is a job too (number 3)
+  b.write_jobs(jobs);
+  std::map<int, int> runs_of_line;
+  for (int k = 0; k < 3; ++k) {
+    const test::CommandResult r = b.run("--shard " + std::to_string(k) + "/3");
+    EXPECT_EQ(r.exit_code, k == 0 ? 2 : 0) << r.err;  // job 3 (line 5) is in shard 0
+    int number = k;
+    for (const std::string& line : lines_of(r.out)) {
+      const nlohmann::json j = nlohmann::json::parse(line);
+      ++runs_of_line[j["line"].get<int>()];
+      // Job i is on line i + 2 (after the comment); the shard holds i = k, k + 3, ...
+      EXPECT_EQ(j["line"].get<int>(), number + 2) << line;
+      number += 3;
+    }
+  }
+  EXPECT_EQ(runs_of_line.size(), 9u);
+  for (const auto& [line, runs] : runs_of_line) EXPECT_EQ(runs, 1) << "line " << line;
+  for (int i = 0; i < 8; ++i) EXPECT_TRUE(fs::exists(b.dir.file(std::to_string(i) + ".ply")));
+}
+
+// The volume is written, then its report fails (no such folder): the transaction removes the
+// volume, so the job leaves nothing; the next job is not affected.
+TEST(BatchCli, AFailedJobLeavesNoOutput) {
+  Batch b;
+  b.write_jobs({job("r", "a.exr", "r.ply", R"("--report", "no/such/folder/r.json")"),
+                job("n", "a.exr", "no/n.ply"), job("a", "a.exr", "a.ply")});
+  const int before = b.dir.entries();
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(lines[0])["error"],
+            b.at(1) + b.dir.file("no/such/folder/r.json") + ": directory " +
+                b.dir.file("no/such/folder") + " does not exist");
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["status"], "failed");
+  EXPECT_EQ(nlohmann::json::parse(lines[2])["status"], "ok");
+  EXPECT_FALSE(fs::exists(b.dir.file("r.ply")));
+  EXPECT_EQ(b.dir.entries(), before + 2);  // a.ply and its report
+}
+
+TEST(BatchCli, ParallelAndSerialRunsWriteTheSameBytes) {
+  Batch serial, parallel;
+  const std::vector<std::string> jobs = {
+      job("s", "a.exr", "s.ply"),
+      job("a", "b.exr", "a.glb", R"("--adaptive", "--max-error", "0.001")"),
+      job("d", "a.exr", "d.obj", "", "dir.json"),
+      job("l", "b.exr", "l.off", R"("--space", "light")"),
+      job("t", "a.exr", "t.stl", R"("--ascii")"),
+      job("q", "b.exr", "q.ply",
+          R"("--adaptive", "--max-error", "0", "--tessellation", "quadtree")"),
+  };
+  serial.write_jobs(jobs);
+  parallel.write_jobs(jobs);
+  ASSERT_EQ(serial.run("--jobs 1").exit_code, 0);
+  ASSERT_EQ(parallel.run("--jobs 6").exit_code, 0);
+  for (const char* out : {"s.ply", "a.glb", "d.obj", "l.off", "t.stl", "q.ply"}) {
+    const std::string bytes = slurp(serial.dir.file(out));
+    EXPECT_FALSE(bytes.empty()) << out;
+    EXPECT_EQ(bytes, slurp(parallel.dir.file(out))) << out;
+  }
+}
+
+TEST(BatchCli, ResultsFileInsteadOfStdout) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply"), "oops"});
+  const test::CommandResult r = b.run("--results " + q(b.dir.file("results.jsonl")));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  const std::vector<std::string> lines = lines_of(slurp(b.dir.file("results.jsonl")));
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(without_seconds(lines[0]), ok_line(1, "a", "a.ply"));
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["status"], "failed");
+}
+
+// SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
+// appeared is whole, with its report; a rerun skips those and builds the rest.
+TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {
+  Batch b;
+  ASSERT_TRUE(write_depth_image(
+                  b.dir.file("big.exr"),
+                  test::make_depth(400, 400,
+                                   [](int c, int r) {
+                                     return 0.9f +
+                                            0.05f * static_cast<float>((c * 7 + r * 3) % 17) / 17;
+                                   }))
+                  .ok());
+  b.dir.write("square.json", test::spot_json());
+  fs::create_directory(b.dir.file("out"));
+  std::vector<std::string> jobs;
+  for (int i = 0; i < 12; ++i)
+    jobs.push_back(job(std::to_string(i), "big.exr", "out/" + std::to_string(i) + ".ply",
+                       R"("--ascii")", "square.json"));
+  b.write_jobs(jobs);
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl(LIGHTVOL_EXE, LIGHTVOL_EXE, "batch", b.jobs.c_str(), "--quiet", "--jobs", "2",
+            "--results", b.dir.file("results.jsonl").c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool seen = false;  // a temporary in out/
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(3);
+  while (!seen && std::chrono::steady_clock::now() < deadline) {
+    seen = has_temporaries(b.dir.file("out"));
+    if (!seen) std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  ASSERT_TRUE(seen) << "no temporary file appeared";
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exited " << WEXITSTATUS(status);
+  EXPECT_EQ(WTERMSIG(status), SIGINT);
+  EXPECT_FALSE(has_temporaries(b.dir.path()));
+  EXPECT_FALSE(fs::exists(b.dir.file("results.jsonl")));
+  int done = 0;
+  for (int i = 0; i < 12; ++i) {
+    const std::string out = b.dir.file("out/" + std::to_string(i) + ".ply");
+    EXPECT_EQ(fs::exists(out), fs::exists(out + ".report.json")) << out;
+    if (!fs::exists(out)) continue;
+    ++done;
+    EXPECT_EQ(test::run_lightvol("check " + q(out) + " --light " + q(b.dir.file("square.json")) +
+                                 " --quiet")
+                  .exit_code,
+              0)
+        << out;
+  }
+  EXPECT_LT(done, 12);
+  const test::CommandResult rerun = test::run_lightvol("batch " + q(b.jobs));
+  EXPECT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_NE(rerun.err.find(": " + std::to_string(12 - done) + " ok, " + std::to_string(done) +
+                           " skipped, 0 failed"),
+            std::string::npos)
+      << rerun.err;
+}
+
+}  // namespace
+}  // namespace lightvol
