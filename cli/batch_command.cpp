@@ -285,16 +285,23 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
     out.triangles = report->value("triangles", std::uint64_t{0});
     return out;
   }
-  std::uint64_t held = 0;
+  // What this job holds of the gate, released however the build ends (an exception too), or the
+  // jobs after it could wait forever.
+  struct Held {
+    MemoryGate& gate;
+    std::uint64_t bytes = 0;
+    ~Held() { gate.release(bytes); }
+  } held{gate};
   BuildJobHooks hooks;
   hooks.extra_report = {{"job_hash", *hash}};
   hooks.before_build = [&](const ShadowMaps& maps) {
-    held = depth_build_memory_bytes(maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
-    gate.acquire(held);
+    const std::uint64_t bytes =
+        depth_build_memory_bytes(maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
+    gate.acquire(bytes);
+    held.bytes = bytes;
   };
   Progress progress(true);
   out.build = run_build_job(job.options, progress, hooks);
-  gate.release(held);
   out.exit_code = out.build.exit_code;
   out.error = out.build.error;
   out.status = out.exit_code == 0 ? JobStatus::ok : JobStatus::failed;
