@@ -26,11 +26,13 @@ constexpr double kStartSeconds = 60;
 
 // Idle lightvol-image servers. A request takes one (or starts one when none is idle: concurrent
 // readers each get their own) and puts it back when it answered whole; a server that failed has
-// ended. At most kIdle are kept; the rest are closed. At exit the idle ones are closed and reaped
+// ended. At most kIdle are kept, as many as `lightvol batch` runs jobs at once (64), so that its
+// jobs reuse their servers instead of starting and closing one per image; there are never more
+// servers than callers that were reading at the same time. The rest are closed. At exit the idle ones are closed and reaped
 // (so that a process's resource usage includes theirs, and none outlives it).
 class ServerPool {
  public:
-  static constexpr std::size_t kIdle = 4;
+  static constexpr std::size_t kIdle = 64;
   std::unique_ptr<IsolatedServer> take() {
     const std::lock_guard<std::mutex> lock(mutex_);
     if (idle_.empty()) return nullptr;
