@@ -1,7 +1,9 @@
-// Checks of faces and of the boundary: degenerate faces and T-junctions.
+// The pass over the vertices, and checks of faces and of the boundary: degenerate faces and
+// T-junctions.
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include <tbb/blocked_range.h>
@@ -11,29 +13,82 @@
 
 namespace lightvol::detail {
 
-// Faces with a repeated vertex or a cross product of exactly zero (double precision, exact for
-// float inputs up to the last rounding).
-CheckResult degenerate_check(const Mesh& mesh, int max_offenders) {
+namespace {
+
+// The vertex pass's partial result over a range of vertices (joined in vertex order).
+struct VertexPartial {
+  std::array<double, 3> min{}, max{};
+  bool any = false;
+  double max_abs = 0;
+  std::vector<std::uint32_t> at_light;
+  double light_offset = 0;
+  VertexPartial join(VertexPartial&& o) && {
+    if (!o.any) return std::move(*this);
+    if (!any) return std::move(o);
+    for (int k = 0; k < 3; ++k)
+      min[k] = std::min(min[k], o.min[k]), max[k] = std::max(max[k], o.max[k]);
+    max_abs = std::max(max_abs, o.max_abs);
+    if (!o.at_light.empty()) {
+      at_light.insert(at_light.end(), o.at_light.begin(), o.at_light.end());
+      light_offset = o.light_offset;
+    }
+    return std::move(*this);
+  }
+};
+
+}  // namespace
+
+VertexScan scan_vertices(const Mesh& mesh, const Light* light, double quantum) {
+  VertexScan out;
+  const bool point = light && light->type != LightType::directional;
+  const Vec3d light_pos = light ? light->position : Vec3d{};
+  out.light_ulp =
+      std::ldexp(std::max({std::abs(light_pos.x), std::abs(light_pos.y), std::abs(light_pos.z),
+                           static_cast<double>(std::numeric_limits<float>::min())}),
+                 -23);
+  const double at_light_tol = std::max(4 * out.light_ulp, quantum);
+  const float* p = mesh.positions.data();
+  VertexPartial all = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.num_vertices(), 1 << 16), VertexPartial{},
+      [&](const tbb::blocked_range<std::size_t>& r, VertexPartial part) {
+        if (r.empty()) return part;
+        VertexPartial s;
+        s.any = true;
+        for (int k = 0; k < 3; ++k) s.min[k] = s.max[k] = p[3 * r.begin() + k];
+        for (std::size_t v = r.begin(); v != r.end(); ++v) {
+          for (int k = 0; k < 3; ++k) {
+            const double x = p[3 * v + k];
+            s.min[k] = std::min(s.min[k], x);
+            s.max[k] = std::max(s.max[k], x);
+            s.max_abs = std::max(s.max_abs, std::abs(x));
+          }
+          if (!point) continue;
+          const Vec3d d = Vec3d{p[3 * v], p[3 * v + 1], p[3 * v + 2]} - light_pos;
+          const double offset = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+          if (offset <= at_light_tol) {
+            s.at_light.push_back(static_cast<std::uint32_t>(v));
+            s.light_offset = offset;
+          }
+        }
+        return std::move(part).join(std::move(s));
+      },
+      [](VertexPartial x, VertexPartial y) { return std::move(x).join(std::move(y)); });
+  if (all.any) out.bounds = {all.min, all.max};
+  out.max_abs = all.max_abs;
+  out.at_light = std::move(all.at_light);
+  out.light_offset = all.light_offset;
+  return out;
+}
+
+// The faces face_pass found degenerate, with the first offenders found again in face order.
+CheckResult degenerate_check(const Mesh& mesh, std::uint64_t count, int max_offenders) {
   CheckResult r;
   r.name = kCheckDegenerate;
+  r.count = count;
   const std::size_t nt = mesh.num_triangles();
-  const auto is_degenerate = [&](std::size_t t) {
-    const auto [a, b, c] = mesh.triangle(t);
-    if (a == b || b == c || a == c) return true;
-    const Vec3d pa = position(mesh, a);
-    const Vec3d n = cross(position(mesh, b) - pa, position(mesh, c) - pa);
-    return n.x == 0 && n.y == 0 && n.z == 0;
-  };
-  r.count = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, nt, 1 << 15), std::uint64_t{0},
-      [&](const tbb::blocked_range<std::size_t>& range, std::uint64_t n) {
-        for (std::size_t t = range.begin(); t != range.end(); ++t) n += is_degenerate(t);
-        return n;
-      },
-      [](std::uint64_t x, std::uint64_t y) { return x + y; });
   for (std::size_t t = 0;
        t < nt && r.offenders.size() < static_cast<std::size_t>(max_offenders) && r.count > 0; ++t)
-    if (is_degenerate(t)) r.offenders.push_back(face_offender(mesh, t));
+    if (is_degenerate(mesh, t)) r.offenders.push_back(face_offender(mesh, t));
   r.status = r.count == 0 ? CheckStatus::passed : CheckStatus::failed;
   r.detail = std::to_string(r.count) + " faces with zero area or a repeated vertex";
   return r;
@@ -80,6 +135,7 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
   for (std::uint32_t v : verts) grid.emplace(key_of(cell_of(position(mesh, v))), v);
 
   std::unordered_map<std::uint32_t, bool> reported;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> offender_edges;
   for (std::size_t e = 0; e < edges.boundary.size(); ++e) {
     const auto [u, v] = edges.boundary[e];
     const Vec3d pu = position(mesh, u), pv = position(mesh, v), d = pv - pu;
@@ -106,12 +162,17 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
               if (t * len <= tol || (1 - t) * len <= tol) continue;
               if (length(pw - (pu + t * d)) > tol) continue;
               reported[w] = true;
-              if (r.count++ < static_cast<std::uint64_t>(max_offenders))
-                r.offenders.push_back(make_offender(mesh, {edges.boundary_faces[e]}, {w, u, v}));
+              if (r.count++ < static_cast<std::uint64_t>(max_offenders)) {
+                r.offenders.push_back(make_offender(mesh, {}, {w, u, v}));
+                offender_edges.emplace_back(u, v);
+              }
             }
           }
     }
   }
+  // Each boundary edge has one face.
+  const std::vector<std::vector<std::int64_t>> faces = faces_of_edges(mesh, offender_edges, 1);
+  for (std::size_t k = 0; k < r.offenders.size(); ++k) r.offenders[k].faces = faces[k];
   r.status = r.count == 0 ? CheckStatus::passed : CheckStatus::failed;
   r.detail = std::to_string(r.count) + " vertices lying inside another face's edge";
   return r;

@@ -19,32 +19,16 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Per-triangle sums of the light proof.
-struct LightSums {
-  double positive = 0;  // Σ of the contributions counted
-  double negative = 0;  // Σ |contribution| of faces on the wrong side (offenders)
-  double source = 0;    // directional: Σ |area| of near-plane faces facing the light
-  double zeroed = 0;    // Σ |contribution| of faces counted as edge-on
-  std::uint64_t wrong = 0;
-  LightSums operator+(const LightSums& o) const {
-    return {positive + o.positive, negative + o.negative, source + o.source, zeroed + o.zeroed,
-            wrong + o.wrong};
-  }
-};
-
 // Solid angle of the cone at `apex` bounded by the faces incident to vertex `apex_vertex`, on the
 // side those faces' outward normals point away from: by Gauss–Bonnet, 2π + the sum of the
 // signed turning angles of the link polygon (the edges opposite the apex, in face order) on the
 // unit sphere. Returns a negative value when the link is not one simple loop.
-double apex_cone_solid_angle(const Mesh& mesh, std::uint32_t apex_vertex, Vec3d apex) {
+double apex_cone_solid_angle(const Mesh& mesh,
+                             const std::vector<std::pair<std::uint32_t, std::uint32_t>>& link,
+                             Vec3d apex) {
   std::unordered_map<std::uint32_t, std::uint32_t> next;
-  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
-    const auto tri = mesh.triangle(t);
-    for (int k = 0; k < 3; ++k) {
-      if (tri[k] != apex_vertex) continue;
-      if (!next.emplace(tri[(k + 1) % 3], tri[(k + 2) % 3]).second) return -1;
-    }
-  }
+  for (const auto& [from, to] : link)
+    if (!next.emplace(from, to).second) return -1;
   if (next.size() < 3) return -1;
   std::vector<Vec3d> loop;
   std::uint32_t v = next.begin()->first;
@@ -70,42 +54,23 @@ double apex_cone_solid_angle(const Mesh& mesh, std::uint32_t apex_vertex, Vec3d 
 
 namespace {
 
-// The mesh's vertex at the light, if any: "at the light" means within the rounding of
-// coordinates there (a few float ulps of the light's own position), not of the largest
-// coordinate: a spot volume's near plane can lie 10^-6 of the far distance from its apex.
-// Quantized positions are only known to within their step (`quantum`).
-struct LightVertices {
-  std::vector<std::uint32_t> at_light;  // all the vertices within the tolerance
-  double offset = 0;                    // of the last of them from the light, max-norm
-  double light_ulp = 0;                 // a float ulp of the light position's largest coordinate
-};
-
-LightVertices vertices_at_light(const Mesh& mesh, const Vec3d& light_pos, double quantum) {
-  LightVertices out;
-  out.light_ulp =
-      std::ldexp(std::max({std::abs(light_pos.x), std::abs(light_pos.y), std::abs(light_pos.z),
-                           static_cast<double>(std::numeric_limits<float>::min())}),
-                 -23);
-  const double at_light_tol = std::max(4 * out.light_ulp, quantum);
-  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) {
-    const Vec3d d = position(mesh, static_cast<std::uint32_t>(v)) - light_pos;
-    const double offset = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
-    if (offset <= at_light_tol) {
-      out.at_light.push_back(static_cast<std::uint32_t>(v));
-      out.offset = offset;
-    }
-  }
-  return out;
+// atan2(y, x), by its series for a small angle in the right half-plane (a face of a fine grid
+// subtends 10^-8 sr; the terms left out are below 10^-18 of it): within an ulp of std::atan2,
+// and a few times faster.
+double small_atan2(double y, double x) {
+  if (!(x > 0 && std::abs(y) <= 1e-3 * x)) return std::atan2(y, x);
+  const double r = y / x, r2 = r * r;
+  return r * (1 - r2 * (1.0 / 3 - r2 * (1.0 / 5)));
 }
 
 // Van Oosterom–Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
 // The sign of det = a·(b×c) says which side the light at `eye` sees (+1 away, −1 facing it, 0
 // edge-on or a face of the apex vertex `apex`); |det| within what moving each vertex by `ulp_tol`
 // could change counts as edge-on. `*omega` is the signed solid angle.
-int classify_from_point(const Mesh& mesh, std::size_t t, const Vec3d& eye, std::uint32_t apex,
-                        double ulp_tol, double* omega) {
+int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega) {
+  const Vec3d& eye = view.eye;
   const auto [ia, ib, ic] = mesh.triangle(t);
-  if (ia == apex || ib == apex || ic == apex) {
+  if (ia == view.apex || ib == view.apex || ic == view.apex) {
     *omega = 0;
     return 0;
   }
@@ -115,48 +80,165 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const Vec3d& eye, std::
   const double det = dot(a, bc);
   const double la = length(a), lb = length(b), lc = length(c);
   const double denom = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-  *omega = 2 * std::atan2(det, denom);
-  const double tol = ulp_tol * (length(bc) + length(cross(c, a)) + length(cross(a, b)));
+  *omega = 2 * small_atan2(det, denom);
+  // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
+  // products' lengths.
+  if (det > view.ulp_tol * (lb * lc + lc * la + la * lb) * (1 + 1e-12)) return 1;
+  const double tol = view.ulp_tol * (length(bc) + length(cross(c, a)) + length(cross(a, b)));
   if (det > tol) return 1;
   if (det < -tol) return -1;
   return 0;
 }
 
-// The solid angles of all faces seen from `eye`, summed by side, in parallel (deterministic).
-LightSums solid_angle_sums(const Mesh& mesh, const Vec3d& eye, std::uint32_t apex, double ulp_tol) {
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), 1 << 14), LightSums{},
-      [&](const tbb::blocked_range<std::size_t>& range, LightSums s) {
-        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-          double omega = 0;
-          const int side = classify_from_point(mesh, t, eye, apex, ulp_tol, &omega);
-          if (side > 0) {
-            s.positive += omega;
-          } else if (side < 0) {
-            s.negative -= omega;
-            ++s.wrong;
-          } else {
-            s.zeroed += std::abs(omega);
-          }
-        }
-        return s;
-      },
-      [](const LightSums& x, const LightSums& y) { return x + y; });
+// Directional: +1 (an exit: normal along f), −1 (a face on the wrong side), 0 (edge-on), or 2
+// (an entry: a near-plane face facing the light); `area` is the signed projected area.
+int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, double* area) {
+  const Vec3d& f = view.f;
+  const auto on_near_plane = [&](std::uint32_t v) {
+    return std::abs(dot(position(mesh, v) - view.origin, f)) <= view.plane_tol;
+  };
+  const auto [ia, ib, ic] = mesh.triangle(t);
+  const Vec3d a = position(mesh, ia), b = position(mesh, ib), c = position(mesh, ic);
+  *area = 0.5 * dot(cross(b - a, c - a), f);
+  // Moving a vertex by δ changes the projected area by at most δ/2 times the opposite edge as
+  // projected along f: walls parallel to f, however tall, stay within rounding of zero.
+  const auto across = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
+  const double tol = view.ulp_tol * (across(b - a) + across(c - b) + across(a - c));
+  const bool source = on_near_plane(ia) && on_near_plane(ib) && on_near_plane(ic);
+  if (*area > tol) return source ? -1 : 1;
+  if (*area < -tol) return source ? 2 : -1;
+  return 0;
 }
+
+// The light sums of faces [begin, end), split as parallel_deterministic_reduce splits a range
+// with grain 2^14 and summed in its order, so that the sums do not depend on the threads.
+constexpr std::size_t kLightGrain = std::size_t{1} << 14;
+constexpr std::size_t kVolumeGrain = std::size_t{1} << 16;  // signed_volume's
+
+LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin, std::size_t end,
+                     std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link) {
+  if (end - begin > kLightGrain) {
+    const std::size_t middle = begin + (end - begin) / 2;
+    const LightSums left = light_sums(mesh, view, begin, middle, apex_link);
+    return left + light_sums(mesh, view, middle, end, apex_link);
+  }
+  LightSums s;
+  for (std::size_t t = begin; t != end; ++t) {
+    if (view.kind == LightView::Kind::point) {
+      double omega = 0;
+      const int side = classify_from_point(mesh, t, view, &omega);
+      if (side > 0) {
+        s.positive += omega;
+      } else if (side < 0) {
+        s.negative -= omega;
+        ++s.wrong;
+      } else {
+        s.zeroed += std::abs(omega);
+        const auto tri = mesh.triangle(t);
+        for (int k = 0; k < 3; ++k)
+          if (tri[k] == view.apex) apex_link->emplace_back(tri[(k + 1) % 3], tri[(k + 2) % 3]);
+      }
+      continue;
+    }
+    double area = 0;
+    switch (classify_along(mesh, t, view, &area)) {
+      case 1:
+        s.positive += area;
+        break;
+      case 2:
+        s.source -= area;
+        break;
+      case -1:
+        s.negative += std::abs(area), ++s.wrong;
+        break;
+      default:
+        s.zeroed += std::abs(area);
+        break;
+    }
+  }
+  return s;
+}
+
+// The body of the face pass's parallel_deterministic_reduce, over leaves of at most
+// kVolumeGrain faces: each leaf sums its determinants in order as signed_volume does, and its
+// light sums as the tree of kLightGrain leaves below it.
+class FacePass {
+ public:
+  FacePass(const Mesh& mesh, const LightView& view) : mesh_(mesh), view_(view) {}
+  FacePass(FacePass& other, tbb::split) : mesh_(other.mesh_), view_(other.view_) {}
+  void operator()(const tbb::blocked_range<std::size_t>& range) {
+    const float* p = mesh_.positions.data();
+    const std::uint32_t* idx = mesh_.indices.data();
+    double acc = sums.det;
+    std::uint64_t degenerate = 0;
+    for (std::size_t t = range.begin(); t != range.end(); ++t) {
+      const float* a = p + 3 * idx[3 * t];
+      const float* b = p + 3 * idx[3 * t + 1];
+      const float* c = p + 3 * idx[3 * t + 2];
+      const double ax = a[0], ay = a[1], az = a[2];
+      const double bx = b[0], by = b[1], bz = b[2];
+      const double cx = c[0], cy = c[1], cz = c[2];
+      acc += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+      degenerate += is_degenerate(mesh_, t);
+    }
+    sums.det = acc;
+    sums.degenerate += degenerate;
+    if (view_.kind != LightView::Kind::none)
+      sums.light =
+          sums.light + light_sums(mesh_, view_, range.begin(), range.end(), &sums.apex_link);
+  }
+  void join(FacePass& right) {
+    sums.det += right.sums.det;
+    sums.degenerate += right.sums.degenerate;
+    sums.light = sums.light + right.sums.light;
+    sums.apex_link.insert(sums.apex_link.end(), right.sums.apex_link.begin(),
+                          right.sums.apex_link.end());
+  }
+  FaceSums sums;
+
+ private:
+  const Mesh& mesh_;
+  const LightView& view_;
+};
 
 }  // namespace
 
-CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos,
-                                double quantum, int max_offenders, CheckReport* report) {
+LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double eps_pos,
+                     double quantum) {
+  // The light at a vertex (a spot volume's apex): view from that vertex's exact position, so the
+  // faces around it are exactly degenerate and the cone is measured from the same point.
+  LightView view;
+  view.kind = LightView::Kind::point;
+  const bool at_vertex = scan.at_light.size() == 1;
+  view.eye = at_vertex ? position(mesh, scan.at_light.front()) : light.position;
+  view.apex = at_vertex ? scan.at_light.front() : ~0u;
+  view.ulp_tol = 8 * eps_pos + quantum;
+  return view;
+}
+
+LightView directional_view(const Light& light, double eps_pos, double quantum) {
+  LightView view;
+  view.kind = LightView::Kind::directional;
+  view.f = normalize(light.direction);
+  view.origin = light.position + light.near * view.f;
+  view.plane_tol = view.ulp_tol = 8 * eps_pos + quantum;
+  return view;
+}
+
+FaceSums face_pass(const Mesh& mesh, const LightView& view) {
+  FacePass body(mesh, view);
+  tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), kVolumeGrain), body);
+  return std::move(body.sums);
+}
+
+CheckResult nesting_check_point(const Mesh& mesh, const VertexScan& scan, const LightView& view,
+                                const FaceSums& face_sums, double quantum, int max_offenders,
+                                CheckReport* report) {
   CheckResult r;
   r.name = kCheckNesting;
   report->proof = NestingProof::solid_angles;
-  // The light at a vertex (a spot volume's apex): view from that vertex's exact position, so the
-  // faces around it are exactly degenerate and the cone is measured from the same point.
-  const Vec3d light_pos = light.position;
-  const LightVertices found = vertices_at_light(mesh, light_pos, quantum);
-  const std::vector<std::uint32_t>& at_light = found.at_light;
-  const double light_ulp = found.light_ulp, light_offset = found.offset;
+  const std::vector<std::uint32_t>& at_light = scan.at_light;
   if (at_light.size() > 1) {
     r.status = CheckStatus::failed;
     r.count = at_light.size();
@@ -167,17 +249,15 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
     return r;
   }
   const bool at_vertex = !at_light.empty();
-  const Vec3d eye = at_vertex ? position(mesh, at_light.front()) : light_pos;
-  const std::uint32_t apex = at_vertex ? at_light.front() : ~0u;
-  const double ulp_tol = 8 * eps_pos + quantum;
+  const std::uint32_t apex = view.apex;
 
   const std::size_t nt = mesh.num_triangles();
-  const LightSums sums = solid_angle_sums(mesh, eye, apex, ulp_tol);
+  const LightSums& sums = face_sums.light;
   if (sums.wrong > 0) {
     for (std::size_t t = 0; t < nt && r.offenders.size() < static_cast<std::size_t>(max_offenders);
          ++t) {
       double omega = 0;
-      if (classify_from_point(mesh, t, eye, apex, ulp_tol, &omega) < 0)
+      if (classify_from_point(mesh, t, view, &omega) < 0)
         r.offenders.push_back(face_offender(mesh, t));
     }
   }
@@ -185,13 +265,13 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   double expected = 4 * kPi;
   std::string where = "the light inside";
   if (at_vertex) {
-    expected = apex_cone_solid_angle(mesh, apex, eye);
+    expected = apex_cone_solid_angle(mesh, face_sums.apex_link, view.eye);
     where = "the light at vertex " + std::to_string(apex);
-    if (light_offset > 4 * light_ulp) {
+    if (scan.light_offset > 4 * scan.light_ulp) {
       std::ostringstream off;
       off.precision(3);
-      off << " (" << light_offset << " from it, within the positions' quantization step " << quantum
-          << ")";
+      off << " (" << scan.light_offset << " from it, within the positions' quantization step "
+          << quantum << ")";
       where += off.str();
     }
     if (expected < 0) {
@@ -225,60 +305,19 @@ CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps
   return r;
 }
 
-CheckResult nesting_check_directional(const Mesh& mesh, const Light& light, double eps_pos,
-                                      double quantum, int max_offenders, CheckReport* report) {
+CheckResult nesting_check_directional(const Mesh& mesh, const LightView& view,
+                                      const FaceSums& face_sums, int max_offenders,
+                                      CheckReport* report) {
   CheckResult r;
   r.name = kCheckNesting;
   report->proof = NestingProof::projected_areas;
-  const Vec3d f = normalize(light.direction), origin = light.position + light.near * f;
-  const double plane_tol = 8 * eps_pos + quantum, ulp_tol = 8 * eps_pos + quantum;
-  const auto on_near_plane = [&](std::uint32_t v) {
-    return std::abs(dot(position(mesh, v) - origin, f)) <= plane_tol;
-  };
-  // Returns +1 (an exit: normal along f), −1 (a face on the wrong side), 0 (edge-on), or 2 (an
-  // entry: a near-plane face facing the light); `area` is the signed projected area.
-  const auto classify = [&](std::size_t t, double* area) -> int {
-    const auto [ia, ib, ic] = mesh.triangle(t);
-    const Vec3d a = position(mesh, ia), b = position(mesh, ib), c = position(mesh, ic);
-    *area = 0.5 * dot(cross(b - a, c - a), f);
-    // Moving a vertex by δ changes the projected area by at most δ/2 times the opposite edge as
-    // projected along f: walls parallel to f, however tall, stay within rounding of zero.
-    const auto across = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
-    const double tol = ulp_tol * (across(b - a) + across(c - b) + across(a - c));
-    const bool source = on_near_plane(ia) && on_near_plane(ib) && on_near_plane(ic);
-    if (*area > tol) return source ? -1 : 1;
-    if (*area < -tol) return source ? 2 : -1;
-    return 0;
-  };
   const std::size_t nt = mesh.num_triangles();
-  const LightSums sums = tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, nt, 1 << 14), LightSums{},
-      [&](const tbb::blocked_range<std::size_t>& range, LightSums s) {
-        for (std::size_t t = range.begin(); t != range.end(); ++t) {
-          double area = 0;
-          switch (classify(t, &area)) {
-            case 1:
-              s.positive += area;
-              break;
-            case 2:
-              s.source -= area;
-              break;
-            case -1:
-              s.negative += std::abs(area), ++s.wrong;
-              break;
-            default:
-              s.zeroed += std::abs(area);
-              break;
-          }
-        }
-        return s;
-      },
-      [](const LightSums& x, const LightSums& y) { return x + y; });
+  const LightSums& sums = face_sums.light;
   if (sums.wrong > 0) {
     for (std::size_t t = 0; t < nt && r.offenders.size() < static_cast<std::size_t>(max_offenders);
          ++t) {
       double area = 0;
-      if (classify(t, &area) == -1) r.offenders.push_back(face_offender(mesh, t));
+      if (classify_along(mesh, t, view, &area) == -1) r.offenders.push_back(face_offender(mesh, t));
     }
   }
   report->light_sum = sums.positive;

@@ -1,6 +1,7 @@
-// The pieces of the linear-time checks (check_volume_linear), one file each: edges.cpp (closed,
-// edge-manifold, oriented), faces.cpp (degenerate faces, T-junctions), light_proof.cpp (the
-// light's non-self-nesting proof); linear.cpp runs them in order. Internal to the check stage.
+// The pieces of the linear-time checks (check_volume_linear), one file each: faces.cpp (the
+// vertex pass, degenerate faces, T-junctions), edges.cpp (closed, edge-manifold, oriented),
+// light_proof.cpp (the pass over the faces and the light's non-self-nesting proof); linear.cpp
+// runs them in order. Internal to the check stage.
 #pragma once
 
 #include <cstdint>
@@ -50,10 +51,23 @@ inline bool passed(const CheckReport& report, std::string_view name) {
   return c && c->status == CheckStatus::passed;
 }
 
+// One pass over the vertices: their bounds, the largest |coordinate|, and with a point light the
+// vertices at the light: "at the light" means within the rounding of coordinates there (a few
+// float ulps of the light's own position), not of the largest coordinate: a spot volume's near
+// plane can lie 10^-6 of the far distance from its apex. Quantized positions are only known to
+// within their step (`quantum`) (faces.cpp).
+struct VertexScan {
+  Bounds bounds;                        // all zeros without vertices
+  double max_abs = 0;                   // of the coordinates
+  std::vector<std::uint32_t> at_light;  // all the vertices within the tolerance, in order
+  double light_offset = 0;              // of the last of them from the light, max-norm
+  double light_ulp = 0;                 // a float ulp of the light position's largest coordinate
+};
+VertexScan scan_vertices(const Mesh& mesh, const Light* light, double quantum);
+
 struct EdgeResults {
   CheckResult closed, manifold, oriented;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;  // directed, as in their face
-  std::vector<std::int64_t> boundary_faces;
 };
 
 // Closed, edge-manifold and oriented, from one linear pass over the edges (edges.cpp); also the
@@ -61,21 +75,80 @@ struct EdgeResults {
 // in range and it must have fewer than 2^31 triangles.
 EdgeResults edge_checks(const Mesh& mesh, int max_offenders);
 
-// Faces with a repeated vertex or a zero cross product (faces.cpp).
-CheckResult degenerate_check(const Mesh& mesh, int max_offenders);
+// For each edge (two vertices, in either order), the faces using it in face order, a face as
+// many times as it uses the edge, at most `limit` (edges.cpp): one pass over the faces.
+std::vector<std::vector<std::int64_t>> faces_of_edges(
+    const Mesh& mesh, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges,
+    std::size_t limit);
+
+// A face with a repeated vertex or a cross product of exactly zero (double precision, exact for
+// float inputs up to the last rounding).
+inline bool is_degenerate(const Mesh& mesh, std::size_t t) {
+  const auto [a, b, c] = mesh.triangle(t);
+  if (a == b || b == c || a == c) return true;
+  const Vec3d pa = position(mesh, a);
+  const Vec3d n = cross(position(mesh, b) - pa, position(mesh, c) - pa);
+  return n.x == 0 && n.y == 0 && n.z == 0;
+}
+
+// The `count` degenerate faces, with the first offenders (faces.cpp).
+CheckResult degenerate_check(const Mesh& mesh, std::uint64_t count, int max_offenders);
 
 // Boundary vertices lying inside boundary edges, within `eps_pos` (the rounding of a coordinate)
 // (faces.cpp).
 CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double eps_pos,
                              int max_offenders);
 
+// Per-face sums of the light proof.
+struct LightSums {
+  double positive = 0;  // Σ of the contributions counted
+  double negative = 0;  // Σ |contribution| of faces on the wrong side (offenders)
+  double source = 0;    // directional: Σ |area| of near-plane faces facing the light
+  double zeroed = 0;    // Σ |contribution| of faces counted as edge-on
+  std::uint64_t wrong = 0;
+  LightSums operator+(const LightSums& o) const {
+    return {positive + o.positive, negative + o.negative, source + o.source, zeroed + o.zeroed,
+            wrong + o.wrong};
+  }
+};
+
+// How the face pass sees the faces from the light (light_proof.cpp): not at all (no light, or
+// the topology failed, or several vertices lie at the light), from a point (spot, omni), or
+// along a direction.
+struct LightView {
+  enum class Kind { none, point, directional } kind = Kind::none;
+  double ulp_tol = 0;  // a face within this much motion of its vertices of edge-on counts zero
+  // Point: the eye (the light, or the vertex at it) and that vertex (~0u: none).
+  Vec3d eye;
+  std::uint32_t apex = ~0u;
+  // Directional: the unit direction, the near plane's origin and the tolerance of lying in it.
+  Vec3d f, origin;
+  double plane_tol = 0;
+};
+LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double eps_pos,
+                     double quantum);
+LightView directional_view(const Light& light, double eps_pos, double quantum);
+
+// The per-face sums of one parallel pass over the faces: the signed volume (exactly as
+// signed_volume sums it), the degenerate faces, and with a view the light's sums and the faces
+// around the apex.
+struct FaceSums {
+  double det = 0;  // Σ det(a, b, c) = 6 × the signed volume
+  std::uint64_t degenerate = 0;
+  LightSums light;
+  // For each corner of a face at the apex: the next and the previous vertex, in face order.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> apex_link;
+};
+FaceSums face_pass(const Mesh& mesh, const LightView& view);
+
 // The light's non-self-nesting proof for a point light (spot, omni: signed solid angles) and a
-// directional one (signed projected areas) (light_proof.cpp). `mesh` must be closed,
-// edge-manifold and oriented; `quantum` is the positions' quantization step. They set
-// `report`'s proof and light sums.
-CheckResult nesting_check_point(const Mesh& mesh, const Light& light, double eps_pos,
-                                double quantum, int max_offenders, CheckReport* report);
-CheckResult nesting_check_directional(const Mesh& mesh, const Light& light, double eps_pos,
-                                      double quantum, int max_offenders, CheckReport* report);
+// directional one (signed projected areas) (light_proof.cpp), from the face pass's sums. `mesh`
+// must be closed, edge-manifold and oriented; `quantum` is the positions' quantization step.
+// They set `report`'s proof and light sums.
+CheckResult nesting_check_point(const Mesh& mesh, const VertexScan& scan, const LightView& view,
+                                const FaceSums& sums, double quantum, int max_offenders,
+                                CheckReport* report);
+CheckResult nesting_check_directional(const Mesh& mesh, const LightView& view, const FaceSums& sums,
+                                      int max_offenders, CheckReport* report);
 
 }  // namespace lightvol::detail
