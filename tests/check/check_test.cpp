@@ -1,9 +1,12 @@
 // lightvol check: a sound volume passes both ways (light proof and CGAL), and each kind of broken
 // volume is rejected with its own named failure, with and without the light.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <set>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
@@ -518,6 +521,168 @@ TEST(CgalHubs, TwoShellsSharingOneVertexAreNotASurfaceMesh) {
   EXPECT_EQ(si->status, CheckStatus::skipped);
   EXPECT_NE(si->detail.find("at vertex 0, where separate fans of faces meet"), std::string::npos)
       << si->detail;
+}
+
+// ---- the edge check's chunks and buckets -------------------------------------------------------
+
+// A closed spot volume of a 300×200 map (about 120,000 faces: 360,000 edge uses, two chunks of
+// lower vertices and more), with a 40×30 occluder.
+Mesh large_spot_volume() {
+  const DepthImage depth = test::make_depth(300, 200, [](int c, int r) {
+    return (c >= 100 && c < 140 && r >= 50 && r < 80) ? 0.95f : 0.98f;
+  });
+  Result<Mesh> mesh = build_static_volume(spot_light(), depth, {}, "test.exr");
+  EXPECT_TRUE(mesh.ok());
+  return *mesh;
+}
+
+// Two reports agree on every count, detail and offender, and on the sums to the last bit.
+void expect_same_report(const CheckReport& a, const CheckReport& b) {
+  EXPECT_EQ(a.volume, b.volume);
+  EXPECT_EQ(a.light_sum, b.light_sum);
+  EXPECT_EQ(a.light_expected, b.light_expected);
+  ASSERT_EQ(a.checks.size(), b.checks.size());
+  for (std::size_t k = 0; k < a.checks.size(); ++k) {
+    EXPECT_EQ(a.checks[k].name, b.checks[k].name);
+    EXPECT_EQ(a.checks[k].status, b.checks[k].status) << a.checks[k].name;
+    EXPECT_EQ(a.checks[k].count, b.checks[k].count) << a.checks[k].name;
+    EXPECT_EQ(a.checks[k].detail, b.checks[k].detail) << a.checks[k].name;
+    ASSERT_EQ(a.checks[k].offenders.size(), b.checks[k].offenders.size()) << a.checks[k].name;
+    for (std::size_t o = 0; o < a.checks[k].offenders.size(); ++o) {
+      EXPECT_EQ(a.checks[k].offenders[o].faces, b.checks[k].offenders[o].faces);
+      EXPECT_EQ(a.checks[k].offenders[o].vertices, b.checks[k].offenders[o].vertices);
+    }
+  }
+}
+
+TEST(EdgeChunks, LargeVolumeIsSoundAndTheSameOnOneThread) {
+  const Mesh mesh = large_spot_volume();
+  const Light light = spot_light();
+  ASSERT_GT(3 * mesh.num_triangles(), std::size_t{300000});
+  const CheckReport all = check_volume_linear(mesh, &light);
+  EXPECT_TRUE(all.valid()) << all.first_failure();
+  // The volume as signed_volume sums it, to the last bit.
+  EXPECT_EQ(all.volume, signed_volume(mesh));
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  expect_same_report(all, check_volume_linear(mesh, &light));
+}
+
+TEST(EdgeChunks, DefectsAcrossTheChunksAreAllFoundInOrder) {
+  Mesh mesh = large_spot_volume();
+  const Light light = spot_light();
+  // Flip one face near the start, one in the middle and one near the end: 3 edges each.
+  for (const std::size_t t : {std::size_t{7}, mesh.num_triangles() / 2, mesh.num_triangles() - 9})
+    std::swap(mesh.indices[3 * t + 1], mesh.indices[3 * t + 2]);
+  const CheckReport r = check_volume_linear(mesh, &light, 1000);
+  const CheckResult* oriented = r.find(kCheckOriented);
+  ASSERT_NE(oriented, nullptr);
+  EXPECT_EQ(oriented->count, 9u);
+  ASSERT_EQ(oriented->offenders.size(), 9u);
+  // In (lower vertex, upper vertex) order, each naming its two faces in face order.
+  for (std::size_t o = 0; o < 9; ++o) {
+    const Offender& off = oriented->offenders[o];
+    ASSERT_EQ(off.faces.size(), 2u);
+    EXPECT_LT(off.faces[0], off.faces[1]);
+    if (o > 0) {
+      const Offender& prev = oriented->offenders[o - 1];
+      EXPECT_LT(std::make_pair(prev.vertices[0], prev.vertices[1]),
+                std::make_pair(off.vertices[0], off.vertices[1]));
+    }
+  }
+  EXPECT_EQ(status_of(r, kCheckClosed), CheckStatus::passed);
+}
+
+TEST(EdgeChunks, FacesInNoOrderGiveTheSameReport) {
+  // The faces shuffled: every block of faces reaches every chunk, so the check takes fewer,
+  // larger chunks; the verdict and the offenders (renumbered) are the same.
+  Mesh mesh = large_spot_volume();
+  const Light light = spot_light();
+  std::swap(mesh.indices[3 * 500 + 1], mesh.indices[3 * 500 + 2]);
+  const std::size_t nt = mesh.num_triangles();
+  std::vector<std::size_t> order(nt);
+  for (std::size_t t = 0; t < nt; ++t) order[t] = (t * 7919) % nt;  // 7919 is prime to nt
+  ASSERT_EQ(std::set<std::size_t>(order.begin(), order.end()).size(), nt);
+  Mesh shuffled = mesh;
+  std::size_t flipped_at = 0;
+  for (std::size_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) shuffled.indices[3 * t + k] = mesh.indices[3 * order[t] + k];
+    if (order[t] == 500) flipped_at = t;
+  }
+  const CheckReport a = check_volume_linear(mesh, &light),
+                    b = check_volume_linear(shuffled, &light);
+  const CheckResult* oa = a.find(kCheckOriented);
+  const CheckResult* ob = b.find(kCheckOriented);
+  EXPECT_EQ(oa->count, 3u);
+  EXPECT_EQ(ob->count, 3u);
+  ASSERT_EQ(ob->offenders.size(), 3u);
+  for (std::size_t o = 0; o < 3; ++o) {
+    EXPECT_EQ(oa->offenders[o].vertices, ob->offenders[o].vertices);
+    const auto& faces = ob->offenders[o].faces;
+    EXPECT_NE(std::find(faces.begin(), faces.end(), std::int64_t(flipped_at)), faces.end());
+  }
+}
+
+TEST_F(BrokenVolume, DuplicatedFace) {
+  // A face listed twice: its three edges are used three times (by it twice and its neighbour).
+  const auto [a, b, c] = mesh.triangle(12);
+  mesh.indices.insert(mesh.indices.end(), {a, b, c});
+  expect_rejected(kCheckManifold);
+  const CheckResult* m = with_light.find(kCheckManifold);
+  EXPECT_EQ(m->count, 3u);
+  for (const Offender& o : m->offenders) {
+    ASSERT_EQ(o.faces.size(), 3u);
+    EXPECT_EQ(o.faces[0] == 12 || o.faces[1] == 12, true);
+    EXPECT_EQ(o.faces[2], std::int64_t(mesh.num_triangles() - 1));
+  }
+}
+
+TEST_F(BrokenVolume, EdgeSharedByFourFaces) {
+  // A second sheet through edge a-b with both directions (x→... a-b-x and b-a-y): each direction
+  // used twice, so pairing uses one way each is not enough.
+  const auto [a, b, c] = mesh.triangle(10);
+  const auto pc = mesh.vertex(c);
+  const std::uint32_t x = add_vertex(mesh, {pc[0] + 0.5f, pc[1], pc[2] + 0.5f});
+  const std::uint32_t y = add_vertex(mesh, {pc[0] - 0.5f, pc[1], pc[2] - 0.5f});
+  mesh.indices.insert(mesh.indices.end(), {a, b, x, b, a, y});
+  expect_rejected(kCheckManifold);
+  const CheckResult* e = with_light.find(kCheckManifold);
+  ASSERT_EQ(e->offenders.size(), e->count);
+  bool found = false;
+  for (const Offender& o : e->offenders)
+    if (std::min(o.vertices[0], o.vertices[1]) == std::min(a, b) &&
+        std::max(o.vertices[0], o.vertices[1]) == std::max(a, b)) {
+      found = true;
+      EXPECT_EQ(o.faces.size(), 4u);
+    }
+  EXPECT_TRUE(found);
+}
+
+TEST(EdgeChunks, VertexOfAHundredThousandFacesAndUnreferencedVertices) {
+  // A closed double cone whose apexes have 100,000 faces each, with unused vertices before and
+  // after: closed, manifold, oriented, outward, no T-junctions.
+  Mesh m;
+  for (const float k : {0.f, 1.f, 2.f}) add_vertex(m, {5 + k, 5, 5});
+  const Mesh cone = bicone(100000);
+  const auto offset = static_cast<std::uint32_t>(m.num_vertices());
+  m.positions.insert(m.positions.end(), cone.positions.begin(), cone.positions.end());
+  for (const std::uint32_t i : cone.indices) m.indices.push_back(i + offset);
+  add_vertex(m, {-5, -5, -5});
+  const CheckReport r = check_volume_linear(m, nullptr);
+  for (std::string_view name : {kCheckIndices, kCheckClosed, kCheckManifold, kCheckOriented,
+                                kCheckOutward, kCheckDegenerate, kCheckTJunctions})
+    EXPECT_EQ(status_of(r, name), CheckStatus::passed) << name;
+  // An omni light inside it proves it too.
+  Light inside = test::light_from_json(
+      R"({"type": "omni", "position": [0, 0, 1], "near": 0.1, "far": 30, "depth": "radial"})");
+  const CheckReport lit = check_volume_linear(m, &inside);
+  EXPECT_TRUE(lit.valid()) << lit.first_failure();
+  EXPECT_NEAR(lit.light_sum, 4 * std::numbers::pi, 1e-6);
+
+  // One rim face flipped: its edges to the hub are found among the hub's 200,000 uses.
+  std::swap(m.indices[3 * 77 + 1], m.indices[3 * 77 + 2]);
+  const CheckReport bad = check_volume_linear(m, nullptr);
+  EXPECT_EQ(status_of(bad, kCheckOriented), CheckStatus::failed);
+  EXPECT_EQ(bad.find(kCheckOriented)->count, 3u);
 }
 
 // ---- check_closed_outward: the same linear checks as one answer -----------------------------

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -208,6 +209,70 @@ TEST(ReadPly, BinaryCutShortOrListingBeyondItsEnd) {
   const Result<Mesh> truncated = read_mesh(skipped);
   ASSERT_FALSE(truncated.ok());
   EXPECT_EQ(truncated.error().message.rfind(skipped + ": PLY", 0), 0u) << truncated.error().message;
+}
+
+// The layout lightvol writes (float x y z; a uchar-counted int list), which the reader takes a
+// buffer of records at a time: triangles, and between them a quad, then each way that layout
+// can go wrong, reported as element by element.
+std::string plain_ply(bool big, const std::vector<std::vector<double>>& faces,
+                      std::size_t vertices = 4) {
+  std::string ply =
+      std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+      " 1.0\nelement vertex " + std::to_string(vertices) +
+      "\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face " +
+      std::to_string(faces.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (std::size_t v = 0; v < vertices; ++v)
+    for (int k = 0; k < 3; ++k)
+      put<float>(&ply, kSquare[v % 5][k] + 2.0 * static_cast<double>(v / 5), big);
+  for (const auto& f : faces) {
+    put<std::uint8_t>(&ply, static_cast<double>(f.size()), big);
+    for (const double i : f) put<std::int32_t>(&ply, i, big);
+  }
+  return ply;
+}
+
+TEST(ReadPly, PlainLayoutInBulkWithPolygonsAndEachBadFace) {
+  TempDir dir;
+  for (const bool big : {false, true}) {
+    SCOPED_TRACE(big);
+    const std::string path =
+        dir.write("plain.ply", plain_ply(big, {{0, 1, 2}, {0, 1, 2, 3}, {3, 2, 1}}));
+    const Result<Mesh> mesh = read_mesh(path);
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    ASSERT_EQ(mesh->num_triangles(), 4u);
+    EXPECT_EQ(mesh->triangle(0), (std::array<std::uint32_t, 3>{0, 1, 2}));
+    EXPECT_EQ(mesh->triangle(1), (std::array<std::uint32_t, 3>{0, 1, 2}));
+    EXPECT_EQ(mesh->triangle(2), (std::array<std::uint32_t, 3>{0, 2, 3}));
+    EXPECT_EQ(mesh->triangle(3), (std::array<std::uint32_t, 3>{3, 2, 1}));
+    EXPECT_EQ(mesh->vertex(3), (std::array<float, 3>{0, 1, 0}));
+
+    const auto expect_error = [&](const std::string& text, const std::string& message) {
+      const std::string bad = dir.write("bad.ply", text);
+      const Result<Mesh> m = read_mesh(bad);
+      ASSERT_FALSE(m.ok()) << message;
+      EXPECT_EQ(m.error().message, bad + ": " + message);
+    };
+    expect_error(plain_ply(big, {{0, 1, 2}, {0, 1, 4}}),
+                 "PLY body: face 1 names vertex 4, but there are 4");
+    expect_error(plain_ply(big, {{0, 1, 2}, {1, 2, 3}, {0, -1, 2}}),
+                 "PLY body: face 2 names vertex -1, but there are 4");
+    expect_error(plain_ply(big, {{0, 1, 2}, {0, 1}, {0, 1, 2, 3}}),
+                 "PLY body: face 1 has 2 vertices");
+    // Vertices of another count than the faces use.
+    const std::string whole = plain_ply(big, {{0, 1, 2}, {1, 2, 3}, {2, 3, 0}, {3, 0, 1}}, 5);
+    const Result<Mesh> ok = read_mesh(dir.write("five.ply", whole));
+    ASSERT_TRUE(ok.ok()) << ok.error().message;
+    EXPECT_EQ(ok->num_vertices(), 5u);
+  }
+  // Many records: more than one buffer of them (1 MiB), a quad in the middle.
+  std::vector<std::vector<double>> many(200000, {0, 1, 2});
+  many[123456] = {0, 1, 2, 3};
+  const Result<Mesh> big_mesh = read_mesh(dir.write("many.ply", plain_ply(false, many, 100000)));
+  ASSERT_TRUE(big_mesh.ok()) << big_mesh.error().message;
+  EXPECT_EQ(big_mesh->num_triangles(), 200001u);
+  EXPECT_EQ(big_mesh->triangle(123457), (std::array<std::uint32_t, 3>{0, 2, 3}));
+  EXPECT_EQ(big_mesh->vertex(99999)[0], kSquare[99999 % 5][0] + 2.0f * (99999 / 5));
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <bit>
 #include <cstring>
+#include <optional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -46,7 +48,52 @@ double signed_volume(const Mesh& mesh) {
          6.0;
 }
 
-Mesh weld_identical_positions(const Mesh& mesh) {
+namespace {
+
+// Whether two vertices have bit-identical positions, by a hash table of the vertices in order;
+// nullopt when its probes exceed a linear budget (positions chosen to collide), which leaves the
+// answer to the sort below.
+std::optional<bool> any_identical_positions(const Mesh& mesh) {
+  const std::size_t nv = mesh.num_vertices();
+  if (nv < 2) return false;
+  const std::size_t mask = std::bit_ceil(2 * nv) - 1;
+  constexpr std::uint32_t kEmpty = 0xffffffffu;
+  std::vector<std::uint32_t> table(mask + 1, kEmpty);
+  const float* p = mesh.positions.data();
+  const auto slot_of = [&](std::size_t v) {
+    std::uint32_t bits[3];
+    std::memcpy(bits, p + 3 * v, 12);
+    std::uint64_t h = bits[0] * 0x9e3779b97f4a7c15ull ^ bits[1] * 0xc2b2ae3d27d4eb4full ^
+                      bits[2] * 0x165667b19e3779f9ull;
+    h ^= h >> 31;
+    h *= 0xbf58476d1ce4e5b9ull;
+    h ^= h >> 29;
+    return static_cast<std::size_t>(h) & mask;
+  };
+  constexpr std::size_t kAhead = 16;  // prefetch the slot of the vertex this far ahead
+  std::size_t probes = 0;
+  const std::size_t budget = 8 * nv;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (v + kAhead < nv) __builtin_prefetch(&table[slot_of(v + kAhead)]);
+    for (std::size_t s = slot_of(v);; s = (s + 1) & mask) {
+      const std::uint32_t u = table[s];
+      if (u == kEmpty) {
+        table[s] = static_cast<std::uint32_t>(v);
+        break;
+      }
+      if (std::memcmp(p + 3 * u, p + 3 * v, 12) == 0) return true;
+      if (++probes > budget) return std::nullopt;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+Mesh weld_identical_positions(Mesh mesh) {
+  // Most meshes have no two vertices at one position: a hash table says so in linear time, and
+  // the mesh is returned as it is.
+  if (any_identical_positions(mesh) == std::optional<bool>(false)) return mesh;
   // By sorting (bits of x, y, z, then the vertex): O(n log n) whatever the positions, where a hash
   // table can be made quadratic by positions chosen to collide. Each run of equal positions is
   // one vertex, numbered in the order of its first occurrence, so the result is the one a

@@ -39,7 +39,9 @@ Bounds bounding_box(const Mesh& mesh);
 double signed_volume(const Mesh& mesh);
 
 // Welds vertices with bit-identical positions (STL files, Draco decodes): returns the mesh with
-// each position once, in order of first use, and the triangles re-indexed. O(n log n) on any input.
-Mesh weld_identical_positions(const Mesh& mesh);
+// each position once, in order of first use, and the triangles re-indexed. O(n log n) on any input;
+// linear when no two positions are identical (a hash table finds none), and then the mesh is
+// returned as it is.
+Mesh weld_identical_positions(Mesh mesh);
 
 }  // namespace lightvol

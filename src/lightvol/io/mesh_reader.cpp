@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <OpenMesh/Core/IO/IOManager.hh>
@@ -451,7 +452,7 @@ Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
   for (const float x : mesh->positions) {
     if (!std::isfinite(x)) return Error{path + ": has a vertex with a non-finite coordinate"};
   }
-  return weld_identical_positions(*mesh);
+  return weld_identical_positions(std::move(*mesh));
 }
 
 }  // namespace lightvol

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -244,6 +245,19 @@ class ByteReader {
   }
   // Bytes the file has left, by its size when opened.
   std::uintmax_t left() const { return left_; }
+  // Bulk access for whole records: makes at least `n` (≤ the buffer) bytes contiguous if the file
+  // holds them, and returns how many are (possibly fewer than n at the end of the file); then
+  // data() points at them and consume() moves past what was used.
+  std::size_t fill(std::size_t n) {
+    if (end_ - at_ < n) refill(n);
+    return end_ - at_;
+  }
+  const unsigned char* data() const { return buffer_.data() + at_; }
+  void consume(std::size_t n) {
+    at_ += n;
+    left_ -= std::min<std::uintmax_t>(left_, n);
+  }
+  std::size_t capacity() const { return buffer_.size(); }
 
  private:
   bool refill(std::size_t n) {
@@ -322,6 +336,13 @@ class Builder {
                                                  static_cast<std::uint32_t>(face[k + 1])});
     return {};
   }
+  // A triangle whose vertex numbers were checked already.
+  void add_triangle(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    mesh_.indices.push_back(a);
+    mesh_.indices.push_back(b);
+    mesh_.indices.push_back(c);
+  }
+  std::uint64_t vertices() const { return vertices_; }
   Mesh take() { return std::move(mesh_); }
 
  private:
@@ -334,6 +355,127 @@ class Builder {
   Mesh mesh_;
 };
 
+// Reads element `i` of `e` property by property (any types, lists anywhere); an empty string, or
+// what is wrong.
+std::string read_element(ByteReader& bytes, const Element& e, std::uint64_t i, bool swap,
+                         Builder& mesh, std::vector<double>& face) {
+  const std::string ends = "PLY file ends inside " + e.name + " element " + std::to_string(i) +
+                           " of " + std::to_string(e.count) + " (truncated?)";
+  for (const Property& p : e.properties) {
+    if (!p.list) {
+      const unsigned char* value = bytes.take(size_of(p.type));
+      if (!value) return ends;
+      if (p.role != Role::skip) mesh.set(i, p.role, decode(value, p.type, swap));
+      continue;
+    }
+    const unsigned char* count = bytes.take(size_of(p.count_type));
+    if (!count) return ends;
+    const double n = decode(count, p.count_type, swap);
+    if (n < 0 || n * static_cast<double>(size_of(p.type)) > static_cast<double>(bytes.left()))
+      return "PLY body: " + e.name + " element " + std::to_string(i) + ": a list of " +
+             std::to_string(static_cast<long long>(n)) +
+             " items, more than the rest of the file holds";
+    const auto items = static_cast<std::size_t>(n);
+    if (p.role != Role::face) {
+      if (!bytes.skip(items * size_of(p.type))) return ends;
+      continue;
+    }
+    face.resize(items);
+    for (double& v : face) {
+      const unsigned char* item = bytes.take(size_of(p.type));
+      if (!item) return ends;
+      v = decode(item, p.type, swap);
+    }
+    if (std::string bad = mesh.add_face(i, face); !bad.empty()) return "PLY body: " + bad;
+  }
+  return {};
+}
+
+// An integer of type `t` (a list count or a vertex number) at `p`, as unsigned 64 bits; negative
+// values come out huge.
+std::uint64_t load_index(const unsigned char* p, Type t, bool swap) {
+  const double v = decode(p, t, swap);
+  return v >= 0 ? static_cast<std::uint64_t>(v) : std::numeric_limits<std::uint64_t>::max();
+}
+
+// Fixed-size records (no list property): whole records at a time from the buffer. Returns the
+// number of elements read.
+std::uint64_t read_fixed_records(ByteReader& bytes, const Element& e, bool swap, Builder& mesh) {
+  std::size_t stride = 0;
+  std::array<std::pair<std::size_t, Type>, 3> axes{};  // offset and type of x, y, z
+  std::array<bool, 3> has{};
+  for (const Property& p : e.properties) {
+    if (p.role >= Role::x && p.role <= Role::z) {
+      const auto k = static_cast<std::size_t>(p.role) - static_cast<std::size_t>(Role::x);
+      axes[k] = {stride, p.type};
+      has[k] = true;
+    }
+    stride += size_of(p.type);
+  }
+  if (stride == 0 || stride > bytes.capacity()) return 0;
+  std::uint64_t i = 0;
+  while (i < e.count) {
+    const std::size_t records =
+        static_cast<std::size_t>(std::min<std::uint64_t>(bytes.fill(stride) / stride, e.count - i));
+    if (records == 0) break;
+    const unsigned char* at = bytes.data();
+    for (std::size_t r = 0; r < records; ++r, ++i, at += stride) {
+      for (std::size_t k = 0; k < 3; ++k) {
+        if (!has[k]) continue;
+        const auto [offset, type] = axes[k];
+        double value;
+        if (type == Type::f32 && !swap) {
+          float f;
+          std::memcpy(&f, at + offset, 4);
+          value = f;
+        } else {
+          value = decode(at + offset, type, swap);
+        }
+        mesh.set(i, static_cast<Role>(static_cast<std::size_t>(Role::x) + k), value);
+      }
+    }
+    bytes.consume(records * stride);
+  }
+  return i;
+}
+
+// Faces whose element holds only the index list, while they are triangles naming vertices that
+// exist: straight from the buffer. Returns the number of faces read; the caller reads the rest
+// (and reports what is wrong with the face where this stopped) element by element.
+std::uint64_t read_triangles(ByteReader& bytes, const Element& e, bool swap, Builder& mesh) {
+  if (e.properties.size() != 1 || e.properties[0].role != Role::face) return 0;
+  const Type count_type = e.properties[0].count_type, type = e.properties[0].type;
+  if (type == Type::f32 || type == Type::f64) return 0;  // whole numbers checked element by element
+  const std::size_t cs = size_of(count_type), is = size_of(type), record = cs + 3 * is;
+  const std::uint64_t nv = mesh.vertices();
+  const bool fast_u32 = !swap && (type == Type::u32 || type == Type::i32) && nv <= (1ull << 31);
+  std::uint64_t i = 0;
+  while (i < e.count) {
+    const std::size_t avail = bytes.fill(std::min<std::size_t>(bytes.capacity(), 1 << 16));
+    if (avail < record) break;
+    const unsigned char* at = bytes.data();
+    std::size_t used = 0;
+    for (; i < e.count && avail - used >= record; ++i, used += record) {
+      const unsigned char* p = at + used;
+      if (load_index(p, count_type, swap) != 3) return bytes.consume(used), i;
+      std::uint64_t v[3];
+      if (fast_u32) {
+        std::uint32_t w[3];
+        std::memcpy(w, p + cs, 12);
+        // i32: a negative number reads as ≥ 2^31 ≥ nv.
+        for (int k = 0; k < 3; ++k) v[k] = w[k];
+      } else {
+        for (int k = 0; k < 3; ++k) v[k] = load_index(p + cs + k * is, type, swap);
+      }
+      if (v[0] >= nv || v[1] >= nv || v[2] >= nv) return bytes.consume(used), i;
+      mesh.add_triangle(static_cast<std::uint32_t>(v[0]), static_cast<std::uint32_t>(v[1]),
+                        static_cast<std::uint32_t>(v[2]));
+    }
+    bytes.consume(used);
+  }
+  return i;
+}
+
 Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Header& header) {
   std::ifstream in(path, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(header.body));
@@ -343,39 +485,15 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
   Builder mesh(header);
   std::vector<double> face;
   for (const Element& e : header.elements) {
-    const auto ends = [&](std::uint64_t i) -> Result<Mesh> {
-      return Error{path + ": PLY file ends inside " + e.name + " element " + std::to_string(i) +
-                   " of " + std::to_string(e.count) + " (truncated?)"};
-    };
-    for (std::uint64_t i = 0; i < e.count; ++i) {
-      for (const Property& p : e.properties) {
-        if (!p.list) {
-          const unsigned char* value = bytes.take(size_of(p.type));
-          if (!value) return ends(i);
-          if (p.role != Role::skip) mesh.set(i, p.role, decode(value, p.type, swap));
-          continue;
-        }
-        const unsigned char* count = bytes.take(size_of(p.count_type));
-        if (!count) return ends(i);
-        const double n = decode(count, p.count_type, swap);
-        if (n < 0 || n * static_cast<double>(size_of(p.type)) > static_cast<double>(bytes.left()))
-          return Error{path + ": PLY body: " + e.name + " element " + std::to_string(i) +
-                       ": a list of " + std::to_string(static_cast<long long>(n)) +
-                       " items, more than the rest of the file holds"};
-        const auto items = static_cast<std::size_t>(n);
-        if (p.role != Role::face) {
-          if (!bytes.skip(items * size_of(p.type))) return ends(i);
-          continue;
-        }
-        face.resize(items);
-        for (double& v : face) {
-          const unsigned char* item = bytes.take(size_of(p.type));
-          if (!item) return ends(i);
-          v = decode(item, p.type, swap);
-        }
-        if (std::string bad = mesh.add_face(i, face); !bad.empty())
-          return Error{path + ": PLY body: " + bad};
-      }
+    // The common layouts a record at a time from the buffer; whatever they leave (another
+    // layout, a polygon, a bad index, the end of the file), element by element.
+    const bool fixed = std::none_of(e.properties.begin(), e.properties.end(),
+                                    [](const Property& p) { return p.list; });
+    std::uint64_t i =
+        fixed ? read_fixed_records(bytes, e, swap, mesh) : read_triangles(bytes, e, swap, mesh);
+    for (; i < e.count; ++i) {
+      if (std::string bad = read_element(bytes, e, i, swap, mesh, face); !bad.empty())
+        return Error{path + ": " + bad};
     }
   }
   return mesh.take();
