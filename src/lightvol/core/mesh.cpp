@@ -52,15 +52,17 @@ namespace {
 
 // Whether two vertices have bit-identical positions, by a hash table of the vertices in order;
 // nullopt when its probes exceed a linear budget (positions chosen to collide), which leaves the
-// answer to the sort below.
+// answer to the sort below. A slot holds the vertex and 32 more bits of its position's hash, so
+// that a probe rarely reads another vertex's position (a cache miss).
 std::optional<bool> any_identical_positions(const Mesh& mesh) {
   const std::size_t nv = mesh.num_vertices();
   if (nv < 2) return false;
+  if (nv >= 0xffffffffu) return std::nullopt;
   const std::size_t mask = std::bit_ceil(2 * nv) - 1;
-  constexpr std::uint32_t kEmpty = 0xffffffffu;
-  std::vector<std::uint32_t> table(mask + 1, kEmpty);
+  constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  std::vector<std::uint64_t> table(mask + 1, kEmpty);
   const float* p = mesh.positions.data();
-  const auto slot_of = [&](std::size_t v) {
+  const auto hash_of = [&](std::size_t v) {
     std::uint32_t bits[3];
     std::memcpy(bits, p + 3 * v, 12);
     std::uint64_t h = bits[0] * 0x9e3779b97f4a7c15ull ^ bits[1] * 0xc2b2ae3d27d4eb4full ^
@@ -68,20 +70,24 @@ std::optional<bool> any_identical_positions(const Mesh& mesh) {
     h ^= h >> 31;
     h *= 0xbf58476d1ce4e5b9ull;
     h ^= h >> 29;
-    return static_cast<std::size_t>(h) & mask;
+    return h;
   };
   constexpr std::size_t kAhead = 16;  // prefetch the slot of the vertex this far ahead
   std::size_t probes = 0;
   const std::size_t budget = 8 * nv;
   for (std::size_t v = 0; v < nv; ++v) {
-    if (v + kAhead < nv) __builtin_prefetch(&table[slot_of(v + kAhead)]);
-    for (std::size_t s = slot_of(v);; s = (s + 1) & mask) {
-      const std::uint32_t u = table[s];
-      if (u == kEmpty) {
-        table[s] = static_cast<std::uint32_t>(v);
+    if (v + kAhead < nv) __builtin_prefetch(&table[hash_of(v + kAhead) & mask]);
+    const std::uint64_t h = hash_of(v);
+    const std::uint64_t tag = h & 0xffffffff00000000ull;
+    for (std::size_t s = static_cast<std::size_t>(h) & mask;; s = (s + 1) & mask) {
+      const std::uint64_t entry = table[s];
+      if (entry == kEmpty) {
+        table[s] = tag | v;
         break;
       }
-      if (std::memcmp(p + 3 * u, p + 3 * v, 12) == 0) return true;
+      if ((entry & 0xffffffff00000000ull) == tag &&
+          std::memcmp(p + 3 * (entry & 0xffffffffu), p + 3 * v, 12) == 0)
+        return true;
       if (++probes > budget) return std::nullopt;
     }
   }
