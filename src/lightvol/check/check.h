@@ -110,7 +110,8 @@ struct CheckOptions {
 //   faces lying in the light's near plane (normal to `direction`, `near` beyond `position`),
 //   where rays enter, which must be ≤ 0; exits must add up to the entries.
 // Without a light, non-self-nesting is skipped (CGAL's proof is in check_volume).
-// Runs in O(n log n) (a sort of the edges), in parallel.
+// Runs in linear time but for sorting the edge uses at a vertex of more than 8 (O(n log n) at
+// worst), in parallel, with the same report for any number of threads.
 CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders = 5,
                                 double quantization_step = 0);
 
