@@ -95,13 +95,41 @@ std::string format_bytes(std::uint64_t bytes) {
   return buffer;
 }
 
-std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, int images) {
+namespace {
+// The check's scratch per triangle of a static volume (its edge records and per-vertex tables):
+// the term to adjust when the check changes. A static volume has about two triangles per texel.
+constexpr double kCheckBytesPerTriangle = 55;
+// A static volume held whole: 12 bytes of position per vertex (one per texel) and 12 bytes of
+// indices per triangle (two per texel).
+constexpr double kStaticMeshBytesPerTexel = 12 + 2 * 12;
+// The depth floats as read (the decoding child holds them too, and sends them over).
+constexpr double kDepthBytesPerTexel = 4;
+}  // namespace
+
+double build_bytes_per_texel(BuildMemory mode) {
+  switch (mode) {
+    case BuildMemory::static_checked:
+      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2 * kCheckBytesPerTriangle;
+    case BuildMemory::static_unchecked:
+      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2;
+    case BuildMemory::static_streamed:
+      return 2 * kDepthBytesPerTexel;
+    case BuildMemory::adaptive:
+      return 22;
+    case BuildMemory::stats:
+      return 22;
+  }
+  return 0;
+}
+
+std::uint64_t process_base_bytes() { return std::uint64_t{160} << 20; }
+
+std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
+                                 int images) {
   if (width <= 0 || height <= 0 || images <= 0) return 0;
-  // Per texel: 4 (depth float) + 12 (vertex) + 2 × 12 (triangles) + 2 × 3 × 8 (edge keys the
-  // checks sort) ≈ 88; rounded up to 96 for the builder's temporaries.
-  constexpr double kBytesPerTexel = 96;
-  const double bytes = static_cast<double>(width) * static_cast<double>(height) *
-                       static_cast<double>(images) * kBytesPerTexel;
+  const double bytes = static_cast<double>(process_base_bytes()) +
+                       static_cast<double>(width) * static_cast<double>(height) *
+                           static_cast<double>(images) * build_bytes_per_texel(mode);
   return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
 }
 
