@@ -96,6 +96,10 @@ std::string format_bytes(std::uint64_t bytes) {
 }
 
 namespace {
+// Measured peaks (2048² spot, 6 × 1024² omni; tests/cli/memory_estimate_test.cpp): checked static
+// 140–142 bytes per texel, --no-check static held 38.6–39, streamed 4.05, adaptive and stats
+// 25.2 (21 at 16384²), over the process's own 131 MiB.
+
 // The check's scratch per triangle of a static volume (its edge records and per-vertex tables):
 // the term to adjust when the check changes. A static volume has about two triangles per texel.
 constexpr double kCheckBytesPerTriangle = 55;
@@ -104,6 +108,9 @@ constexpr double kCheckBytesPerTriangle = 55;
 constexpr double kStaticMeshBytesPerTexel = 12 + 2 * 12;
 // The depth floats as read (the decoding child holds them too, and sends them over).
 constexpr double kDepthBytesPerTexel = 4;
+// Adaptive: the floats read, the texel depths and error scales (doubles), the error pyramid
+// (floats, a third of a texel's), the quadtree's and the collapse's per-texel tables.
+constexpr double kAdaptiveBytesPerTexel = 24;
 }  // namespace
 
 double build_bytes_per_texel(BuildMemory mode) {
@@ -111,18 +118,19 @@ double build_bytes_per_texel(BuildMemory mode) {
     case BuildMemory::static_checked:
       return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2 * kCheckBytesPerTriangle;
     case BuildMemory::static_unchecked:
-      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2;
+      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2;  // + the writer's buffers
     case BuildMemory::static_streamed:
-      return 2 * kDepthBytesPerTexel;
+      return kDepthBytesPerTexel + 0.5;  // the rows in flight are a fixed few MiB
     case BuildMemory::adaptive:
-      return 22;
     case BuildMemory::stats:
-      return 22;
+      return kAdaptiveBytesPerTexel;
   }
   return 0;
 }
 
-std::uint64_t process_base_bytes() { return std::uint64_t{160} << 20; }
+// lightvol's resident size before it reads a map (131 MiB: its shared libraries), and the fixed
+// working buffers of a build.
+std::uint64_t process_base_bytes() { return std::uint64_t{152} << 20; }
 
 std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
                                  int images) {
