@@ -20,22 +20,23 @@ cat > "$work/spot.json" <<'JSON'
  "fov_y_deg": 60, "near": 1, "far": 20}
 JSON
 lv="$build/lightvol"
-gib() { awk -v k="$1" 'BEGIN { printf "%.2f GB", k * 1024 / 1e9 }'; }  # KiB → GB
+# KiB → "156.5 MiB" or "5.4 GiB", as lightvol prints sizes.
+human() { awk -v k="$1" 'BEGIN { if (k < 1048576) printf "%.1f MiB", k / 1024; else printf "%.1f GiB", k / 1048576 }'; }
 
 # The estimate: the "needs about X" of the refusal under a 1 KiB budget.
 estimate() {
-  "$lv" --max-memory 1K "$@" --quiet 2>&1 >/dev/null | sed -n 's/.*needs about \([0-9.]* [KMGT]iB\).*/\1/p'
+  { "$lv" --max-memory 1K "$@" --quiet 2>&1 >/dev/null || true; } | sed -n 's/.*needs about \([0-9.]* [KMGT]iB\).*/\1/p'
 }
 
 # case LABEL ARGS...: one run under /usr/bin/time; prints a table row.
 run_case() {
   local n=$1 label=$2; shift 2
-  local est; est=$(estimate "$@")
+  local est; est=$(estimate "$@" || true)
   rm -f "$work/v.ply"
   if /usr/bin/time -f '%e %U %S %M' -o "$work/t" "$lv" "$@" --quiet 2> "$work/err"; then
     read -r wall user sys rss < "$work/t"
     printf '| %d² | %s | %.2f s | %.2f s | %s | %s |\n' "$n" "$label" "$wall" \
-      "$(echo "$user + $sys" | bc -l)" "$(gib "$rss")" "$est"
+      "$(echo "$user + $sys" | bc -l)" "$(human "$rss")" "$est"
   else
     printf '| %d² | %s | refused: %s | | | %s |\n' "$n" "$label" \
       "$(sed -n 's/.*\(needs about [^;]*\);.*/\1/p' "$work/err" | head -1)" "$est"
