@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cmath>
@@ -96,9 +97,10 @@ std::string format_bytes(std::uint64_t bytes) {
 }
 
 namespace {
-// Measured peaks (2048² spot, 6 × 1024² omni; tests/cli/memory_estimate_test.cpp): checked static
-// 140–142 bytes per texel, --no-check static held 38.6–39, streamed 4.05, adaptive and stats
-// 25.2 (21 at 16384²), over the process's own 131 MiB.
+// Measured peaks (2048² spot, 6 × 1024² omni; tests/cli/memory_estimate_test.cpp): lightvol itself
+// holds checked static 140–142 bytes per texel, --no-check static held 38.6–39, streamed 4.05,
+// adaptive and stats 25.2 (21 at 16384²), over its own few MiB; lightvol-image, which decodes the
+// images (one at a time), reaches 130 MiB (its libraries) plus about 6.3 bytes per texel.
 
 // The check's scratch per triangle of a static volume (its edge records and per-vertex tables):
 // the term to adjust when the check changes. A static volume has about two triangles per texel.
@@ -106,11 +108,15 @@ constexpr double kCheckBytesPerTriangle = 55;
 // A static volume held whole: 12 bytes of position per vertex (one per texel) and 12 bytes of
 // indices per triangle (two per texel).
 constexpr double kStaticMeshBytesPerTexel = 12 + 2 * 12;
-// The depth floats as read (the decoding child holds them too, and sends them over).
+// The depth floats as received from lightvol-image.
 constexpr double kDepthBytesPerTexel = 4;
 // Adaptive: the floats read, the texel depths and error scales (doubles), the error pyramid
 // (floats, a third of a texel's), the quadtree's and the collapse's per-texel tables.
 constexpr double kAdaptiveBytesPerTexel = 24;
+// lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
+// file's buffers.
+constexpr double kImageReaderBase = 136.0 * (1 << 20);
+constexpr double kImageReaderBytesPerTexel = 7;
 }  // namespace
 
 double build_bytes_per_texel(BuildMemory mode) {
@@ -128,16 +134,19 @@ double build_bytes_per_texel(BuildMemory mode) {
   return 0;
 }
 
-// lightvol's resident size before it reads a map (131 MiB: its shared libraries), and the fixed
-// working buffers of a build.
-std::uint64_t process_base_bytes() { return std::uint64_t{152} << 20; }
+// lightvol's resident size before it reads a map, and the fixed working buffers of a build.
+std::uint64_t process_base_bytes() { return std::uint64_t{12} << 20; }
 
 std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
                                  int images) {
   if (width <= 0 || height <= 0 || images <= 0) return 0;
-  const double bytes = static_cast<double>(process_base_bytes()) +
-                       static_cast<double>(width) * static_cast<double>(height) *
-                           static_cast<double>(images) * build_bytes_per_texel(mode);
+  const double texels = static_cast<double>(width) * static_cast<double>(height);
+  // The peak is that of lightvol or of lightvol-image (a process of its own, one image at a time),
+  // whichever is larger.
+  const double lightvol = static_cast<double>(process_base_bytes()) +
+                          texels * static_cast<double>(images) * build_bytes_per_texel(mode);
+  const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;
+  const double bytes = std::max(lightvol, reader);
   return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
 }
 

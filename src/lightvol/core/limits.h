@@ -38,16 +38,17 @@ enum class BuildMemory {
   stats,             // stats: the error pyramid and the adaptive meshes at each bound
 };
 
-// Peak memory (resident, whole process) of a build from `images` depth images of W×H texels in
-// `mode`: a fixed part (the process and its libraries) plus, per texel, what that mode allocates
-// (docs/robustness.md lists the terms). Meant to be at or above the measured peak and within
+// Peak memory (resident, of the largest process) of a build from `images` depth images of W×H
+// texels in `mode`: lightvol's fixed part plus, per texel, what that mode allocates, or
+// lightvol-image's, which decodes each image, whichever is larger (docs/robustness.md lists the
+// terms). Meant to be at or above the measured peak and within
 // 1.25× of it (tests/cli/memory_estimate_test.cpp).
 std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
                                  int images = 1);
 
 // The per-texel terms of build_memory_bytes, for the docs and tests.
 double build_bytes_per_texel(BuildMemory mode);
-// Its fixed part: the resident size of the process before it reads a map.
+// lightvol's fixed part: its resident size before it reads a map, and a build's fixed buffers.
 std::uint64_t process_base_bytes();
 
 // Peak memory of rendering a W×H shadow map `faces` times (double window depths, encoded floats,
