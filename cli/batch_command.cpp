@@ -294,9 +294,9 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
   } held{gate};
   BuildJobHooks hooks;
   hooks.extra_report = {{"job_hash", *hash}};
-  hooks.before_build = [&](const ShadowMaps& maps) {
+  hooks.before_build = [&](const ShadowMaps& maps, BuildMemory mode) {
     const std::uint64_t bytes =
-        depth_build_memory_bytes(maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
+        build_memory_bytes(mode, maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
     gate.acquire(bytes);
     held.bytes = bytes;
   };

@@ -84,12 +84,31 @@ nlohmann::json stage_json(const StageLog& log) {
   return stages;
 }
 
+// What the report says of the volume written (a streamed volume is not held: its stream tallies
+// these).
+struct VolumeSummary {
+  std::uint64_t vertices = 0, triangles = 0;
+  Bounds bounds;
+  double volume = 0;
+};
+
+VolumeSummary summary_of(const Mesh& mesh) {
+  return {mesh.num_vertices(), mesh.num_triangles(), bounding_box(mesh), signed_volume(mesh)};
+}
+
+// The memory a build in these modes takes (the budget's estimate, checked as the map is read).
+BuildMemory memory_mode(const BuildCommandOptions& o, bool adaptive, bool streamed) {
+  if (adaptive) return BuildMemory::adaptive;
+  if (streamed) return BuildMemory::static_streamed;
+  return o.no_check ? BuildMemory::static_unchecked : BuildMemory::static_checked;
+}
+
 // The --report / --json report of a finished build.
 nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
-                            const ShadowMaps& maps, const Mesh& mesh,
+                            const ShadowMaps& maps, const VolumeSummary& mesh,
                             const AdaptiveReport* adaptive, const StageLog& log,
                             const std::vector<std::string>& warnings, const nlohmann::json& extra) {
-  const Bounds box = bounding_box(mesh);
+  const Bounds& box = mesh.bounds;
   nlohmann::json report = {
       {"inputs", o.depth_paths},
       {"light",
@@ -101,10 +120,10 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
       {"width", maps.width()},
       {"height", maps.height()},
       {"mode", adaptive ? "adaptive" : "static"},
-      {"vertices", mesh.num_vertices()},
-      {"triangles", mesh.num_triangles()},
+      {"vertices", mesh.vertices},
+      {"triangles", mesh.triangles},
       {"bounds", {{"min", box.min}, {"max", box.max}}},
-      {"volume", signed_volume(mesh)},
+      {"volume", mesh.volume},
       {"stages", stage_json(log)},
       {"total_seconds", log.total_seconds()},
       {"peak_memory_bytes", peak_memory_bytes()},
@@ -156,16 +175,17 @@ CLI::Validator finite_non_negative() {
       "NUMBER>=0");
 }
 
-// Every file a build run writes is written here, and only here: the volume, then the --report
-// JSON, made by `report_of` once the volume is written (it records that step's time). Returns the
-// report, for --json.
-Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& mesh,
-                                     const ExportOptions& export_options, Progress& progress,
+// Every file a build run writes is written here, and only here: the volume (by `write_volume`,
+// under the progress line `what`), then the --report JSON, made by `report_of` once the volume is
+// written (it records that step's time). Returns the report, for --json.
+Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const std::string& what,
+                                     const std::function<Status()>& write_volume,
+                                     Progress& progress,
                                      const std::function<nlohmann::json()>& report_of) {
   // The volume and the report are committed together once both are written, or neither is.
   OutputTransaction outputs;
-  progress.begin("writing " + o.out_path);
-  if (Status s = write_mesh(o.out_path, mesh, export_options); !s) return s.error();
+  progress.begin(what);
+  if (Status s = write_volume(); !s) return s.error();
   progress.end();
   nlohmann::json report = report_of();
   if (!o.report_path.empty()) {
@@ -179,6 +199,38 @@ Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const Mesh& m
 // The seconds of the step `progress` just ended.
 double last_step_seconds(const Progress& progress) {
   return progress.log().stages().back().seconds;
+}
+
+// --no-check, static, PLY: the volume built row by row straight into the file, never held whole
+// (its memory does not grow with the mesh); still refused, with nothing written, when float32
+// cannot hold it. Fills `r` as run_build_job does.
+void write_streamed(const BuildCommandOptions& o, const Light& light, const ShadowMaps& maps,
+                    Space space, Progress& progress, const nlohmann::json& extra,
+                    BuildJobResult& r) {
+  StaticVolumeStream stream(light, maps.image, VolumeOptions{space}, maps.source, o.light_path);
+  ExportOptions eo;
+  eo.ascii = o.ascii;
+  VolumeSummary summary;
+  Result<nlohmann::json> report = write_outputs(
+      o, "building the static volume into " + o.out_path,
+      [&]() -> Status {
+        if (Status s = write_mesh_stream(o.out_path, stream, eo); !s) return s;
+        summary = {stream.num_vertices(), stream.num_triangles(), stream.bounds(), stream.volume()};
+        return {};
+      },
+      progress,
+      [&] {
+        r.write_seconds = last_step_seconds(progress);
+        return build_report(o, light, maps, summary, nullptr, progress.log(), r.warnings, extra);
+      });
+  if (!report) {
+    r.exit_code = 2;
+    r.error = report.error().message;
+    return;
+  }
+  r.vertices = summary.vertices;
+  r.triangles = summary.triangles;
+  r.report = std::move(*report);
 }
 
 int run_build(const BuildCommandOptions& o) {
@@ -292,8 +344,13 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   if (!medium) return failed(2, medium.error().message);
 
   const bool omni = light->type == LightType::omni;
+  // A static volume written unchecked to PLY is streamed: built row by row into the file.
+  const bool streamed = !adaptive && !omni && o.no_check && *format == MeshFormat::ply;
   progress.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
-  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, {o.channel});
+  DepthReadOptions read_options;
+  read_options.channel = o.channel;
+  read_options.memory = memory_mode(o, adaptive, streamed);
+  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, read_options);
   if (!maps) return failed(2, maps.error().message);
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
   r.read_seconds += last_step_seconds(progress);
@@ -305,9 +362,14 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
 
   if (hooks.before_build) {
     const auto waited_from = std::chrono::steady_clock::now();
-    hooks.before_build(*maps);
+    hooks.before_build(*maps, read_options.memory);
     r.wait_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - waited_from).count();
+  }
+
+  if (streamed) {
+    write_streamed(o, *light, *maps, options.space, progress, hooks.extra_report, r);
+    return r;
   }
 
   progress.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
@@ -344,11 +406,14 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   if (options.space == Space::light) glb_light.view = Mat4d::identity();
   eo.glb.light = &glb_light;
   eo.glb.medium_json = *medium;
-  Result<nlohmann::json> report = write_outputs(o, *mesh, eo, progress, [&] {
-    r.write_seconds = last_step_seconds(progress);
-    return build_report(o, *light, *maps, *mesh, adaptive ? &adaptive_report : nullptr,
-                        progress.log(), r.warnings, hooks.extra_report);
-  });
+  const VolumeSummary summary = summary_of(*mesh);
+  Result<nlohmann::json> report = write_outputs(
+      o, "writing " + o.out_path, [&] { return write_mesh(o.out_path, *mesh, eo); }, progress,
+      [&] {
+        r.write_seconds = last_step_seconds(progress);
+        return build_report(o, *light, *maps, summary, adaptive ? &adaptive_report : nullptr,
+                            progress.log(), r.warnings, hooks.extra_report);
+      });
   if (!report) return failed(2, report.error().message);
   r.vertices = mesh->num_vertices();
   r.triangles = mesh->num_triangles();

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <lightvol/core/limits.h>
 #include <lightvol/depth/shadow_maps.h>
 
 #include "progress.h"
@@ -49,9 +50,10 @@ nlohmann::json output_options_json(const BuildCommandOptions& o);
 
 // What a caller adds to one build run.
 struct BuildJobHooks {
-  // Called once the light and maps are read, before the volume is built; may block (batch: until
-  // the build's memory fits under the budget beside the jobs already running).
-  std::function<void(const ShadowMaps& maps)> before_build;
+  // Called once the light and maps are read, before the volume is built, with the build's memory
+  // mode (core/limits.h build_memory_bytes); may block (batch: until the build's memory fits under
+  // the budget beside the jobs already running).
+  std::function<void(const ShadowMaps& maps, BuildMemory mode)> before_build;
   // Keys added to the report (batch: the job's content hash).
   nlohmann::json extra_report = nlohmann::json::object();
 };

@@ -220,7 +220,10 @@ int run_stats(const StatsOptions& o) {
 
   const bool omni = light->type == LightType::omni;
   progress.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
-  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, {o.channel});
+  DepthReadOptions read_options;
+  read_options.channel = o.channel;
+  read_options.memory = BuildMemory::stats;  // the error pyramid, not a static volume
+  Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, read_options);
   if (!maps) return fail(maps.error().message);
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
 

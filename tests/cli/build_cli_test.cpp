@@ -224,6 +224,36 @@ TEST(BuildCli, NonFiniteBoundsAreRefused) {
   EXPECT_EQ(w.dir.entries(), before);
 }
 
+// --no-check to PLY streams the static volume row by row into the file: the same bytes as the held
+// volume written after its check, and the same report.
+TEST(BuildCli, StreamedStaticPlyIsTheHeldOneByteForByte) {
+  test::TempDir dir;
+  const std::string depth = dir.file("d.exr");
+  ASSERT_TRUE(write_depth_image(depth, test::make_depth(700, 400,
+                                                        [](int c, int r) {
+                                                          return 0.9f +
+                                                                 0.0001f * static_cast<float>(
+                                                                               (c * r) % 700);
+                                                        }))
+                  .ok());
+  for (const std::string& light : {dir.write("spot.json", test::spot_json("window", 7.0 / 4.0)),
+                                   dir.write("dir.json", test::directional_json("window"))})
+    for (const char* ascii : {"", " --ascii"}) {
+      const auto run = [&](const std::string& out, const std::string& flags) {
+        const test::CommandResult r =
+            test::run_lightvol("build " + q(depth) + " --light " + q(light) + " --out " + q(out) +
+                               " --quiet --report " + q(out + ".json") + ascii + flags);
+        EXPECT_EQ(r.exit_code, 0) << r.err;
+        return nlohmann::json::parse(slurp(out + ".json"));
+      };
+      const nlohmann::json held = run(dir.file("held.ply"), "");
+      const nlohmann::json streamed = run(dir.file("streamed.ply"), " --no-check");
+      EXPECT_EQ(slurp(dir.file("held.ply")), slurp(dir.file("streamed.ply"))) << light << ascii;
+      for (const char* key : {"vertices", "triangles", "bounds", "volume"})
+        EXPECT_EQ(held[key], streamed[key]) << key;
+    }
+}
+
 // Before: valid lights whose volumes float32 cannot hold gave NaN vertices (written with
 // --no-check) or zero-area faces, and exit 1 blaming the volume. Now: exit 2 naming the light's
 // keys and the remedy, nothing written; or a volume that passes its checks.

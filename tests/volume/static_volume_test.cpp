@@ -193,5 +193,77 @@ TEST(StaticVolume, UnreachableRadialDepthNamesThePixel) {
       << m.error().message;
 }
 
+// The stream of a static volume, collected: what a writer receives.
+struct Streamed {
+  Status status;
+  Mesh mesh;
+};
+Streamed collect(StaticVolumeStream& stream) {
+  Streamed out;
+  out.status = stream.positions([&](const float* xyz, std::size_t n) {
+    out.mesh.positions.insert(out.mesh.positions.end(), xyz, xyz + 3 * n);
+    return true;
+  });
+  if (!out.status) return out;
+  out.status = stream.triangles([&](const std::uint32_t* abc, std::size_t n) {
+    out.mesh.indices.insert(out.mesh.indices.end(), abc, abc + 3 * n);
+    return true;
+  });
+  return out;
+}
+
+// Streamed row by row (several blocks of rows at these widths) or held, the volume is the same:
+// the same positions and triangles in the same order, and the same bounds and signed volume to
+// the bit.
+TEST(StaticVolumeStream, IsTheHeldVolumeBlockByBlock) {
+  const Light lights[] = {test::light_from_json(test::spot_json("linear", 1.3)),
+                          test::light_from_json(test::directional_json("linear"))};
+  for (const Light& light : lights)
+    for (auto [w, h] : {std::pair{2, 2}, {5, 3}, {700, 500}, {3001, 90}})
+      for (const Space space : {Space::world, Space::light}) {
+        SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h));
+        const DepthImage depth = occluded(w, h);
+        const Mesh held = build(light, depth, space);
+        StaticVolumeStream stream(light, depth, {space}, "depth.exr", "light.json");
+        EXPECT_EQ(stream.num_vertices(), held.num_vertices());
+        EXPECT_EQ(stream.num_triangles(), held.num_triangles());
+        const Streamed s = collect(stream);
+        ASSERT_TRUE(s.status.ok()) << s.status.error().message;
+        EXPECT_EQ(s.mesh.positions, held.positions);
+        EXPECT_EQ(s.mesh.indices, held.indices);
+        EXPECT_EQ(stream.volume(), signed_volume(held));  // bit for bit: the same sums
+        const Bounds b = bounding_box(held);
+        EXPECT_EQ(stream.bounds().min, b.min);
+        EXPECT_EQ(stream.bounds().max, b.max);
+      }
+}
+
+// Refused as the held volume is, with the same message, before any triangle is handed on.
+TEST(StaticVolumeStream, RefusesWhatTheHeldVolumeRefuses) {
+  const Light radial = test::light_from_json(test::directional_json("radial"));
+  DepthImage d = test::constant_depth(4, 4, 8.0f);
+  d.values[1 * 4 + 2] = 0.1f;
+  StaticVolumeStream unreachable(radial, d, {}, "rad.exr", "light.json");
+  const Streamed u = collect(unreachable);
+  ASSERT_FALSE(u.status.ok());
+  EXPECT_EQ(u.status.error().message,
+            build_static_volume(radial, d, {}, "rad.exr").error().message);
+  EXPECT_TRUE(u.mesh.indices.empty());
+
+  // A needle of a frustum: float32 collapses faces.
+  const Light needle = test::light_from_json(
+      R"({"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
+      R"( "fov_y_deg": 1e-6, "near": 1, "far": 20})");
+  const DepthImage depth = occluded(64, 64);
+  const Mesh held = build(needle, depth);
+  const Status expected = check_representable(held, needle, Space::world, "needle.json");
+  ASSERT_FALSE(expected.ok());
+  StaticVolumeStream stream(needle, depth, {}, "depth.exr", "needle.json");
+  const Streamed s = collect(stream);
+  ASSERT_FALSE(s.status.ok());
+  EXPECT_EQ(s.status.error().message, expected.error().message);
+  EXPECT_TRUE(s.mesh.indices.empty());
+}
+
 }  // namespace
 }  // namespace lightvol

@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cmath>
@@ -95,13 +96,60 @@ std::string format_bytes(std::uint64_t bytes) {
   return buffer;
 }
 
-std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, int images) {
+namespace {
+// Measured peaks (2048² spot, 6 × 1024² omni; tests/cli/memory_estimate_test.cpp): lightvol itself
+// holds checked static 39.8 bytes per texel (the check adds a few MiB of scratch to the volume it
+// checks), --no-check static held 38.6–39, streamed 4.05,
+// adaptive and stats 25.2 (21 at 16384²), over its own few MiB; lightvol-image, which decodes the
+// images (one at a time), reaches 130 MiB (its libraries) plus about 6.3 bytes per texel.
+
+// The check's scratch per triangle of a static volume: its edge uses are bucketed a cache-sized
+// chunk at a time, so it needs about 1.4 MiB per thread plus 12 bytes per 1024 faces (0.1 byte
+// per triangle; docs/checks.md), rounded up. A static volume has about two triangles per texel.
+constexpr double kCheckBytesPerTriangle = 0.5;
+// A static volume held whole: 12 bytes of position per vertex (one per texel) and 12 bytes of
+// indices per triangle (two per texel).
+constexpr double kStaticMeshBytesPerTexel = 12 + 2 * 12;
+// The depth floats as received from lightvol-image.
+constexpr double kDepthBytesPerTexel = 4;
+// Adaptive: the floats read, the texel depths and error scales (doubles), the error pyramid
+// (floats, a third of a texel's), the quadtree's and the collapse's per-texel tables.
+constexpr double kAdaptiveBytesPerTexel = 24;
+// lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
+// file's buffers.
+constexpr double kImageReaderBase = 136.0 * (1 << 20);
+constexpr double kImageReaderBytesPerTexel = 7;
+}  // namespace
+
+double build_bytes_per_texel(BuildMemory mode) {
+  switch (mode) {
+    case BuildMemory::static_checked:
+      // + the writer's buffers + the check's scratch
+      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2 + 2 * kCheckBytesPerTriangle;
+    case BuildMemory::static_unchecked:
+      return kDepthBytesPerTexel + kStaticMeshBytesPerTexel + 2;  // + the writer's buffers
+    case BuildMemory::static_streamed:
+      return kDepthBytesPerTexel + 0.5;  // the rows in flight are a fixed few MiB
+    case BuildMemory::adaptive:
+    case BuildMemory::stats:
+      return kAdaptiveBytesPerTexel;
+  }
+  return 0;
+}
+
+// lightvol's resident size before it reads a map, and the fixed working buffers of a build.
+std::uint64_t process_base_bytes() { return std::uint64_t{12} << 20; }
+
+std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
+                                 int images) {
   if (width <= 0 || height <= 0 || images <= 0) return 0;
-  // Per texel: 4 (depth float) + 12 (vertex) + 2 × 12 (triangles) + 2 × 3 × 8 (edge keys the
-  // checks sort) ≈ 88; rounded up to 96 for the builder's temporaries.
-  constexpr double kBytesPerTexel = 96;
-  const double bytes = static_cast<double>(width) * static_cast<double>(height) *
-                       static_cast<double>(images) * kBytesPerTexel;
+  const double texels = static_cast<double>(width) * static_cast<double>(height);
+  // The peak is that of lightvol or of lightvol-image (a process of its own, one image at a time),
+  // whichever is larger.
+  const double lightvol = static_cast<double>(process_base_bytes()) +
+                          texels * static_cast<double>(images) * build_bytes_per_texel(mode);
+  const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;
+  const double bytes = std::max(lightvol, reader);
   return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
 }
 

@@ -29,10 +29,27 @@ Result<std::uint64_t> parse_memory_size(const std::string& text);
 // "1.5 GiB", for messages.
 std::string format_bytes(std::uint64_t bytes);
 
-// Peak memory a build from `images` depth images of W×H texels takes: the floats read, the
-// volume's positions and indices (≈ W·H vertices, 2·W·H triangles each) and the edge arrays the
-// checks sort. An over-estimate by design: a refused input would have come close.
-std::uint64_t depth_build_memory_bytes(std::int64_t width, std::int64_t height, int images = 1);
+// What a command does with W×H depth maps, for its memory estimate (build_memory_bytes).
+enum class BuildMemory {
+  static_checked,    // build: the static volume, checked before it is written (the default)
+  static_unchecked,  // build --no-check: the static volume held whole, then written
+  static_streamed,   // build --no-check to PLY: the static volume's rows streamed to the writer
+  adaptive,          // build --adaptive: texel depths, the error pyramid, the (small) mesh
+  stats,             // stats: the error pyramid and the adaptive meshes at each bound
+};
+
+// Peak memory (resident, of the largest process) of a build from `images` depth images of W×H
+// texels in `mode`: lightvol's fixed part plus, per texel, what that mode allocates, or
+// lightvol-image's, which decodes each image, whichever is larger (docs/robustness.md lists the
+// terms). Meant to be at or above the measured peak and within
+// 1.25× of it (tests/cli/memory_estimate_test.cpp).
+std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
+                                 int images = 1);
+
+// The per-texel terms of build_memory_bytes, for the docs and tests.
+double build_bytes_per_texel(BuildMemory mode);
+// lightvol's fixed part: its resident size before it reads a map, and a build's fixed buffers.
+std::uint64_t process_base_bytes();
 
 // Peak memory of rendering a W×H shadow map `faces` times (double window depths, encoded floats,
 // GPU readback).

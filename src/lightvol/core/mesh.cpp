@@ -4,10 +4,12 @@
 #include <optional>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/mesh_stream.h>
 
 namespace lightvol {
 
@@ -27,25 +29,81 @@ Bounds bounding_box(const Mesh& mesh) {
 }
 
 double signed_volume(const Mesh& mesh) {
+  SignedVolumeSum sum(mesh.num_triangles());
   const float* p = mesh.positions.data();
   const std::uint32_t* idx = mesh.indices.data();
-  return tbb::parallel_deterministic_reduce(
-             tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), 1 << 16), 0.0,
-             [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-               for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                 const float* a = p + 3 * idx[3 * t];
-                 const float* b = p + 3 * idx[3 * t + 1];
-                 const float* c = p + 3 * idx[3 * t + 2];
-                 const double ax = a[0], ay = a[1], az = a[2];
-                 const double bx = b[0], by = b[1], bz = b[2];
-                 const double cx = c[0], cy = c[1], cz = c[2];
-                 acc +=
-                     ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
-               }
-               return acc;
-             },
-             [](double x, double y) { return x + y; }) /
-         6.0;
+  sum.add(0, mesh.num_triangles(),
+          [&](std::size_t t, int k) { return p + 3 * std::size_t{idx[3 * t + k]}; });
+  return sum.volume();
+}
+
+// The sum is the one tbb::parallel_deterministic_reduce forms over blocked_range(0, n, 2^16):
+// ranges above the grain split at their midpoint, each leaf sums its triangles in order from 0,
+// and each split adds its left half's sum to its right half's.
+namespace {
+constexpr std::size_t kVolumeGrain = std::size_t{1} << 16;
+}  // namespace
+
+SignedVolumeSum::SignedVolumeSum(std::size_t triangles) : triangles_(triangles) {
+  split(0, triangles);
+  leaf_begin_.push_back(triangles);
+  leaf_sum_.assign(leaf_begin_.size() - 1, 0.0);
+}
+
+void SignedVolumeSum::split(std::size_t begin, std::size_t end) {
+  if (end - begin > kVolumeGrain) {
+    const std::size_t middle = begin + (end - begin) / 2u;
+    split(begin, middle);
+    split(middle, end);
+    return;
+  }
+  leaf_begin_.push_back(begin);
+}
+
+void SignedVolumeSum::for_each_leaf(
+    std::size_t begin, std::size_t end,
+    const std::function<void(std::size_t, std::size_t, std::size_t)>& f) {
+  if (begin >= end) return;
+  const auto leaf_of = [&](std::size_t t) {
+    return static_cast<std::size_t>(std::upper_bound(leaf_begin_.begin(), leaf_begin_.end(), t) -
+                                    leaf_begin_.begin() - 1);
+  };
+  const std::size_t first = leaf_of(begin), last = leaf_of(end - 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last + 1, 1),
+                    [&](const tbb::blocked_range<std::size_t>& leaves) {
+                      for (std::size_t l = leaves.begin(); l != leaves.end(); ++l)
+                        f(l, std::max(begin, leaf_begin_[l]), std::min(end, leaf_begin_[l + 1]));
+                    });
+}
+
+double SignedVolumeSum::fold(std::size_t begin, std::size_t end, std::size_t* leaf) const {
+  if (end - begin > kVolumeGrain) {
+    const std::size_t middle = begin + (end - begin) / 2u;
+    const double left = fold(begin, middle, leaf);
+    return left + fold(middle, end, leaf);
+  }
+  return leaf_sum_[(*leaf)++];
+}
+
+double SignedVolumeSum::volume() const {
+  std::size_t leaf = 0;
+  return fold(0, triangles_, &leaf) / 6.0;
+}
+
+Status MeshBufferStream::positions(const PositionSink& sink) {
+  constexpr std::size_t kBlock = std::size_t{1} << 16;
+  const std::size_t n = mesh_.num_vertices();
+  for (std::size_t v = 0; v < n; v += kBlock)
+    if (!sink(&mesh_.positions[3 * v], std::min(kBlock, n - v))) return {};
+  return {};
+}
+
+Status MeshBufferStream::triangles(const TriangleSink& sink) {
+  constexpr std::size_t kBlock = std::size_t{1} << 16;
+  const std::size_t n = mesh_.num_triangles();
+  for (std::size_t t = 0; t < n; t += kBlock)
+    if (!sink(&mesh_.indices[3 * t], std::min(kBlock, n - t))) return {};
+  return {};
 }
 
 namespace {

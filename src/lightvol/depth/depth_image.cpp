@@ -70,10 +70,10 @@ Status validate_depths(const DepthImage& image, const std::string& source) {
 
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options) {
   const auto within_budget = [&](const detail::ImageHeader& spec) {
-    return check_memory(depth_build_memory_bytes(spec.width, spec.height, options.images), path,
-                        "a volume from " + std::to_string(spec.width) + "x" +
-                            std::to_string(spec.height) + " texels" +
-                            (options.images > 1 ? " x " + std::to_string(options.images) : ""));
+    return check_memory(
+        build_memory_bytes(options.memory, spec.width, spec.height, options.images), path,
+        "a volume from " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+            " texels" + (options.images > 1 ? " x " + std::to_string(options.images) : ""));
   };
   const auto select = [&](const detail::ImageHeader& spec) -> Result<int> {
     const Result<int> channel = choose_channel(spec, options, path);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <lightvol/core/limits.h>
 #include <lightvol/core/result.h>
 
 namespace lightvol {
@@ -29,6 +30,9 @@ struct DepthReadOptions {
   // memory a build would need is checked against memory_budget() (core/limits.h) right after the
   // header is read, before any pixel is allocated.
   int images = 1;
+  // What the caller will do with them, for that estimate (core/limits.h build_memory_bytes); the
+  // default is the most demanding build.
+  BuildMemory memory = BuildMemory::static_checked;
 };
 
 // Reads the first subimage of an EXR, TIFF, PNG, PFM, PGM, HDR or ZFile image (chosen by its

@@ -77,6 +77,21 @@ Status write_with_openmesh(const std::string& path, const std::string& temp, Mes
   return {};
 }
 
+Status write_ply_file(const std::string& path, MeshStream& mesh, const ExportOptions& options) {
+  return write_file_atomically(path, [&](const std::string& temp) -> Status {
+    std::FILE* f = std::fopen(temp.c_str(), "wb");
+    if (!f) return Error{path + ": cannot create file: " + std::strerror(errno)};
+    bool write_failed = false;
+    const Status streamed = detail::write_ply(f, mesh, options.ascii, &write_failed);
+    const int saved = errno;
+    const bool closed = std::fclose(f) == 0;
+    if (!streamed) return streamed;
+    if (write_failed || !closed)
+      return Error{path + ": write failed: " + std::strerror(write_failed ? saved : errno)};
+    return {};
+  });
+}
+
 }  // namespace
 
 Result<std::string> encode_draco(const Mesh& mesh, int bits) {
@@ -111,20 +126,23 @@ Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions
       }
       return write_bytes_atomically(path, *bytes);
     }
-    case MeshFormat::ply:
-      return write_file_atomically(path, [&](const std::string& temp) -> Status {
-        std::FILE* f = std::fopen(temp.c_str(), "wb");
-        if (!f) return Error{path + ": cannot create file: " + std::strerror(errno)};
-        const bool written = detail::write_ply(f, mesh, options.ascii);
-        const bool closed = std::fclose(f) == 0;
-        if (!written || !closed) return Error{path + ": write failed: " + std::strerror(errno)};
-        return {};
-      });
+    case MeshFormat::ply: {
+      MeshBufferStream stream(mesh);
+      return write_ply_file(path, stream, options);
+    }
     default:
       return write_file_atomically(path, [&](const std::string& temp) {
         return write_with_openmesh(path, temp, *format, mesh, options);
       });
   }
+}
+
+Status write_mesh_stream(const std::string& path, MeshStream& mesh, const ExportOptions& options) {
+  const Result<MeshFormat> format = mesh_format_from_path(path);
+  if (!format) return format.error();
+  if (*format != MeshFormat::ply)
+    return Error{path + ": a streamed mesh is written as .ply only (write_mesh takes the others)"};
+  return write_ply_file(path, mesh, options);
 }
 
 }  // namespace lightvol

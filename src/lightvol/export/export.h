@@ -4,6 +4,7 @@
 #include <string>
 
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/mesh_stream.h>
 #include <lightvol/core/result.h>
 #include <lightvol/io/mesh_format.h>
 #include <lightvol/light/light.h>
@@ -38,6 +39,12 @@ struct ExportOptions {
 // and free of collapsed faces (and sound seen from `options.light`), or nothing is written and
 // the Error says what broke.
 Status write_mesh(const std::string& path, const Mesh& mesh, const ExportOptions& options = {});
+
+// Writes a streamed mesh (core/mesh_stream.h) to `path` atomically as it is produced, without
+// holding it: PLY only (binary or ASCII, the same bytes write_mesh writes for the same mesh). An
+// Error from the stream, or a write error, leaves nothing at `path`.
+Status write_mesh_stream(const std::string& path, MeshStream& mesh,
+                         const ExportOptions& options = {});
 
 // Encodes `mesh` as Draco bytes (edgebreaker, `bits` position quantization).
 Result<std::string> encode_draco(const Mesh& mesh, int bits);

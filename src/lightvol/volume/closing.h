@@ -47,6 +47,15 @@ struct ClosingCounts {
 };
 ClosingCounts closing_counts(LightType type, std::size_t ring_size);
 
+// The closing's own vertices (float xyz, numbered from `first_vertex` on) and its triangles, as
+// append_closing adds them: for a producer that does not hold the grid (StaticVolumeStream).
+struct ClosingPart {
+  std::vector<float> positions;
+  std::vector<std::uint32_t> indices;
+};
+ClosingPart make_closing(LightType type, const Unprojector& unproject, int width, int height,
+                         const std::vector<BorderVertex>& ring, std::uint32_t first_vertex);
+
 // Appends the closing to `mesh`, whose grid vertices (positions in `unproject`'s frame) and grid
 // triangles are already there. spot: the apex vertex, then one triangle (next, cur, apex) per ring
 // edge. directional: a near-plane copy of each ring vertex (in ring order) and the cap's centre,

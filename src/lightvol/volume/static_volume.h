@@ -2,9 +2,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/mesh_stream.h>
 #include <lightvol/core/result.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/light/light.h>
@@ -36,6 +39,31 @@ std::vector<std::uint32_t> border_loop(int width, int height, bool standard);
 // `source` names the depth image in errors (a radial depth no parallel ray reaches).
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  const VolumeOptions& options, const std::string& source);
+
+// The static volume of build_static_volume as a stream (core/mesh_stream.h): produced in blocks of
+// rows and never held whole (memory: a few rows and the border), with the same vertices and
+// triangles in the same order, so a file written from it has the same bytes. positions() fails as
+// build_static_volume does (a radial depth no ray reaches) and, at its end, before any triangle,
+// as check_representable does (`light_source` names the light); after it, bounds() and volume()
+// are bounding_box and signed_volume of the mesh. `light` and `depth` must outlive the stream.
+class StaticVolumeStream : public MeshStream {
+ public:
+  StaticVolumeStream(const Light& light, const DepthImage& depth, const VolumeOptions& options,
+                     std::string source, std::string light_source);
+  ~StaticVolumeStream() override;
+  std::uint64_t num_vertices() const override;
+  std::uint64_t num_triangles() const override;
+  Status positions(const PositionSink& sink) override;
+  Status triangles(const TriangleSink& sink) override;
+  Bounds bounds() const { return bounds_; }
+  double volume() const { return volume_; }
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  Bounds bounds_;
+  double volume_ = 0;
+};
 
 // Whether `mesh`, a volume of `light` built in `space`, holds in float32 as it is: every
 // coordinate finite and below 1e18 in magnitude (so that the products the checks and renderers

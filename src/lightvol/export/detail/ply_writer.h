@@ -8,11 +8,13 @@
 
 #include <cstdio>
 
-#include <lightvol/core/mesh.h>
+#include <lightvol/core/mesh_stream.h>
+#include <lightvol/core/result.h>
 
 namespace lightvol::detail {
 
-// Writes `mesh` to the open file; false on a write error (errno tells).
-bool write_ply(std::FILE* file, const Mesh& mesh, bool ascii);
+// Writes `mesh` to the open file as it streams. A write error sets *write_failed (errno tells) and
+// stops the stream; an Error is the stream's own. Either way the file is to be discarded.
+Status write_ply(std::FILE* file, MeshStream& mesh, bool ascii, bool* write_failed);
 
 }  // namespace lightvol::detail

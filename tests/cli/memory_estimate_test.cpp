@@ -1,0 +1,136 @@
+// The memory estimates of core/limits.h against the peak resident size lightvol actually reaches:
+// for each command and mode, at 1024² and 2048², the estimate is at or above the peak and within
+// 1.25× of it; so is the estimate of a 4×4 build (the processes' fixed parts: lightvol and
+// lightvol-image, which decodes the images).
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/core/limits.h>
+#include <lightvol/depth/cube_faces.h>
+#include <lightvol/depth/depth_image.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+// Runs lightvol with `args` (no shell) and returns its peak resident size in bytes (the largest
+// of it and its own children, as wait4 reports), or 0 if it failed.
+std::uint64_t peak_of(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  std::string exe = LIGHTVOL_EXE;
+  argv.push_back(exe.data());
+  std::vector<std::string> copy = args;
+  for (std::string& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, 1);
+    dup2(null, 2);
+    execv(exe.c_str(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) ||
+      WEXITSTATUS(status) != 0)
+    return 0;
+  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+}
+
+// A smooth map with a raised block: every mode has work to do (the adaptive tessellation refines
+// along the block's edges).
+DepthImage scene(int n) {
+  return test::make_depth(n, n, [n](int c, int r) {
+    const double x = double(c) / n, y = double(r) / n;
+    const bool block = x > 0.3 && x < 0.6 && y > 0.4 && y < 0.7;
+    return static_cast<float>(block ? 0.93 : 0.97 + 0.01 * std::sin(6 * x) * std::cos(5 * y));
+  });
+}
+
+class MemoryEstimate : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    test::TempDir dir;
+    const std::string depth = dir.file("tiny.exr");
+    ASSERT_TRUE(write_depth_image(depth, scene(4)).ok());
+    base_ = peak_of({"build", depth, "--light", dir.write("spot.json", test::spot_json("window")),
+                     "--out", dir.file("tiny.ply"), "--quiet"});
+    ASSERT_GT(base_, 0u);
+  }
+  static double estimate(BuildMemory mode, int n, int images = 1) {
+    return static_cast<double>(build_memory_bytes(mode, n, n, images));
+  }
+  static void expect_close(const std::string& what, double estimate, std::uint64_t peak) {
+    ASSERT_GT(peak, 0u) << what << ": the command failed";
+    const double p = static_cast<double>(peak);
+    EXPECT_GE(estimate, p) << what << ": estimate " << estimate / (1 << 20) << " MiB, peak "
+                           << p / (1 << 20) << " MiB";
+    EXPECT_LE(estimate, 1.25 * p) << what << ": estimate " << estimate / (1 << 20) << " MiB, peak "
+                                  << p / (1 << 20) << " MiB";
+  }
+  static std::uint64_t base_;
+  test::TempDir dir_;
+};
+std::uint64_t MemoryEstimate::base_ = 0;
+
+TEST_F(MemoryEstimate, TheFixedPartCoversTheProcesses) {
+  expect_close("a 4x4 build", estimate(BuildMemory::static_checked, 4), base_);
+}
+
+TEST_F(MemoryEstimate, BuildAndStatsOfOneMapPerMode) {
+  const std::string light = dir_.write("spot.json", test::spot_json("window"));
+  for (const int n : {1024, 2048}) {
+    const std::string depth = dir_.file("d" + std::to_string(n) + ".exr");
+    ASSERT_TRUE(write_depth_image(depth, scene(n)).ok());
+    const std::string size = std::to_string(n) + "²";
+    const std::vector<std::string> build = {"build", depth, "--light", light, "--quiet", "--out"};
+    const auto with = [&](std::vector<std::string> tail) {
+      std::vector<std::string> a = build;
+      a.insert(a.end(), tail.begin(), tail.end());
+      return a;
+    };
+    expect_close("static checked " + size, estimate(BuildMemory::static_checked, n),
+                 peak_of(with({dir_.file("c.ply")})));
+    expect_close("static --no-check .obj " + size, estimate(BuildMemory::static_unchecked, n),
+                 peak_of(with({dir_.file("u.obj"), "--no-check"})));
+    expect_close("static --no-check .ply (streamed) " + size,
+                 estimate(BuildMemory::static_streamed, n),
+                 peak_of(with({dir_.file("s.ply"), "--no-check"})));
+    expect_close("adaptive " + size, estimate(BuildMemory::adaptive, n),
+                 peak_of(with({dir_.file("a.ply"), "--adaptive", "--max-error", "0.001"})));
+    expect_close(
+        "stats " + size, estimate(BuildMemory::stats, n),
+        peak_of({"stats", depth, "--light", light, "--quiet", "--max-error", "0.001,0.01"}));
+  }
+}
+
+TEST_F(MemoryEstimate, OmniBuildOfSixFaces) {
+  const std::string light =
+      dir_.write("omni.json", R"({"type": "omni", "position": [0, 1, 0], "near": 0.1, "far": 10})");
+  for (const int n : {512, 1024}) {
+    const std::string pattern = dir_.file("o" + std::to_string(n) + "_{face}.exr");
+    for (int f = 0; f < kOmniFaces; ++f)
+      ASSERT_TRUE(write_depth_image(expand_face_pattern(pattern, f), scene(n)).ok());
+    const std::string size = "6 x " + std::to_string(n) + "²";
+    expect_close(
+        "omni static checked " + size, estimate(BuildMemory::static_checked, n, 6),
+        peak_of({"build", pattern, "--light", light, "--quiet", "--out", dir_.file("o.ply")}));
+    expect_close("omni adaptive " + size, estimate(BuildMemory::adaptive, n, 6),
+                 peak_of({"build", pattern, "--light", light, "--quiet", "--out",
+                          dir_.file("oa.ply"), "--adaptive", "--max-error", "0.001"}));
+  }
+}
+
+}  // namespace
+}  // namespace lightvol
