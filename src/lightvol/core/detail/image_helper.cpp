@@ -28,8 +28,9 @@ constexpr double kStartSeconds = 60;
 // readers each get their own) and puts it back when it answered whole; a server that failed has
 // ended. At most kIdle are kept, as many as `lightvol batch` runs jobs at once (64), so that its
 // jobs reuse their servers instead of starting and closing one per image; there are never more
-// servers than callers that were reading at the same time. The rest are closed. At exit the idle ones are closed and reaped
-// (so that a process's resource usage includes theirs, and none outlives it).
+// servers than callers that were reading at the same time. The rest are closed. At exit the idle
+// ones are closed and reaped (so that a process's resource usage includes theirs, and none outlives
+// it).
 class ServerPool {
  public:
   static constexpr std::size_t kIdle = 64;
