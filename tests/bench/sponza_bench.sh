@@ -10,6 +10,10 @@
 #                pass at the camera's size (GPU = llvmpipe here)
 # Prints markdown tables. Usage:
 #   tests/bench/sponza_bench.sh BUILD_DIR [SCENE] [MAX_ERROR] [SIZES] [OMNI_SIZES]
+# The environment variable MODES picks the volumes of each row (default "static collapse quadtree":
+# the static volume and the adaptive one with each tessellation, `--tessellation collapse`, the
+# default, and `--tessellation quadtree`, the paper's); e.g. MODES="collapse quadtree" skips the slow
+# static rows. PNG_DIR, if set, keeps each render there as LABEL_MODE.png to look at.
 # BUILD_DIR holds the `lightvol` binary; SCENE (the full Dabrovic Sponza OBJ, see data/README.md)
 # defaults to ../shared/scenes/sponza/sponza.obj next to the repository. Needs about 2.5 GB of
 # free space in $TMPDIR for the 4096² PLY files.
@@ -20,6 +24,9 @@ scene=${2:-$repo/../shared/scenes/sponza/sponza.obj}
 max_error=${3:-0.01}
 sizes=${4:-1024 2048 4096}
 omni_sizes=${5:-128 512}
+modes=${MODES:-static collapse quadtree}
+png_dir=${PNG_DIR:-}
+[[ -n $png_dir ]] && mkdir -p "$png_dir"
 if [[ ! -f $scene ]]; then
   echo "sponza_bench: no scene at $scene (the Dabrovic Sponza OBJ; data/README.md says where it comes from)" >&2
   exit 0
@@ -54,9 +61,9 @@ frames_for() { local tris=$1; if (( tris > 8000000 )); then echo 1; elif (( tris
 # One row: LABEL LIGHT DEPTH... ; builds (static and adaptive), checks, renders.
 row() {
   local label=$1 light=$2 depth=$3 sm_wall=$4 sm_gpu=$5
-  for mode in static adaptive; do
+  for mode in $modes; do
     local extra=() mesh=$work/$mode.ply
-    [[ $mode == adaptive ]] && extra=(--adaptive --max-error "$max_error")
+    [[ $mode != static ]] && extra=(--adaptive --max-error "$max_error" --tessellation "$mode")
     rm -f "$mesh"
     if ! wall "$lv" build "$depth" --light "$light" --out "$mesh" --quiet --no-check --report "$work/r.json" "${extra[@]}" > /dev/null 2>&1; then
       printf '| %s | %s | n/a: %s | | | | |\n' "$label" "$mode" "$(head -1 "$work/err")"
@@ -72,6 +79,12 @@ row() {
       --medium "$work/medium.json" --out "$work/a.exr" --frames "$frames" --quiet > /dev/null
     render_ms=$(sed -n 's/.*time per frame: \([0-9.]*\) ms.*/\1/p' "$work/out")
     [[ -z $render_ms ]] && render_ms=$(sed -n 's/.*per frame[^0-9]*\([0-9.]*\).*/\1/p' "$work/out" "$work/err" | head -1)
+    if [[ -n $png_dir ]]; then
+      local png
+      png=$png_dir/$(echo "$label" | tr -c 'A-Za-z0-9\n' '_')_$mode.png
+      wall "$lv" render "$mesh" --light "$light" --camera "$work/camera.json" --depth "$work/camera.exr" \
+        --medium "$work/medium.json" --out "$png" --quiet > /dev/null
+    fi
     printf '| %s | %s | %s | %s s (GPU %s ms) | %.2f s | %s s | %s ms |\n' "$label" "$mode" \
       "$(python3 -c "print(f'{$tris:,}')")" "$sm_wall" "$sm_gpu" "$build_s" "$check_s" "${render_ms:-?}"
     rm -f "$mesh"
