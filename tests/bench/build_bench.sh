@@ -10,13 +10,7 @@ build=$(realpath "${1:?usage: build_bench.sh BUILD_DIR [RUNS]}")
 runs=${2:-5}
 shift $(( $# < 2 ? $# : 2 ))
 extra=("$@")
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cat > "$work/spot.json" <<'JSON'
-{"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
- "fov_y_deg": 60, "near": 1, "far": 20}
-JSON
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
+source "$(dirname "$0")/bench_common.sh"
 printf '| map | triangles | wall (median of %d) | read | build | check | write | peak memory | cat EXR + PLY |\n' "$runs"
 printf '|---|---|---|---|---|---|---|---|---|\n'
 for n in 1024 2048 4096; do

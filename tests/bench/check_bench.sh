@@ -8,13 +8,7 @@
 set -euo pipefail
 build=$(realpath "${1:?usage: check_bench.sh BUILD_DIR [RUNS]}")
 runs=${2:-5}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cat > "$work/spot.json" <<'JSON'
-{"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
- "fov_y_deg": 60, "near": 1, "far": 20}
-JSON
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
+source "$(dirname "$0")/bench_common.sh"
 "$build/tests/bench/make_depth" 1024 1024 "$work/d.exr"
 "$build/lightvol" build "$work/d.exr" --light "$work/spot.json" --out "$work/v.ply" --quiet
 printf '| command | wall (median of %d) | peak memory |\n|---|---|---|\n' "$runs"

@@ -14,13 +14,7 @@ other=${2:-}
 [ -n "$other" ] && other=$(realpath "$other")
 runs=${3:-1}
 sizes=${4:-"2048 4096"}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cat > "$work/spot.json" <<'JSON'
-{"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
- "fov_y_deg": 60, "near": 1, "far": 20}
-JSON
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2 ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2)}'; }
+source "$(dirname "$0")/bench_common.sh"
 # measure LABEL FILE-PREFIX COMMAND...: appends "cpu wall rss" of one run to PREFIX.
 measure() {
   local out=$1; shift

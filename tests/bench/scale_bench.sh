@@ -13,12 +13,7 @@ build=$(realpath "${1:?usage: scale_bench.sh BUILD_DIR [SIZES...]}")
 shift
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(1024 4096 8192 16384)
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cat > "$work/spot.json" <<'JSON'
-{"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],
- "fov_y_deg": 60, "near": 1, "far": 20}
-JSON
+source "$(dirname "$0")/bench_common.sh"
 lv="$build/lightvol"
 # KiB → "156.5 MiB" or "5.4 GiB", as lightvol prints sizes.
 human() { awk -v k="$1" 'BEGIN { if (k < 1048576) printf "%.1f MiB", k / 1024; else printf "%.1f GiB", k / 1048576 }'; }
