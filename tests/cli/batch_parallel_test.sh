@@ -18,9 +18,13 @@ mkdir -p "$work/out"
 cp "$data/synthetic_256.exr" "$data/spot_light.json" "$data/directional_light.json" "$work/"
 
 # The ssh stand-in: ssh [OPTIONS] HOST [--] COMMAND...; sshd would join COMMAND's words with spaces
-# and give them to the login shell, so this does the same here, and logs the host.
+# and give them to the login shell, so this does the same here, and logs the host. sshd also sets
+# SHELL to the login shell, which parallel's remote worker runs the command with (under an
+# environment without SHELL, as CI's may be, the worker would silently run nothing).
 cat > "$tmp/ssh-here" <<EOF
 #!/usr/bin/env bash
+SHELL=\$(getent passwd "\$(id -u)" | cut -d: -f7)
+export SHELL=\${SHELL:-/bin/sh}
 while [ \$# -gt 0 ]; do
   case "\$1" in
     --) shift; break ;;
