@@ -17,6 +17,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -350,7 +351,7 @@ int run_batch(const BatchOptions& opts) {
   // Every job of the file, so that a job's number, and so its shard, is the same in every shard;
   // an output named by an earlier job fails the later one, whichever shards they fall in.
   std::vector<Job> all;
-  std::vector<std::pair<std::string, int>> written;  // identity of each output, and its line
+  std::unordered_map<std::string, int> written;  // each output's identity, and its job's line
   std::string text;
   for (int line = 1; std::getline(in, text); ++line) {
     if (!text.empty() && text.back() == '\r') text.pop_back();
@@ -360,19 +361,17 @@ int run_batch(const BatchOptions& opts) {
     job.line = line;
     job.number = all.size();
     if (job.error.empty()) {
-      for (const std::string& path : {job.options.out_path, job.options.report_path}) {
-        const std::string identity = fs::weakly_canonical(fs::absolute(path, ec), ec).string();
-        const auto earlier = std::find_if(written.begin(), written.end(),
-                                          [&](const auto& w) { return w.first == identity; });
-        if (earlier != written.end()) {
-          job.error = job_where(opts.jobs_path, line) + ": " + path + ": also an output of line " +
-                      std::to_string(earlier->second) + "; give each job its own out (and report)";
-          break;
-        }
+      const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
+      std::string identity[2];
+      for (int k = 0; k < 2 && job.error.empty(); ++k) {
+        identity[k] = fs::weakly_canonical(fs::absolute(*paths[k], ec), ec).string();
+        if (const auto earlier = written.find(identity[k]); earlier != written.end())
+          job.error = job_where(opts.jobs_path, line) + ": " + *paths[k] +
+                      ": also an output of line " + std::to_string(earlier->second) +
+                      "; give each job its own out (and report)";
       }
       if (job.error.empty())
-        for (const std::string& path : {job.options.out_path, job.options.report_path})
-          written.emplace_back(fs::weakly_canonical(fs::absolute(path, ec), ec).string(), line);
+        for (const std::string& id : identity) written.emplace(id, line);
     }
     all.push_back(std::move(job));
   }

@@ -113,7 +113,6 @@ int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, doubl
 // The light sums of faces [begin, end), split as parallel_deterministic_reduce splits a range
 // with grain 2^14 and summed in its order, so that the sums do not depend on the threads.
 constexpr std::size_t kLightGrain = std::size_t{1} << 14;
-constexpr std::size_t kVolumeGrain = std::size_t{1} << 16;  // signed_volume's
 
 LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin, std::size_t end,
                      std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link) {
@@ -160,7 +159,7 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
 }
 
 // The body of the face pass's parallel_deterministic_reduce, over leaves of at most
-// kVolumeGrain faces: each leaf sums its determinants in order as signed_volume does, and its
+// kSignedVolumeGrain faces: each leaf sums its determinants in order as signed_volume does, and its
 // light sums as the tree of kLightGrain leaves below it.
 class FacePass {
  public:
@@ -172,13 +171,7 @@ class FacePass {
     double acc = sums.det;
     std::uint64_t degenerate = 0;
     for (std::size_t t = range.begin(); t != range.end(); ++t) {
-      const float* a = p + 3 * idx[3 * t];
-      const float* b = p + 3 * idx[3 * t + 1];
-      const float* c = p + 3 * idx[3 * t + 2];
-      const double ax = a[0], ay = a[1], az = a[2];
-      const double bx = b[0], by = b[1], bz = b[2];
-      const double cx = c[0], cy = c[1], cz = c[2];
-      acc += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+      acc += volume_det(p + 3 * idx[3 * t], p + 3 * idx[3 * t + 1], p + 3 * idx[3 * t + 2]);
       degenerate += is_degenerate(mesh_, t);
     }
     sums.det = acc;
@@ -228,7 +221,7 @@ LightView directional_view(const Light& light, double eps_pos, double quantum) {
 FaceSums face_pass(const Mesh& mesh, const LightView& view) {
   FacePass body(mesh, view);
   tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), kVolumeGrain), body);
+      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), kSignedVolumeGrain), body);
   return std::move(body.sums);
 }
 

@@ -37,12 +37,9 @@ double signed_volume(const Mesh& mesh) {
   return sum.volume();
 }
 
-// The sum is the one tbb::parallel_deterministic_reduce forms over blocked_range(0, n, 2^16):
-// ranges above the grain split at their midpoint, each leaf sums its triangles in order from 0,
-// and each split adds its left half's sum to its right half's.
-namespace {
-constexpr std::size_t kVolumeGrain = std::size_t{1} << 16;
-}  // namespace
+// The sum is the one tbb::parallel_deterministic_reduce forms over blocked_range(0, n,
+// kSignedVolumeGrain): ranges above the grain split at their midpoint, each leaf sums its
+// triangles in order from 0, and each split adds its left half's sum to its right half's.
 
 SignedVolumeSum::SignedVolumeSum(std::size_t triangles) : triangles_(triangles) {
   split(0, triangles);
@@ -51,7 +48,7 @@ SignedVolumeSum::SignedVolumeSum(std::size_t triangles) : triangles_(triangles) 
 }
 
 void SignedVolumeSum::split(std::size_t begin, std::size_t end) {
-  if (end - begin > kVolumeGrain) {
+  if (end - begin > kSignedVolumeGrain) {
     const std::size_t middle = begin + (end - begin) / 2u;
     split(begin, middle);
     split(middle, end);
@@ -77,7 +74,7 @@ void SignedVolumeSum::for_each_leaf(
 }
 
 double SignedVolumeSum::fold(std::size_t begin, std::size_t end, std::size_t* leaf) const {
-  if (end - begin > kVolumeGrain) {
+  if (end - begin > kSignedVolumeGrain) {
     const std::size_t middle = begin + (end - begin) / 2u;
     const double left = fold(begin, middle, leaf);
     return left + fold(middle, end, leaf);

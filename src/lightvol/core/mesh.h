@@ -38,6 +38,20 @@ Bounds bounding_box(const Mesh& mesh);
 // a closed mesh oriented outward; meaningless for an open one.
 double signed_volume(const Mesh& mesh);
 
+// det(a, b, c) in double precision: six times the signed volume of the tetrahedron (origin, a, b,
+// c), the term signed_volume sums for triangle (a, b, c).
+inline double volume_det(const float* a, const float* b, const float* c) {
+  const double ax = a[0], ay = a[1], az = a[2];
+  const double bx = b[0], by = b[1], bz = b[2];
+  const double cx = c[0], cy = c[1], cz = c[2];
+  return ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+}
+
+// signed_volume sums its terms as tbb::parallel_deterministic_reduce over blocked_range(0, n,
+// kSignedVolumeGrain) does; a sum that must equal it to the bit (SignedVolumeSum, the check's face
+// pass) splits the triangles the same way.
+inline constexpr std::size_t kSignedVolumeGrain = std::size_t{1} << 16;
+
 // Welds vertices with bit-identical positions (STL files, Draco decodes): returns the mesh with
 // each position once, in order of first use, and the triangles re-indexed. O(n log n) on any input;
 // linear when no two positions are identical (a hash table finds none), and then the mesh is

@@ -53,15 +53,8 @@ class SignedVolumeSum {
   void add(std::size_t first, std::size_t count, const Corner& corner) {
     for_each_leaf(first, first + count, [&](std::size_t leaf, std::size_t t0, std::size_t t1) {
       double acc = leaf_sum_[leaf];
-      for (std::size_t t = t0; t != t1; ++t) {
-        const float* a = corner(t, 0);
-        const float* b = corner(t, 1);
-        const float* c = corner(t, 2);
-        const double ax = a[0], ay = a[1], az = a[2];
-        const double bx = b[0], by = b[1], bz = b[2];
-        const double cx = c[0], cy = c[1], cz = c[2];
-        acc += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
-      }
+      for (std::size_t t = t0; t != t1; ++t)
+        acc += volume_det(corner(t, 0), corner(t, 1), corner(t, 2));
       leaf_sum_[leaf] = acc;
     });
   }

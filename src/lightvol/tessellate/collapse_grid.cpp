@@ -12,6 +12,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/tessellate/detail/lattice.h>
+#include <lightvol/tessellate/detail/plane_error.h>
 
 namespace lightvol {
 
@@ -19,6 +20,9 @@ namespace {
 
 using detail::Pt;
 using detail::RowSpanWalker;
+using detail::span_error;
+using detail::triangle_plane;
+using detail::TrianglePlane;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -30,45 +34,14 @@ std::int64_t cross(Pt a, Pt b, Pt c) {
 // wide, so the per-row work is most of the cost).
 template <bool kUniform>
 bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
-  std::int64_t area2 = cross(a, b, c);
-  if (area2 < 0) {
-    std::swap(b, c);
-    area2 = -area2;
-  }
-  LV_CHECK(area2 > 0);
-  const double da = t.window_depth(a.x, a.y), db = t.window_depth(b.x, b.y),
-               dc = t.window_depth(c.x, c.y);
-  const double inv = 1.0 / static_cast<double>(area2);
-  const double gx = ((db - da) * (c.y - a.y) - (dc - da) * (b.y - a.y)) * inv;
-  const double gy = ((dc - da) * (b.x - a.x) - (db - da) * (c.x - a.x)) * inv;
-  const Pt v[3] = {a, b, c};
+  const TrianglePlane plane = triangle_plane(t, a, b, c);
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
-  const double limit = kUniform ? bound / t.uniform_scale() : bound;
-  RowSpanWalker walk(v, y0);
+  RowSpanWalker walk(plane.v, y0);
   for (int y = y0; y <= y1; ++y) {
     int x0 = 0, x1 = 0;
     if (!walk.next(&x0, &x1)) continue;
-    const double* dt = t.depth_row(y);
-    const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
-    double m = 0;
-    if constexpr (kUniform) {
-#pragma omp simd reduction(max : m)
-      for (int x = x0; x <= x1; ++x) {
-        const double e = std::abs(base + gx * (x - x0) - dt[x]);
-        m = m > e ? m : e;
-      }
-      if (m * t.uniform_scale() > bound) return false;
-    } else {
-      const double* k = t.scale_row(y);
-      const double w0 = t.w0(x0, y), dw = t.w0_dc(), w1 = t.w1();
-#pragma omp simd reduction(max : m)
-      for (int x = x0; x <= x1; ++x) {
-        const double d = base + gx * (x - x0);
-        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0 + dw * (x - x0) + d * w1);
-        m = m > e ? m : e;
-      }
-      if (m > limit) return false;
-    }
+    const double m = span_error<kUniform>(t, y, x0, x1, plane.at(x0, y), plane.gx);
+    if (kUniform ? m * t.uniform_scale() > bound : m > bound) return false;
   }
   return true;
 }

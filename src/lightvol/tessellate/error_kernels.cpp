@@ -9,6 +9,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/detail/lattice.h>
+#include <lightvol/tessellate/detail/plane_error.h>
 
 namespace lightvol::detail {
 namespace {
@@ -18,43 +19,12 @@ namespace {
 // exactly what the emitted flat triangle gives along each texel ray.
 template <bool kUniform>
 double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, int y_end) {
-  std::int64_t area2 =
-      std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
-  if (area2 < 0) {
-    std::swap(b, c);
-    area2 = -area2;
-  }
-  LV_CHECK(area2 > 0);
-  const double da = t.window_depth(a.x, a.y), db = t.window_depth(b.x, b.y),
-               dc = t.window_depth(c.x, c.y);
-  const double inv = 1.0 / static_cast<double>(area2);
-  const double gx = ((db - da) * (c.y - a.y) - (dc - da) * (b.y - a.y)) * inv;
-  const double gy = ((dc - da) * (b.x - a.x) - (db - da) * (c.x - a.x)) * inv;
-  const Pt v[3] = {a, b, c};
+  const TrianglePlane plane = triangle_plane(t, a, b, c);
   double worst = 0;
   for (int y = y_begin; y < y_end; ++y) {
     int x0 = 0, x1 = 0;
-    if (!triangle_row_span(v, y, &x0, &x1)) continue;
-    const double* dt = t.depth_row(y);
-    const double base = da + gy * (y - a.y) + gx * (x0 - a.x);
-    double m = 0;
-    if constexpr (kUniform) {
-#pragma omp simd reduction(max : m)
-      for (int x = x0; x <= x1; ++x) {
-        const double e = std::abs(base + gx * (x - x0) - dt[x]);
-        m = m > e ? m : e;
-      }
-    } else {
-      const double* k = t.scale_row(y);
-      const double w0 = t.w0(x0, y), dw = t.w0_dc(), w1 = t.w1();
-#pragma omp simd reduction(max : m)
-      for (int x = x0; x <= x1; ++x) {
-        const double d = base + gx * (x - x0);
-        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0 + dw * (x - x0) + d * w1);
-        m = m > e ? m : e;
-      }
-    }
-    worst = std::max(worst, m);
+    if (!triangle_row_span(plane.v, y, &x0, &x1)) continue;
+    worst = std::max(worst, span_error<kUniform>(t, y, x0, x1, plane.at(x0, y), plane.gx));
   }
   if constexpr (kUniform) worst *= t.uniform_scale();
   return worst;

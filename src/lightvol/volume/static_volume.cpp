@@ -63,6 +63,54 @@ inline void quad_triangles(std::uint32_t r, std::uint32_t c, std::uint32_t uw, b
   }
 }
 
+// Grid triangles of quad rows [q0, q1) (two per texel quad, wound to face away from the light)
+// into `out`, 6·(W − 1) indices a row, in parallel.
+void grid_quad_rows(int q0, int q1, std::uint32_t uw, bool standard, std::uint32_t* out) {
+  const std::size_t per_row = 6 * (std::size_t{uw} - 1);
+  tbb::parallel_for(tbb::blocked_range<int>(q0, q1), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      std::uint32_t* quad = out + static_cast<std::size_t>(r - q0) * per_row;
+      for (std::uint32_t c = 0; c + 1 < uw; ++c, quad += 6)
+        quad_triangles(static_cast<std::uint32_t>(r), c, uw, standard, quad);
+    }
+  });
+}
+
+// Grid vertices of rows [r0, r1) (one per texel, on its ray at its depth) into `out`, 3·W floats
+// a row, in parallel; the Error of the first texel (in row order) whose radial depth no ray
+// reaches.
+Status grid_rows(const Unprojector& unproject, const DepthImage& depth, int r0, int r1, float* out,
+                 const std::string& source) {
+  const std::size_t uw = static_cast<std::size_t>(depth.width);
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::atomic<std::size_t> first_bad{kNone};
+  tbb::parallel_for(tbb::blocked_range<int>(r0, r1), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      const std::size_t row_start = static_cast<std::size_t>(r) * uw;
+      const int bad_col = unproject.row_points(r, &depth.values[row_start],
+                                               out + 3 * static_cast<std::size_t>(r - r0) * uw);
+      if (bad_col < 0) continue;
+      const std::size_t v = row_start + static_cast<std::size_t>(bad_col);
+      std::size_t seen = first_bad.load();
+      while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
+      }
+    }
+  });
+  const std::size_t bad = first_bad.load();
+  if (bad == kNone) return {};
+  return unreachable_radial_depth(source, static_cast<int>(bad % uw), static_cast<int>(bad / uw),
+                                  depth.values[bad]);
+}
+
+// The grid's border loop as the closing's ring.
+std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
+  const auto uw = static_cast<std::uint32_t>(width);
+  std::vector<BorderVertex> ring;
+  for (const std::uint32_t v : border_loop(width, height, standard))
+    ring.push_back({v, static_cast<int>(v % uw), static_cast<int>(v / uw)});
+  return ring;
+}
+
 // What check_representable decides from: gathered vertex by vertex and face by face, so a
 // streamed volume is judged by the same numbers as a held one.
 struct RepresentableTally {
@@ -123,42 +171,12 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   mesh.positions.resize(3 * grid_vertices);
   mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
 
-  // Grid vertices, row by row; remember the first texel a parallel ray cannot reach.
-  std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
-  tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
-    for (int r = rows.begin(); r != rows.end(); ++r) {
-      const std::size_t row_start = static_cast<std::size_t>(r) * w;
-      const int bad_col =
-          unproject.row_points(r, &depth.values[row_start], &mesh.positions[3 * row_start]);
-      if (bad_col < 0) continue;
-      const std::size_t v = row_start + static_cast<std::size_t>(bad_col);
-      std::size_t seen = first_bad.load();
-      while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
-      }
-    }
-  });
-  if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max()) {
-    return unreachable_radial_depth(source, static_cast<int>(bad % w), static_cast<int>(bad / w),
-                                    depth.values[bad]);
-  }
-
-  // Grid triangles: two per texel quad, wound to face away from the light.
+  if (Status s = grid_rows(unproject, depth, 0, h, mesh.positions.data(), source); !s)
+    return s.error();
   const bool standard = unproject.standard_winding();
-  std::uint32_t* idx = mesh.indices.data();
-  const std::uint32_t uw = static_cast<std::uint32_t>(w);
-  tbb::parallel_for(tbb::blocked_range<int>(0, h - 1), [&](const tbb::blocked_range<int>& rows) {
-    for (int r = rows.begin(); r != rows.end(); ++r) {
-      std::uint32_t* out = idx + 6 * static_cast<std::size_t>(r) * (w - 1);
-      for (std::uint32_t c = 0; c + 1 < uw; ++c, out += 6)
-        quad_triangles(static_cast<std::uint32_t>(r), c, uw, standard, out);
-    }
-  });
-
+  grid_quad_rows(0, h - 1, static_cast<std::uint32_t>(w), standard, mesh.indices.data());
   // Closing: fan to the apex (spot) or walls and a cap on the near plane (directional).
-  std::vector<BorderVertex> ring;
-  for (const std::uint32_t v : border_loop(w, h, standard))
-    ring.push_back({v, static_cast<int>(v % uw), static_cast<int>(v / uw)});
-  append_closing(light.type, unproject, w, h, ring, &mesh);
+  append_closing(light.type, unproject, w, h, closing_ring(w, h, standard), &mesh);
   LV_CHECK_EQ(mesh.num_vertices(), counts.vertices);
   LV_CHECK_EQ(mesh.num_triangles(), counts.triangles);
   return mesh;
@@ -292,22 +310,7 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
     const int r1 = std::min(h, r0 + block_rows);
     const int first_row = have_previous ? r0 - 1 : r0;  // the buffer's first row
     float* fresh = buffer.data() + (have_previous ? 3 * uw : 0);
-    std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
-    tbb::parallel_for(tbb::blocked_range<int>(r0, r1), [&](const tbb::blocked_range<int>& rows) {
-      for (int r = rows.begin(); r != rows.end(); ++r) {
-        const std::size_t row_start = static_cast<std::size_t>(r) * uw;
-        float* out = fresh + 3 * static_cast<std::size_t>(r - r0) * uw;
-        const int bad_col = st.unproject.row_points(r, &st.depth.values[row_start], out);
-        if (bad_col < 0) continue;
-        const std::size_t v = row_start + static_cast<std::size_t>(bad_col);
-        std::size_t seen = first_bad.load();
-        while (v < seen && !first_bad.compare_exchange_weak(seen, v)) {
-        }
-      }
-    });
-    if (const std::size_t bad = first_bad.load(); bad != std::numeric_limits<std::size_t>::max())
-      return unreachable_radial_depth(st.source, static_cast<int>(bad % uw),
-                                      static_cast<int>(bad / uw), st.depth.values[bad]);
+    if (Status s = grid_rows(st.unproject, st.depth, r0, r1, fresh, st.source); !s) return s;
     // Then (every row of the block made) the tallies of its vertices and of the quad rows ending
     // in it.
     const RepresentableTally block = tbb::parallel_reduce(
@@ -365,10 +368,7 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
   }
 
   // The closing: its vertices after the grid's, its triangles after the grid's.
-  std::vector<BorderVertex> ring;
-  for (const std::uint32_t v : border_loop(w, h, standard))
-    ring.push_back({v, static_cast<int>(v % uw), static_cast<int>(v / uw)});
-  st.closing = make_closing(st.light.type, st.unproject, w, h, ring,
+  st.closing = make_closing(st.light.type, st.unproject, w, h, closing_ring(w, h, standard),
                             static_cast<std::uint32_t>(grid_vertices));
   const std::size_t closing_vertices = st.closing.positions.size() / 3;
   for (std::size_t v = 0; v < closing_vertices; ++v) tally.add_vertex(&st.closing.positions[3 * v]);
@@ -407,13 +407,7 @@ Status StaticVolumeStream::triangles(const TriangleSink& sink) {
   std::vector<std::uint32_t> buffer(per_row * static_cast<std::size_t>(block_rows));
   for (int q0 = 0; q0 < h - 1; q0 += block_rows) {
     const int q1 = std::min(h - 1, q0 + block_rows);
-    tbb::parallel_for(tbb::blocked_range<int>(q0, q1), [&](const tbb::blocked_range<int>& rows) {
-      for (int r = rows.begin(); r != rows.end(); ++r) {
-        std::uint32_t* out = buffer.data() + static_cast<std::size_t>(r - q0) * per_row;
-        for (std::uint32_t c = 0; c + 1 < uw; ++c, out += 6)
-          quad_triangles(static_cast<std::uint32_t>(r), c, uw, standard, out);
-      }
-    });
+    grid_quad_rows(q0, q1, uw, standard, buffer.data());
     if (!sink(buffer.data(), static_cast<std::size_t>(q1 - q0) * per_row / 3)) return {};
   }
   sink(st.closing.indices.data(), st.closing.indices.size() / 3);

@@ -37,10 +37,6 @@ extern char** environ;
 namespace lightvol {
 namespace {
 
-// How the child ends when it cannot finish `child` (exit codes of its own, beside 0).
-constexpr int kOutOfMemory = kChildOutOfMemory, kThrew = kChildThrew,
-              kBrokenPipe = kChildBrokenPipe;
-
 double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -97,7 +93,7 @@ void ChildOutput::write(const void* data, std::size_t bytes) {
   while (bytes > 0) {
     const ssize_t n = send_some(fd_, p, bytes);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) _exit(kBrokenPipe);  // the parent stopped listening
+    if (n <= 0) _exit(kChildBrokenPipe);  // the parent stopped listening
     p += n;
     bytes -= static_cast<std::size_t>(n);
   }
@@ -122,26 +118,30 @@ bool ChildOutput::read_string(std::string* text) {
   return read(text->data(), length);
 }
 
-bool ChildInput::write(const void* data, std::size_t bytes) {
-  const char* p = static_cast<const char*>(data);
+bool ChildInput::transfer(char* data, std::size_t bytes, bool sending) {
   while (bytes > 0) {
     const double left = deadline_ - now_seconds();
     if (left <= 0) {
       timed_out_ = true;
       return false;
     }
-    pollfd ready{fd_, POLLOUT, 0};
+    pollfd ready{fd_, static_cast<short>(sending ? POLLOUT : POLLIN), 0};
     const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000)));
     if (polled < 0 && errno == EINTR) continue;
     if (polled < 0) return false;
     if (polled == 0) continue;  // the deadline is tested above
-    const ssize_t n = send_some(fd_, p, bytes);
+    const ssize_t n = sending ? send_some(fd_, data, bytes) : ::read(fd_, data, bytes);
     if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
-    if (n <= 0) return false;  // the child ended
-    p += n;
+    if (n <= 0) return false;  // the child ended or broke off
+    data += n;
     bytes -= static_cast<std::size_t>(n);
   }
   return true;
+}
+
+bool ChildInput::write(const void* data, std::size_t bytes) {
+  // transfer() only reads from `data` when sending.
+  return transfer(const_cast<char*>(static_cast<const char*>(data)), bytes, true);
 }
 
 bool ChildInput::write_string(const std::string& text) {
@@ -216,25 +216,7 @@ void ChildInput::allow_more(double cpu_seconds) {
 }
 
 bool ChildInput::read(void* data, std::size_t bytes) {
-  char* p = static_cast<char*>(data);
-  while (bytes > 0) {
-    const double left = deadline_ - now_seconds();
-    if (left <= 0) {
-      timed_out_ = true;
-      return false;
-    }
-    pollfd ready{fd_, POLLIN, 0};
-    const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000)));
-    if (polled < 0 && errno == EINTR) continue;
-    if (polled < 0) return false;
-    if (polled == 0) continue;  // the deadline is tested above
-    const ssize_t n = ::read(fd_, p, bytes);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;  // the child ended or broke off
-    p += n;
-    bytes -= static_cast<std::size_t>(n);
-  }
-  return true;
+  return transfer(static_cast<char*>(data), bytes, false);
 }
 
 namespace {
@@ -273,10 +255,10 @@ Status reap(const std::string& what, const IsolationLimits& limits, std::uint64_
     return Error{what + " crashed on this input (signal " + std::to_string(sig) +
                  (name ? std::string(": ") + name : "") + ")"};
   }
-  if (WIFEXITED(status) && WEXITSTATUS(status) == kOutOfMemory)
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kChildOutOfMemory)
     return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " +
                  limits.memory_advice + ")"};
-  if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kBrokenPipe)
+  if (WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != kChildBrokenPipe)
     return Error{what + " failed (exit status " + std::to_string(WEXITSTATUS(status)) + ")"};
   return answer;
 }
@@ -382,9 +364,9 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
       ChildOutput out(fds[1]);
       child(out);
     } catch (const std::bad_alloc&) {
-      code = kOutOfMemory;
+      code = kChildOutOfMemory;
     } catch (...) {
-      code = kThrew;
+      code = kChildThrew;
     }
     _exit(code);
   }

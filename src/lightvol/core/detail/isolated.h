@@ -89,6 +89,9 @@ class ChildInput {
   double wall_seconds_added() const { return wall_added_; }
 
  private:
+  // Reads (or sends) all `bytes` before the deadline, polling the channel; false as read() says.
+  bool transfer(char* data, std::size_t bytes, bool sending);
+
   int fd_;
   int pid_;
   double cpu_;       // processor seconds granted (the child's RLIMIT_CPU)
