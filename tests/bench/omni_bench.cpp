@@ -56,6 +56,7 @@ void BM_AdaptiveOmniBuild(benchmark::State& state) {
   state.counters["triangles"] = static_cast<double>(report.triangles);
   state.counters["seam_tris"] = static_cast<double>(detail.seam_triangles);
   state.counters["seam_rounds"] = detail.seam_rounds;
+  state.counters["collapse_rounds"] = detail.collapse_rounds;
   state.counters["pyramid_ms"] = report.pyramid_seconds * 1e3;
   state.counters["peak_MiB"] = static_cast<double>(lightvol::peak_memory_bytes()) / (1 << 20);
 }

@@ -286,6 +286,38 @@ TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
   }
 }
 
+// Kept positions stay, on a side that is otherwise free; the rest of that side still coarsens
+// (an omni seam keeps what the neighbouring face keeps).
+TEST(Collapse, KeptBorderPositionsStayAndTheRestOfTheSideCoarsens) {
+  const Case c = cases(65, 65)[2];
+  const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+  const double e = pyramid.measure(pyramid.tessellate(1e30, true)) * 0.01;
+  BorderSplits forced;
+  for (int p = 0; p < 65; p += 2) forced.side[kBottom].push_back(p);
+  const AdaptiveGrid quad = pyramid.tessellate(e, true, forced);
+  const AdaptiveGrid free_sides = collapse_grid(pyramid.texels(), quad, e);
+  // Keep every fourth position of the quadtree's bottom side, and one that has no vertex (ignored).
+  CollapseOptions options;
+  for (std::size_t k = 0; k < quad.border[kBottom].size(); k += 4)
+    options.keep[kBottom].push_back(quad.border[kBottom][k]);
+  ASSERT_GE(options.keep[kBottom].size(), 8u);
+  const int absent = 1;
+  ASSERT_FALSE(
+      std::binary_search(quad.border[kBottom].begin(), quad.border[kBottom].end(), absent));
+  options.keep[kBottom].insert(options.keep[kBottom].begin() + 1, absent);
+  ASSERT_TRUE(std::is_sorted(options.keep[kBottom].begin(), options.keep[kBottom].end()));
+  const AdaptiveGrid g = collapse_grid(pyramid.texels(), quad, e, options);
+  EXPECT_TRUE(is_conforming(g));
+  EXPECT_LE(brute_force(pyramid.texels(), g).max_error, e);
+  for (const int p : options.keep[kBottom])
+    EXPECT_EQ(std::binary_search(g.border[kBottom].begin(), g.border[kBottom].end(), p),
+              p != absent)
+        << p;
+  // More than the free collapse keeps there, fewer than the quadtree had.
+  EXPECT_GT(g.border[kBottom].size(), free_sides.border[kBottom].size());
+  EXPECT_LT(g.border[kBottom].size(), quad.border[kBottom].size());
+}
+
 TEST(Collapse, SameBytesWithOneThreadAndMany) {
   // 300 rows: five stripes of 64 (and six shifted by 32), coarsened in parallel two phases at a
   // time.

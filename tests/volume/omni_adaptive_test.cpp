@@ -141,6 +141,27 @@ TEST(OmniAdaptive, CollapseIsDeterministicAndSmallerThanTheQuadtree) {
   EXPECT_TRUE(is_closed_and_oriented(*many));
 }
 
+// The collapse coarsens the seams too: both faces of a seam end on the same border vertices (the
+// volume is closed edge by edge), fewer than the quadtree's, so the seam strips are smaller.
+TEST(OmniAdaptive, CollapseCoarsensTheSeams) {
+  const Light light = scene_light();
+  const CubeFaces cube = test::omni_scene(64);
+  AdaptiveOptions options;
+  options.max_error = 0.01;
+  options.measure = true;
+  AdaptiveReport report;
+  OmniAdaptiveDetail collapsed, quadtree;
+  Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options, &report, &collapsed);
+  ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+  EXPECT_TRUE(is_closed_and_oriented(*mesh));
+  EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+  EXPECT_LE(report.max_error_reached, options.max_error);
+  EXPECT_GE(collapsed.collapse_rounds, 2);  // the seams' keeps moved at least once
+  options.tessellation = Tessellation::quadtree;
+  ASSERT_TRUE(build_adaptive_omni_volume(light, cube, {}, options, nullptr, &quadtree).ok());
+  EXPECT_LT(collapsed.seam_triangles, quadtree.seam_triangles * 3 / 4);
+}
+
 TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
   const Light light = scene_light();
   const int w = 64;

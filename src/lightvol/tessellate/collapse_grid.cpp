@@ -53,6 +53,8 @@ class Collapser {
   Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
             const CollapseOptions& options)
       : t_(texels), grid_(grid), bound_(bound), options_(options) {
+    for (const std::vector<int>& keep : options.keep)
+      LV_CHECK(std::is_sorted(keep.begin(), keep.end()));
     const int w = grid.width, h = grid.height;
     const std::size_t nv = grid.vertices.size(), nt = grid.num_triangles();
     pt_.resize(nv);
@@ -267,6 +269,9 @@ class Collapser {
     if (su != 0) {
       side = std::countr_zero(su);
       if (options_.locked[side]) return false;
+      const std::vector<int>& keep = options_.keep[side];
+      const int along = side == kTop || side == kBottom ? pt_[u].x : pt_[u].y;
+      if (std::binary_search(keep.begin(), keep.end(), along)) return false;
     }
     std::int64_t star2 = 0;
     for (const std::uint32_t k : star_[u])

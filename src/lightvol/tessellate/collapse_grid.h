@@ -12,7 +12,8 @@
 // Then edges are flipped where the bound allows and the smaller angle grows (flip_sweeps below).
 //
 // Border vertices move only along their side (a corner never), and not at all on a locked side:
-// locked sides keep exactly the border vertices of the input (omni seams, fixed closures).
+// locked sides keep exactly the border vertices of the input (fixed closures). On an unlocked side,
+// the positions listed in `keep` stay too (omni seams: the vertices the neighbouring face keeps).
 // In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, alternate stripes in
 // parallel; vertices whose star crosses a stripe's edge then in stripes shifted by 32 rows; those
 // that cross both afterwards in order): the same input gives the same bytes on any machine and
@@ -20,6 +21,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <lightvol/tessellate/adaptive_grid.h>
 
@@ -27,6 +29,9 @@ namespace lightvol {
 
 struct CollapseOptions {
   bool locked[4] = {false, false, false, false};  // per GridSide: keep its border vertices
+  // Per GridSide, ascending positions along it (as AdaptiveGrid::border) of border vertices that
+  // must stay; positions the input has no vertex at are ignored.
+  std::vector<int> keep[4];
   int max_rounds = 64;  // sweeps over the vertices whose star changed in the previous sweep
   // A vertex whose star covers more texels (area in texel units²) is kept: bounds the cost of
   // one attempt (every attempt evaluates the texels of the whole star).

@@ -136,13 +136,49 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
   }
   if (pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse) {
-    // Borders locked: the seams keep the vertices both of their faces agreed on.
+    // Each face collapses its quadtree grid, seam vertices too (they slide along their side);
+    // then each seam keeps what either of its faces kept, and a face that kept less collapses its
+    // quadtree grid again keeping those. Keeps only grow (within the quadtree's border), so this
+    // ends, with both faces of every seam on the same border vertices.
     const auto collapse_start = std::chrono::steady_clock::now();
-    CollapseOptions locked;
-    for (bool& side : locked.locked) side = true;
+    const std::array<AdaptiveGrid, kOmniFaces> quadtree = grids;
+    std::array<CollapseOptions, kOmniFaces> keep;
+    for (CollapseOptions& k : keep) k.flip_sweeps = 0;  // flips once, after the seams agree
     std::array<CollapseReport, kOmniFaces> reports;
+    dirty.fill(true);
+    for (;;) {
+      ++d.collapse_rounds;
+      // Every round after the first keeps another border vertex on some side.
+      LV_CHECK_LE(d.collapse_rounds, 4 * kOmniFaces * w + 1);
+      tbb::parallel_for(0, kOmniFaces, [&](int f) {
+        if (!dirty[f]) return;
+        reports[f] = {};
+        grids[f] = collapse_grid(pyramids[f].texels(), quadtree[f], bound, keep[f], &reports[f]);
+      });
+      dirty.fill(false);
+      bool changed = false;
+      for (const OmniSeam& seam : adjacency.seams) {
+        const GridSide sa = grid_side(seam.border[0]), sb = grid_side(seam.border[1]);
+        const std::vector<int>& a = grids[seam.face[0]].border[sa];
+        const std::vector<int>& b = grids[seam.face[1]].border[sb];
+        const std::vector<int> both = merged(a, mapped(b, seam.reversed, w));
+        if (both != a) {
+          keep[seam.face[0]].keep[sa] = both;
+          dirty[seam.face[0]] = changed = true;
+        }
+        const std::vector<int> both_b = mapped(both, seam.reversed, w);
+        if (both_b != b) {
+          keep[seam.face[1]].keep[sb] = both_b;
+          dirty[seam.face[1]] = changed = true;
+        }
+      }
+      if (!changed) break;
+    }
+    CollapseOptions flips;  // borders locked, no collapses: the flips alone
+    for (bool& side : flips.locked) side = true;
+    flips.max_rounds = 0;
     tbb::parallel_for(0, kOmniFaces, [&](int f) {
-      grids[f] = collapse_grid(pyramids[f].texels(), grids[f], bound, locked, &reports[f]);
+      grids[f] = collapse_grid(pyramids[f].texels(), grids[f], bound, flips);
     });
     for (const CollapseReport& c : reports) r.collapses += c.collapses;
     r.collapse_seconds = seconds_since(collapse_start);

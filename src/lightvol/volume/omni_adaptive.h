@@ -26,6 +26,7 @@ struct OmniAdaptiveDetail {
   std::uint64_t face_triangles[kOmniFaces] = {};  // each face's grid triangles
   std::uint64_t seam_triangles = 0;               // the twelve seam strips (corners: 8 more)
   int seam_rounds = 0;                            // tessellation rounds until the borders agreed
+  int collapse_rounds = 0;  // collapse (default tessellation): rounds until the seams agreed
 };
 
 // The six faces' refinement pyramids, built once and reusable for any number of bounds (what
