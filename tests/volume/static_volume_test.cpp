@@ -435,5 +435,29 @@ TEST(StaticVolumeStream, JudgedAsTheHeldVolumeIs) {
   }
 }
 
+// What the vertices alone decide (coordinates beyond 1e18: ortho ±1e30) the stream refuses after
+// its first pass, before handing on any position, with the held volume's message.
+TEST(StaticVolumeStream, RefusesBeforeAnyPositionWhenTheVerticesDecide) {
+  const Light huge = test::light_from_json(
+      R"({"type": "directional", "position": [0, 10, 0], "direction": [0, -1, 0],)"
+      R"( "up": [0, 0, -1], "ortho": [-1e30, 1e30, -1e30, 1e30], "near": 0, "far": 20})");
+  const DepthImage depth = occluded(300, 200);
+  const Status expected = check_representable(build(huge, depth), huge, Space::world, "l.json");
+  ASSERT_FALSE(expected.ok());
+  EXPECT_NE(expected.error().message.find("l.json: keys 'ortho', 'near' and 'far': the volume "
+                                          "reaches coordinate"),
+            std::string::npos)
+      << expected.error().message;
+  StaticVolumeStream stream(huge, depth, {}, "depth.exr", "l.json");
+  std::size_t handed_on = 0;
+  const Status s = stream.positions([&](const float*, std::size_t n) {
+    handed_on += n;
+    return true;
+  });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, expected.error().message);
+  EXPECT_EQ(handed_on, 0u);
+}
+
 }  // namespace
 }  // namespace lightvol
