@@ -62,6 +62,7 @@ BuildVolumeOptions volume_options(const BuildCommandOptions& o) {
   v.adaptive.tessellation =
       o.tessellation == "quadtree" ? Tessellation::quadtree : Tessellation::collapse;
   v.adaptive.measure = o.json || !o.report_path.empty();  // the reached error is for reports
+  v.light_source = o.light_path;
   return v;
 }
 
@@ -375,13 +376,11 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   progress.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
                  (omni ? "omni " : "") + "volume");
   AdaptiveReport adaptive_report;
+  // A valid light whose volume float32 cannot hold is bad input (exit 2), not an invalid volume.
   Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
   if (!mesh) return failed(2, mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
   r.build_seconds = last_step_seconds(progress);
-  // A valid light whose volume float32 cannot hold is bad input (exit 2), not an invalid volume.
-  if (Status s = check_representable(*mesh, *light, options.space, o.light_path); !s)
-    return failed(2, s.error().message);
 
   const Light frame_light = light_in_space(*light, options.space);
   if (!o.no_check) {

@@ -1,4 +1,6 @@
-// The static volume build alone (no file I/O), for the synthetic map at several sizes.
+// The static volume build alone (no file I/O), for the synthetic map at several sizes; the float32
+// guard (check_representable) on the held volume; the streamed volume (StaticVolumeStream, which
+// runs the guard as it goes) handed to sinks that keep nothing.
 #include <benchmark/benchmark.h>
 
 #include <lightvol/volume/static_volume.h>
@@ -29,6 +31,51 @@ void BM_StaticSpotVolume(benchmark::State& state) {
 BENCHMARK(BM_StaticSpotVolume)
     ->Arg(1024)
     ->Arg(2048)
+    ->Arg(4096)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_CheckRepresentable(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const lightvol::DepthImage depth = lightvol::bench::synthetic_scene(n, n);
+  const lightvol::Light light = spot();
+  const lightvol::Result<lightvol::Mesh> mesh =
+      lightvol::build_static_volume(light, depth, {}, "bench");
+  for (auto _ : state) {
+    const lightvol::Status s =
+        lightvol::check_representable(*mesh, light, lightvol::Space::world, "bench");
+    benchmark::DoNotOptimize(s.ok());
+  }
+}
+BENCHMARK(BM_CheckRepresentable)
+    ->Arg(1024)
+    ->Arg(4096)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_StaticVolumeStream(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const lightvol::DepthImage depth = lightvol::bench::synthetic_scene(n, n);
+  const lightvol::Light light = spot();
+  for (auto _ : state) {
+    lightvol::StaticVolumeStream stream(light, depth, {}, "bench", "bench");
+    float sum = 0;
+    const lightvol::Status p = stream.positions([&](const float* xyz, std::size_t count) {
+      sum += xyz[3 * count - 1];
+      return true;
+    });
+    std::uint64_t last = 0;
+    const lightvol::Status t = stream.triangles([&](const std::uint32_t* abc, std::size_t count) {
+      last += abc[3 * count - 1];
+      return true;
+    });
+    benchmark::DoNotOptimize(sum);
+    benchmark::DoNotOptimize(last);
+    benchmark::DoNotOptimize(p.ok() && t.ok());
+  }
+}
+BENCHMARK(BM_StaticVolumeStream)
+    ->Arg(1024)
     ->Arg(4096)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

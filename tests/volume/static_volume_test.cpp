@@ -5,6 +5,7 @@
 
 #include <lightvol/check/check.h>
 #include <lightvol/volume/adaptive_volume.h>
+#include <lightvol/volume/build_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/test_support.h"
@@ -100,6 +101,111 @@ TEST(StaticVolume, DirectionalDepthsOnTheNearPlaneStayJustBeyondIt) {
       }
     }
   }
+}
+
+// A directional light box 8193 units wide and 1 deep, and a 513² map with a shadow map's
+// structure in [0, 1]: a sloped floor with creases, box occluders, a thin bar.
+Light thin_wide_box() {
+  return test::light_from_json(
+      R"({"type": "directional", "position": [0, 1, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
+      R"( "ortho": [-4096.5, 4096.5, -4096.5, 4096.5], "near": 0, "far": 1, "depth": "linear"})");
+}
+DepthImage thin_wide_box_map() {
+  return test::make_depth(513, 513, [](int c, int r) {
+    if (c > 100 && c < 180 && r > 60 && r < 300) return 0.25f;
+    if (c > 300 && c < 304) return 0.4f;
+    if ((c - 380) * (c - 380) + (r - 400) * (r - 400) < 40 * 40) return 0.6f;
+    return 0.9f + 0.0001f * static_cast<float>(c) - 0.00005f * static_cast<float>(r % 97);
+  });
+}
+
+// Before: the float32 guard compared the float step at the largest coordinate of any axis (x up to
+// 4096.5 here: 4.9e-4) with a spacing derived from the thinnest extent (the box is 1 deep: 1.8e-3
+// over 16), and refused this directional volume, although float32 holds it (x steps 4.9e-4
+// against a texel 16 wide; no face collapses or turns towards the light). Now it judges the faces
+// as the checks do: static and both adaptive tessellations build through build_volume and pass the
+// checks with the light.
+TEST(StaticVolume, ThinWideDirectionalBoxHoldsInFloat32) {
+  const Light light = thin_wide_box();
+  const DepthImage depth = thin_wide_box_map();
+  for (int mode = 0; mode < 3; ++mode) {
+    SCOPED_TRACE(mode == 0 ? "static" : mode == 1 ? "collapse" : "quadtree");
+    BuildVolumeOptions options;
+    options.grid = mode == 0 ? VolumeGrid::static_grid : VolumeGrid::adaptive;
+    options.adaptive.max_error = 0.001;
+    options.adaptive.tessellation = mode == 2 ? Tessellation::quadtree : Tessellation::collapse;
+    const Result<Mesh> m =
+        build_volume(light, ShadowMaps::planar(depth, "wide.exr"), options, nullptr);
+    ASSERT_TRUE(m.ok()) << m.error().message;
+    EXPECT_TRUE(check_representable(*m, light, Space::world, "wide.json").ok());
+    const CheckReport report = check_volume_linear(*m, &light);
+    EXPECT_TRUE(report.valid()) << report.first_failure();
+  }
+}
+
+// The guard is the library's: build_volume refuses what float32 cannot hold (a spot far from the
+// origin, a needle of a frustum), naming the light's keys, and accepts the same spot in light
+// space.
+TEST(StaticVolume, BuildVolumeRefusesWhatFloat32CannotHold) {
+  const DepthImage depth = occluded(64, 64);
+  const auto spot = [](const std::string& position, const std::string& fov) {
+    return test::light_from_json(R"({"type": "spot", "position": )" + position +
+                                 R"(, "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": )" +
+                                 fov + R"(, "near": 1, "far": 20, "depth": "linear"})");
+  };
+  BuildVolumeOptions options;
+  options.light_source = "l.json";
+  const Result<Mesh> far_away =
+      build_volume(spot("[1e6, 10, 0]", "60"), ShadowMaps::planar(depth, "d.exr"), options);
+  ASSERT_FALSE(far_away.ok());
+  EXPECT_NE(far_away.error().message.find("l.json: float32 cannot hold this volume"),
+            std::string::npos)
+      << far_away.error().message;
+  EXPECT_NE(far_away.error().message.find("key 'position'"), std::string::npos);
+  const Result<Mesh> needle =
+      build_volume(spot("[0, 10, 0]", "1e-6"), ShadowMaps::planar(depth, "d.exr"), options);
+  ASSERT_FALSE(needle.ok());
+  EXPECT_NE(needle.error().message.find("keys 'near', 'far' and 'fov_y_deg'"), std::string::npos)
+      << needle.error().message;
+  options.space = Space::light;
+  const Result<Mesh> in_light_space =
+      build_volume(spot("[1e6, 10, 0]", "60"), ShadowMaps::planar(depth, "d.exr"), options);
+  ASSERT_TRUE(in_light_space.ok()) << in_light_space.error().message;
+}
+
+// The guard counts the faces the light proof would see turned towards the light: a sound volume
+// has none; reversing one grid face (spot: seen from the apex; directional: an exit facing
+// against the light) or one cap face (directional: a near-plane face facing along it) makes one,
+// named in the refusal.
+TEST(StaticVolume, GuardCountsFacesTurnedTowardsTheLight) {
+  const Light spot = test::light_from_json(test::spot_json("linear", 1.3));
+  const Light directional = test::light_from_json(test::directional_json("linear"));
+  for (const Light* light : {&spot, &directional})
+    for (const Space space : {Space::world, Space::light}) {
+      const bool is_spot = light == &spot;
+      SCOPED_TRACE(std::string(is_spot ? "spot" : "directional") +
+                   (space == Space::world ? " world" : " light"));
+      const Mesh sound = build(*light, occluded(9, 7), space);
+      ASSERT_TRUE(check_representable(sound, *light, space, "l.json").ok());
+      // Face 10: a grid face; the last face: the spot's fan, or the directional cap.
+      for (const std::size_t face : {std::size_t{10}, sound.num_triangles() - 1}) {
+        Mesh turned = sound;
+        std::swap(turned.indices[3 * face + 1], turned.indices[3 * face + 2]);
+        const Status s = check_representable(turned, *light, space, "l.json");
+        if (is_spot && face != 10) {
+          // The fan's faces have the apex as a corner: the proof leaves them out.
+          EXPECT_TRUE(s.ok());
+          continue;
+        }
+        ASSERT_FALSE(s.ok()) << face;
+        EXPECT_NE(s.error().message.find("0 of " + std::to_string(sound.num_triangles()) +
+                                         " faces collapse to zero area, 1 face the light"),
+                  std::string::npos)
+            << s.error().message;
+        const Light frame_light = light_in_space(*light, space);
+        EXPECT_FALSE(check_volume_linear(turned, &frame_light).valid());
+      }
+    }
 }
 
 TEST(StaticVolume, SpotOverFlatFloorIsThePyramid) {
@@ -263,6 +369,94 @@ TEST(StaticVolumeStream, RefusesWhatTheHeldVolumeRefuses) {
   ASSERT_FALSE(s.status.ok());
   EXPECT_EQ(s.status.error().message, expected.error().message);
   EXPECT_TRUE(s.mesh.indices.empty());
+}
+
+// The float32 guard's verdict and message are the same streamed (two passes over the rows, in
+// blocks) and held (two passes over the mesh): refusals whose message counts collapsed and turned
+// faces, in several blocks of rows, and sound volumes, which both accept. What the guard refuses
+// the checks refuse too, what it accepts they accept.
+TEST(StaticVolumeStream, JudgedAsTheHeldVolumeIs) {
+  const auto spot = [](const std::string& position, const std::string& fov) {
+    return test::light_from_json(R"({"type": "spot", "position": )" + position +
+                                 R"(, "direction": [0, -1, 0], "up": [0, 0, -1], "fov_y_deg": )" +
+                                 fov + R"(, "near": 1, "far": 20, "depth": "linear"})");
+  };
+  // A directional light 10^6 behind a volume 1 deep: the checks' rounding is of its position.
+  const auto behind = [](const std::string& ortho, const std::string& near) {
+    return test::light_from_json(
+        R"({"type": "directional", "position": [0, 1e6, 0], "direction": [0, -1, 0],)"
+        R"( "up": [0, 0, -1], "ortho": )" +
+        ortho + R"(, "near": )" + near + R"(, "far": 1000000.7, "depth": "linear"})");
+  };
+  struct Case {
+    Light light;
+    DepthImage depth;
+    std::string refusal;  // empty: accepted
+  };
+  const Case cases[] = {
+      {spot("[1e6, 10, 0]", "60"), occluded(64, 64),
+       "240 of 8190 faces collapse to zero area, 0 face the light): key 'position'"},
+      {spot("[3e5, 10, 0]", "60"), occluded(1500, 700), "key 'position'"},
+      {spot("[0, 10, 0]", "1e-6"), occluded(700, 500), "keys 'near', 'far' and 'fov_y_deg'"},
+      // Grid vertices within the checks' rounding of the near plane, so its faces, facing away,
+      // count as turned; the texels (18 wide) are far coarser than a float step (0.12).
+      {behind("[-100, 100, -100, 100]", "999999.7"),
+       test::make_depth(
+           11, 11, [](int c, int r) { return 0.2f + 0.05f * static_cast<float>((c + r) % 5); }),
+       "0 of 320 faces collapse to zero area, 200 face the light): keys 'position' and 'near'"},
+      // The same light over finer texels (0.04 wide): float steps coarser than a texel.
+      {behind("[-10, 10, -10, 10]", "999999.3"), thin_wide_box_map(), "keys 'position' and 'near'"},
+      {spot("[0, 10, 0]", "60"), occluded(700, 500), ""},
+      {thin_wide_box(), thin_wide_box_map(), ""},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(std::to_string(c.depth.width) + "x" + std::to_string(c.depth.height) + " " +
+                 c.refusal);
+    const Mesh held = build(c.light, c.depth);
+    const Status expected = check_representable(held, c.light, Space::world, "l.json");
+    const CheckReport report = check_volume_linear(held, &c.light);
+    EXPECT_EQ(report.valid(), expected.ok()) << report.first_failure();
+    if (c.refusal.empty()) {
+      EXPECT_TRUE(expected.ok()) << expected.error().message;
+    } else {
+      ASSERT_FALSE(expected.ok());
+      EXPECT_NE(expected.error().message.find(c.refusal), std::string::npos)
+          << expected.error().message;
+    }
+    StaticVolumeStream stream(c.light, c.depth, {}, "depth.exr", "l.json");
+    const Streamed s = collect(stream);
+    ASSERT_EQ(s.status.ok(), expected.ok());
+    if (expected.ok()) {
+      EXPECT_EQ(s.mesh.positions, held.positions);
+      continue;
+    }
+    EXPECT_EQ(s.status.error().message, expected.error().message);
+    EXPECT_TRUE(s.mesh.indices.empty());
+  }
+}
+
+// What the vertices alone decide (coordinates beyond 1e18: ortho ±1e30) the stream refuses after
+// its first pass, before handing on any position, with the held volume's message.
+TEST(StaticVolumeStream, RefusesBeforeAnyPositionWhenTheVerticesDecide) {
+  const Light huge = test::light_from_json(
+      R"({"type": "directional", "position": [0, 10, 0], "direction": [0, -1, 0],)"
+      R"( "up": [0, 0, -1], "ortho": [-1e30, 1e30, -1e30, 1e30], "near": 0, "far": 20})");
+  const DepthImage depth = occluded(300, 200);
+  const Status expected = check_representable(build(huge, depth), huge, Space::world, "l.json");
+  ASSERT_FALSE(expected.ok());
+  EXPECT_NE(expected.error().message.find("l.json: keys 'ortho', 'near' and 'far': the volume "
+                                          "reaches coordinate"),
+            std::string::npos)
+      << expected.error().message;
+  StaticVolumeStream stream(huge, depth, {}, "depth.exr", "l.json");
+  std::size_t handed_on = 0;
+  const Status s = stream.positions([&](const float*, std::size_t n) {
+    handed_on += n;
+    return true;
+  });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, expected.error().message);
+  EXPECT_EQ(handed_on, 0u);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // static_volume.h, omni_volume.h, adaptive_volume.h and omni_adaptive.h.
 #pragma once
 
+#include <string>
+
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 #include <lightvol/depth/shadow_maps.h>
@@ -21,13 +23,16 @@ struct BuildVolumeOptions {
   Space space = Space::world;  // frame of the output: world, or the light's eye space
   VolumeGrid grid = VolumeGrid::static_grid;
   AdaptiveOptions adaptive;  // with VolumeGrid::adaptive: criterion, bound, tessellation
+  std::string light_source = "the light";  // names the light's file in float32 refusals
 };
 
 // The closed light volume of `light` over `maps` (read_shadow_maps): closed, edge-manifold,
 // oriented outward, star-shaped from the light. `maps` must match the light (six faces for an omni
 // light, one image otherwise). `report` (optional) receives an adaptive build's counts, reached
 // error and stage times; a static build leaves it untouched. Errors name the map's source and the
-// pixel (a radial depth no ray reaches), or the face (unequal omni faces).
+// pixel (a radial depth no ray reaches), or the face (unequal omni faces); a valid light whose
+// volume float32 cannot hold is refused with check_representable's Error, naming
+// `options.light_source` and its keys.
 Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
                           const BuildVolumeOptions& options, AdaptiveReport* report = nullptr);
 

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -111,47 +112,208 @@ std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
   return ring;
 }
 
-// What check_representable decides from: gathered vertex by vertex and face by face, so a
-// streamed volume is judged by the same numbers as a held one.
-struct RepresentableTally {
+// The float32 guard (check_representable) judges a volume as check_volume_linear's proof from the
+// light would: in the volume's frame (world, or the light's eye space with the light at the origin,
+// spot and directional looking down −Z), with its tolerance, eight float ulps of the largest
+// coordinate. That coordinate is known only after every vertex, so the guard runs in two passes,
+// each a tally gathered vertex by vertex or face by face and merged in any order (maxima, minima
+// and counts: the same numbers however the work is split): first the vertices (VertexTally), then
+// the faces judged with what the vertices said (FaceJudge, FaceTally). A held mesh is read twice;
+// StaticVolumeStream makes its rows twice. Both give the same verdict and message.
+
+// The light as the guard sees it, in the volume's frame.
+struct GuardLight {
+  LightType type = LightType::spot;
+  Vec3d position;       // the light's position in the frame
+  Vec3d f;              // directional: the unit direction
+  Vec3d near_origin;    // directional: a point of the near plane
+  double at_light = 0;  // point lights: a vertex this close (max-norm) is at the light (4 ulps)
+};
+
+GuardLight guard_light(const Light& light, Space space) {
+  GuardLight g;
+  g.type = light.type;
+  const bool world = space == Space::world;
+  g.position = world ? light.position : Vec3d{0, 0, 0};
+  if (light.type == LightType::directional) {
+    g.f = normalize(world ? light.direction : Vec3d{0, 0, -1});
+    g.near_origin = g.position + light.near * g.f;
+  }
+  g.at_light = 4 * std::ldexp(std::max({std::abs(g.position.x), std::abs(g.position.y),
+                                        std::abs(g.position.z),
+                                        static_cast<double>(std::numeric_limits<float>::min())}),
+                              -23);
+  return g;
+}
+
+// The first pass: the vertices.
+struct VertexTally {
   bool finite = true;
-  double largest = 0;
+  double largest = 0;  // the largest |coordinate|
   Vec3d lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
            std::numeric_limits<double>::max()};
   Vec3d hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
            -std::numeric_limits<double>::max()};
-  std::uint64_t vertices = 0, triangles = 0, collapsed = 0;
+  std::uint64_t vertices = 0;
+  // Point lights: the vertices at the light (a spot volume's apex) and one of them (the one, when
+  // there is one), and the squared distance from the light of the nearest other vertex.
+  std::uint64_t at_light = 0;
+  Vec3d apex;
+  double nearest2 = std::numeric_limits<double>::infinity();
 
-  void add_vertex(const float* q) {
-    ++vertices;
-    const Vec3d p{q[0], q[1], q[2]};
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-      finite = false;
-      return;
+  // Adds `n` vertices (x y z floats from `xyz`), in locals the compiler keeps in registers:
+  // branch-free but for the vertices at the light (the rest is of no use once a coordinate is not
+  // finite: the verdict then says only that).
+  void add(const float* xyz, std::size_t n, const GuardLight& g) {
+    constexpr double kMax = std::numeric_limits<double>::max();
+    const bool point = g.type != LightType::directional;
+    bool all_finite = true;
+    double big = largest, near2 = nearest2;
+    double lx = lo.x, ly = lo.y, lz = lo.z, hx = hi.x, hy = hi.y, hz = hi.z;
+    for (std::size_t v = 0; v < n; ++v) {
+      const float* q = xyz + 3 * v;
+      const double x = q[0], y = q[1], z = q[2];
+      const double ax = std::abs(x), ay = std::abs(y), az = std::abs(z);
+      all_finite &= ax <= kMax && ay <= kMax && az <= kMax;  // false for NaN too
+      big = std::max(big, std::max(ax, std::max(ay, az)));
+      lx = std::min(lx, x), ly = std::min(ly, y), lz = std::min(lz, z);
+      hx = std::max(hx, x), hy = std::max(hy, y), hz = std::max(hz, z);
+      if (!point) continue;
+      const double dx = x - g.position.x, dy = y - g.position.y, dz = z - g.position.z;
+      if (std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))) <= g.at_light) {
+        ++at_light;
+        apex = {x, y, z};
+      } else {
+        near2 = std::min(near2, dx * dx + dy * dy + dz * dz);
+      }
     }
-    largest = std::max({largest, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    vertices += n;
+    finite = finite && all_finite;
+    largest = big, nearest2 = near2;
+    lo = {lx, ly, lz}, hi = {hx, hy, hz};
   }
-  void add_triangle(const float* qa, const float* qb, const float* qc) {
-    ++triangles;
-    const Vec3d a{qa[0], qa[1], qa[2]}, b{qb[0], qb[1], qb[2]}, c{qc[0], qc[1], qc[2]};
-    const Vec3d n = cross(b - a, c - a);
-    if (n.x == 0 && n.y == 0 && n.z == 0) ++collapsed;
-  }
-  void merge(const RepresentableTally& o) {
+  void merge(const VertexTally& o) {
     finite = finite && o.finite;
     largest = std::max(largest, o.largest);
     lo = {std::min(lo.x, o.lo.x), std::min(lo.y, o.lo.y), std::min(lo.z, o.lo.z)};
     hi = {std::max(hi.x, o.hi.x), std::max(hi.y, o.hi.y), std::max(hi.z, o.hi.z)};
     vertices += o.vertices;
-    triangles += o.triangles;
-    collapsed += o.collapsed;
+    if (o.at_light > 0) apex = o.apex;
+    at_light += o.at_light;
+    nearest2 = std::min(nearest2, o.nearest2);
   }
 };
 
-Status representable_verdict(const RepresentableTally& tally, const Light& light, Space space,
-                             const std::string& light_source);
+// The tally of `n` vertices (x y z floats from `xyz`), in parallel.
+VertexTally tally_vertices(const float* xyz, std::size_t n, const GuardLight& g) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 14), VertexTally{},
+      [&](const tbb::blocked_range<std::size_t>& r, VertexTally acc) {
+        acc.add(xyz + 3 * r.begin(), r.size(), g);
+        return acc;
+      },
+      [](VertexTally a, const VertexTally& b) {
+        a.merge(b);
+        return a;
+      });
+}
+
+// How the second pass judges a face: turned towards the light, as the light proof of
+// check_volume_linear decides it (check/light_proof.cpp), beyond what moving each vertex by `tol`
+// could do. Point lights: the determinant of the face seen from the eye; directional: the face's
+// area projected along the light, exits facing along it, the near plane's faces against it.
+struct FaceJudge {
+  LightType type = LightType::spot;
+  Vec3d eye;  // point lights: the vertex at the light if there is exactly one, else the light
+  Vec3d f, near_origin;
+  double tol = 0;  // eight float ulps of the largest coordinate, the light's position's included
+
+  FaceJudge(const VertexTally& v, const GuardLight& g)
+      : type(g.type),
+        eye(v.at_light == 1 ? v.apex : g.position),
+        f(g.f),
+        near_origin(g.near_origin),
+        tol(8 * std::ldexp(std::max({v.largest, std::abs(g.position.x), std::abs(g.position.y),
+                                     std::abs(g.position.z)}),
+                           -23)) {}
+
+  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), surely faces the right
+  // way, from a test cheap enough for every face: nearly all of them pass it. Point lights:
+  // det(a − eye, b − eye, c − eye) is (a − eye)·n, and a face where that is not negative faces
+  // away (rounding moves it by some 1e-16 of its terms, the tolerance is 1e-6 of them: they could
+  // only disagree for faces a billionth of a radian across, which the texel test of the verdict
+  // refuses anyway). Directional: a face with a vertex off the near plane is an exit, which faces
+  // the right way when its projected area is not negative.
+  bool away(const Vec3d& a, const Vec3d& n) const {
+    if (type == LightType::directional)
+      return std::abs(dot(a - near_origin, f)) > tol && dot(n, f) >= 0;
+    return dot(a - eye, n) >= 0;
+  }
+
+  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), faces the wrong way.
+  [[gnu::noinline]] bool turned(const Vec3d& a, const Vec3d& b, const Vec3d& c,
+                                const Vec3d& n) const {
+    if (type == LightType::directional) {
+      const double area = 0.5 * dot(n, f);
+      const auto on_near_plane = [&](const Vec3d& p) {
+        return std::abs(dot(p - near_origin, f)) <= tol;
+      };
+      const bool source = on_near_plane(a) && on_near_plane(b) && on_near_plane(c);
+      if (source ? area <= 0 : area >= 0) return false;  // the right way round, or edge-on
+      const auto flat = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
+      const double bound = tol * (flat(b - a) + flat(c - b) + flat(a - c));
+      return source ? area > bound : area < -bound;
+    }
+    // The proof's own formula. A face of the vertex at the eye has det 0 exactly: the proof leaves
+    // the apex's faces out.
+    const Vec3d pa = a - eye, pb = b - eye, pc = c - eye;
+    const Vec3d bc = cross(pb, pc);
+    const double det = dot(pa, bc);
+    if (det >= 0) return false;
+    return det < -tol * (length(bc) + length(cross(pc, pa)) + length(cross(pa, pb)));
+  }
+};
+
+// What the second pass finds of a face of float corners `qa`, `qb`, `qc`.
+enum class FaceFinding { sound, collapsed, turned };
+inline FaceFinding judge_face(const float* qa, const float* qb, const float* qc,
+                              const FaceJudge& judge) {
+  const Vec3d a{qa[0], qa[1], qa[2]}, b{qb[0], qb[1], qb[2]}, c{qc[0], qc[1], qc[2]};
+  const Vec3d n = cross(b - a, c - a);
+  if (n.x == 0 && n.y == 0 && n.z == 0) return FaceFinding::collapsed;
+  if (judge.away(a, n) || !judge.turned(a, b, c, n)) return FaceFinding::sound;
+  return FaceFinding::turned;
+}
+
+// The second pass: the faces.
+struct FaceTally {
+  std::uint64_t triangles = 0, collapsed = 0, turned = 0;
+
+  // Adds faces [0, n); corners(t, k) points to the x y z floats of corner k of face t. Counts in
+  // locals the compiler keeps in registers.
+  template <class Corners>
+  void add(std::size_t n, const Corners& corners, const FaceJudge& judge) {
+    std::uint64_t c = 0, t = 0;
+    for (std::size_t f = 0; f < n; ++f) {
+      const FaceFinding found = judge_face(corners(f, 0), corners(f, 1), corners(f, 2), judge);
+      c += found == FaceFinding::collapsed;
+      t += found == FaceFinding::turned;
+    }
+    triangles += n, collapsed += c, turned += t;
+  }
+  void merge(const FaceTally& o) {
+    triangles += o.triangles;
+    collapsed += o.collapsed;
+    turned += o.turned;
+  }
+};
+
+// Refusals the vertices decide alone: not finite, too large, too small.
+Status vertex_verdict(const VertexTally& vertices, const Light& light,
+                      const std::string& light_source);
+// The whole verdict (vertex_verdict's first).
+Status representable_verdict(const VertexTally& vertices, const FaceTally& faces,
+                             const Light& light, Space space, const std::string& light_source);
 
 }  // namespace
 
@@ -184,73 +346,120 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
 
 Status check_representable(const Mesh& mesh, const Light& light, Space space,
                            const std::string& light_source) {
-  RepresentableTally tally;
-  for (std::size_t v = 0; v < mesh.num_vertices(); ++v) tally.add_vertex(&mesh.positions[3 * v]);
-  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
-    const auto tri = mesh.triangle(t);
-    tally.add_triangle(&mesh.positions[3 * std::size_t{tri[0]}],
-                       &mesh.positions[3 * std::size_t{tri[1]}],
-                       &mesh.positions[3 * std::size_t{tri[2]}]);
-  }
-  return representable_verdict(tally, light, space, light_source);
+  const GuardLight guard = guard_light(light, space);
+  const VertexTally vertices = tally_vertices(mesh.positions.data(), mesh.num_vertices(), guard);
+  if (Status s = vertex_verdict(vertices, light, light_source); !s) return s;
+  const FaceJudge judge(vertices, guard);
+  const float* p = mesh.positions.data();
+  const FaceTally faces = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), std::size_t{1} << 14), FaceTally{},
+      [&](const tbb::blocked_range<std::size_t>& r, FaceTally acc) {
+        const std::uint32_t* first = mesh.indices.data() + 3 * r.begin();
+        acc.add(
+            r.size(), [&](std::size_t t, int k) { return p + 3 * std::size_t{first[3 * t + k]}; },
+            judge);
+        return acc;
+      },
+      [](FaceTally a, const FaceTally& b) {
+        a.merge(b);
+        return a;
+      });
+  return representable_verdict(vertices, faces, light, space, light_source);
 }
 
 namespace {
 
-Status representable_verdict(const RepresentableTally& tally, const Light& light, Space space,
-                             const std::string& light_source) {
+std::string shown(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
+std::string frustum_keys(const Light& light) {
+  return light.type == LightType::spot   ? "keys 'near', 'far' and 'fov_y_deg'"
+         : light.type == LightType::omni ? "keys 'near' and 'far'"
+                                         : "keys 'ortho', 'near' and 'far'";
+}
+
+Status vertex_verdict(const VertexTally& vertices, const Light& light,
+                      const std::string& light_source) {
   constexpr double kLargest = 1e18;  // squares stay below float's 3.4e38
-  const auto shown = [](double x) {
-    std::ostringstream out;
-    out << x;
-    return out.str();
-  };
-  const std::string frustum_keys =
-      light.type == LightType::spot   ? "keys 'near', 'far' and 'fov_y_deg'"
-      : light.type == LightType::omni ? "keys 'near' and 'far'"
-                                      : "keys 'ortho', 'near' and 'far'";
-  const double largest = tally.largest;
-  const Vec3d lo = tally.lo, hi = tally.hi;
-  if (!tally.finite)
-    return Error{light_source + ": " + frustum_keys +
+  if (!vertices.finite)
+    return Error{light_source + ": " + frustum_keys(light) +
                  ": the volume's vertices are not finite numbers (near " + shown(light.near) +
                  ", far " + shown(light.far) +
                  ": more than double precision holds); bring far closer to near"};
-  if (largest > kLargest)
-    return Error{light_source + ": " + frustum_keys + ": the volume reaches coordinate " +
-                 shown(largest) + "; float32 meshes need coordinates below " + shown(kLargest) +
-                 " (choose the scene's units so that the frustum is smaller)"};
-  const Vec3d span = hi - lo;
+  if (vertices.largest > kLargest)
+    return Error{light_source + ": " + frustum_keys(light) + ": the volume reaches coordinate " +
+                 shown(vertices.largest) + "; float32 meshes need coordinates below " +
+                 shown(kLargest) + " (choose the scene's units so that the frustum is smaller)"};
+  const Vec3d span = vertices.hi - vertices.lo;
   const double across = std::max({span.x, span.y, span.z});
   // The checks form areas and volumes in float: a volume smaller than this underflows them.
   constexpr double kSmallest = 1e-12;
   if (across < kSmallest)
-    return Error{light_source + ": " + frustum_keys + ": the volume is " + shown(across) +
+    return Error{light_source + ": " + frustum_keys(light) + ": the volume is " + shown(across) +
                  " across; float32 meshes and their checks need at least " + shown(kSmallest) +
                  " (choose the scene's units, or near and far, so that it is larger)"};
-  const std::uint64_t collapsed = tally.collapsed;
-  // Float32 steps at the volume's coordinates against the spacing of its vertices (its thinnest
-  // extent over the square root of their count, a texel's spacing across a grid): steps coarser
-  // than a sixteenth of it move vertices by more than the checks allow for, which then refuse the
-  // volume (a spot far from the origin, or a fov of 1e-6 degrees).
-  const double thinnest = std::min({span.x, span.y, span.z});
-  const double spacing = thinnest / std::sqrt(std::max<double>(1, double(tally.vertices)));
-  const bool coarse = largest * std::numeric_limits<float>::epsilon() > spacing / 16;
-  if (collapsed == 0 && !coarse) return {};
-  const Vec3d extent = hi - lo;
-  const double size = std::max({extent.x, extent.y, extent.z});
-  const double step = largest * std::numeric_limits<float>::epsilon();
-  std::string what = light_source + ": float32 cannot hold this volume (coordinates up to " +
-                     shown(largest) + ", steps of " + shown(step) + ", vertices about " +
-                     shown(spacing) + " apart; " + std::to_string(collapsed) + " of " +
-                     std::to_string(tally.triangles) + " faces collapse to zero area)";
+  return {};
+}
 
+Status representable_verdict(const VertexTally& vertices, const FaceTally& faces,
+                             const Light& light, Space space, const std::string& light_source) {
+  if (Status s = vertex_verdict(vertices, light, light_source); !s) return s;
+  const double largest = vertices.largest;
+  // The checks' rounding is of the largest coordinate, the light's position's included: a
+  // directional light far behind its near plane coarsens it however small the volume's own
+  // coordinates are.
+  const GuardLight guard = guard_light(light, space);
+  const double light_largest = std::max(
+      {std::abs(guard.position.x), std::abs(guard.position.y), std::abs(guard.position.z)});
+  const double max_abs = std::max(largest, light_largest);
+  // Faces the proof accepts may still be too fine for float32 to place where they belong, which
+  // the apex's cone and the proof's sums then notice: float steps at those coordinates against the
+  // spacing of the faces across the light's rays, about a texel (the light's field over the square
+  // root of the vertex count per map). Point lights: the angle a step subtends at the vertex
+  // nearest the light against a texel's angle; directional: the step against a texel's width in
+  // the ortho extents. Steps coarser than a sixteenth of that refuse the volume (a spot far from
+  // the origin, a fov of 1e-6 degrees); a thin but wide box (8193 wide, 1 deep) is fine.
+  const double step = max_abs * std::numeric_limits<float>::epsilon();
+  const double maps = light.type == LightType::omni ? double(kOmniFaces) : 1.0;
+  const double texels_across = std::sqrt(std::max(1.0, double(vertices.vertices) / maps));
+  const double px = std::abs(light.projection(0, 0)), py = std::abs(light.projection(1, 1));
+  double ratio = 0;  // a float step over a texel's spacing
+  if (light.type == LightType::directional) {
+    ratio = step / (std::min(2 / px, 2 / py) / texels_across);
+  } else if (std::isfinite(vertices.nearest2)) {
+    const double field = light.type == LightType::omni
+                             ? std::numbers::pi / 2
+                             : std::min(2 * std::atan(1 / px), 2 * std::atan(1 / py));
+    ratio = (step / std::sqrt(vertices.nearest2)) / (field / texels_across);
+  }
+  const bool coarse = ratio > 1.0 / 16;
+  if (faces.collapsed == 0 && faces.turned == 0 && !coarse) return {};
+  const Vec3d extent = vertices.hi - vertices.lo;
+  const double size = std::max({extent.x, extent.y, extent.z});
+  std::string what =
+      light_source + ": float32 cannot hold this volume (coordinates up to " + shown(largest) +
+      (light_largest > largest ? ", the light's position up to " + shown(light_largest)
+                               : std::string()) +
+      ", steps of " + shown(step) + ", " + shown(ratio) + " of a texel's spacing; " +
+      std::to_string(faces.collapsed) + " of " + std::to_string(faces.triangles) +
+      " faces collapse to zero area, " + std::to_string(faces.turned) + " face the light)";
+
+  // A directional light's volume begins `near` from its position, in either frame: far for the
+  // volume's size, only moving the position closer helps.
+  if (light.type == LightType::directional && light.near > 100 * size)
+    return Error{what + ": keys 'position' and 'near': the volume begins " + shown(light.near) +
+                 " from the light's position, far for its size " + shown(size) +
+                 "; move the position along the light's direction towards the volume and reduce "
+                 "near and far by as much"};
   if (space == Space::world && largest > 100 * size)
     return Error{what + ": key 'position': the light is far from the origin for the volume's " +
                  "size " + shown(size) +
                  "; write it in the light's eye space with --space light and place it with the "
                  "light's view matrix"};
-  return Error{what + ": " + frustum_keys +
+  return Error{what + ": " + frustum_keys(light) +
                ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
                "near and far closer"};
 }
@@ -288,9 +497,11 @@ StaticVolumeStream::~StaticVolumeStream() = default;
 std::uint64_t StaticVolumeStream::num_vertices() const { return state_->counts.vertices; }
 std::uint64_t StaticVolumeStream::num_triangles() const { return state_->counts.triangles; }
 
-// Long (over 80 lines) on purpose: one pass over blocks of rows makes each block's vertices, hands
-// them on, and folds them and the grid triangles they complete (with the row before) into the
-// tallies; the border rows and columns are kept for the closing.
+// Long (over 80 lines) on purpose: two passes over blocks of rows. The first makes each block's
+// vertices and tallies them for the float32 guard (its faces' tolerance needs the largest
+// coordinate, known only after every vertex); the second makes them again, hands them on, judges
+// the grid triangles they complete (with the row before) and sums the volume; the border rows and
+// columns are kept for the closing.
 Status StaticVolumeStream::positions(const PositionSink& sink) {
   State& st = *state_;
   const int w = st.depth.width, h = st.depth.height;
@@ -300,10 +511,31 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
   const std::size_t quad_triangles_per_row = 2 * (uw - 1);
   const int block_rows = std::clamp(static_cast<int>((std::size_t{1} << 18) / uw), 1, h);
   std::vector<float> buffer(3 * uw * (static_cast<std::size_t>(block_rows) + 1));
+  const GuardLight guard = guard_light(st.light, st.space);
+  // The closing: its vertices after the grid's, its triangles after the grid's (it needs none of
+  // the grid's positions).
+  st.closing = make_closing(st.light.type, st.unproject, w, h, closing_ring(w, h, standard),
+                            static_cast<std::uint32_t>(grid_vertices));
+  const std::size_t closing_vertices = st.closing.positions.size() / 3;
+
+  // First pass: the vertices' tally; each block's rows made and dropped.
+  VertexTally vertices;
+  for (int r0 = 0; r0 < h; r0 += block_rows) {
+    const int r1 = std::min(h, r0 + block_rows);
+    if (Status s = grid_rows(st.unproject, st.depth, r0, r1, buffer.data(), st.source); !s)
+      return s;
+    vertices.merge(tally_vertices(buffer.data(), static_cast<std::size_t>(r1 - r0) * uw, guard));
+  }
+  vertices.merge(tally_vertices(st.closing.positions.data(), closing_vertices, guard));
+  LV_CHECK_EQ(vertices.vertices, st.counts.vertices);
+  if (Status s = vertex_verdict(vertices, st.light, st.light_source); !s) return s;
+  const FaceJudge judge(vertices, guard);
+
+  // Second pass: the same rows, handed on, their faces judged and summed.
   // The border: rows 0 and H−1, columns 0 and W−1 (for the closing's triangles).
   std::vector<float> top(3 * uw), bottom(3 * uw), left(3 * static_cast<std::size_t>(h)),
       right(3 * static_cast<std::size_t>(h));
-  RepresentableTally tally;
+  FaceTally faces;
   SignedVolumeSum volume(st.counts.triangles);
   bool have_previous = false;
   for (int r0 = 0; r0 < h; r0 += block_rows) {
@@ -311,35 +543,40 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
     const int first_row = have_previous ? r0 - 1 : r0;  // the buffer's first row
     float* fresh = buffer.data() + (have_previous ? 3 * uw : 0);
     if (Status s = grid_rows(st.unproject, st.depth, r0, r1, fresh, st.source); !s) return s;
-    // Then (every row of the block made) the tallies of its vertices and of the quad rows ending
-    // in it.
-    const RepresentableTally block = tbb::parallel_reduce(
-        tbb::blocked_range<int>(r0, r1), RepresentableTally{},
-        [&](const tbb::blocked_range<int>& rows, RepresentableTally acc) {
+    // Then (every row of the block made) the tally of the quad rows ending in it: quad row r − 1
+    // (rows r − 1 and r) for each row r of the block but row 0.
+    const FaceTally block = tbb::parallel_reduce(
+        tbb::blocked_range<int>(std::max(r0, 1), r1), FaceTally{},
+        [&](const tbb::blocked_range<int>& rows, FaceTally acc) {
           for (int r = rows.begin(); r != rows.end(); ++r) {
             const float* out = fresh + 3 * static_cast<std::size_t>(r - r0) * uw;
-            for (std::size_t c = 0; c < uw; ++c) acc.add_vertex(out + 3 * c);
-            // Quad row r − 1 (rows r − 1 and r), when row r − 1 is in the buffer.
-            if (r == 0) continue;
             const float* above = out - 3 * uw;
+            // The quads' corners in rows 0 (above) and 1 (out), the same for every quad but for
+            // its column.
             std::uint32_t tri[6];
+            quad_triangles(0, 0, static_cast<std::uint32_t>(uw), standard, tri);
+            const float* corner[6];
+            for (int k = 0; k < 6; ++k)
+              corner[k] = tri[k] >= uw ? out + 3 * (tri[k] - uw) : above + 3 * std::size_t{tri[k]};
+            std::uint64_t collapsed = 0, turned = 0;
             for (std::size_t c = 0; c + 1 < uw; ++c) {
-              quad_triangles(0, static_cast<std::uint32_t>(c), static_cast<std::uint32_t>(uw),
-                             standard, tri);  // rows 0 (above) and 1 (out)
-              const auto at = [&](std::uint32_t v) {
-                return (v >= uw ? out + 3 * (v - uw) : above + 3 * std::size_t{v});
-              };
-              acc.add_triangle(at(tri[0]), at(tri[1]), at(tri[2]));
-              acc.add_triangle(at(tri[3]), at(tri[4]), at(tri[5]));
+              const std::size_t o = 3 * c;
+              for (int i = 0; i < 2; ++i) {
+                const FaceFinding found = judge_face(corner[3 * i] + o, corner[3 * i + 1] + o,
+                                                     corner[3 * i + 2] + o, judge);
+                collapsed += found == FaceFinding::collapsed;
+                turned += found == FaceFinding::turned;
+              }
             }
+            acc.triangles += 2 * (uw - 1), acc.collapsed += collapsed, acc.turned += turned;
           }
           return acc;
         },
-        [](RepresentableTally a, const RepresentableTally& b) {
+        [](FaceTally a, const FaceTally& b) {
           a.merge(b);
           return a;
         });
-    tally.merge(block);
+    faces.merge(block);
     if (!sink(fresh, static_cast<std::size_t>(r1 - r0) * uw)) return {};
     // The volume's sum takes the grid triangles in order: quad rows [first_row, r1 − 1).
     const auto row_of = [&](std::size_t v) {
@@ -367,11 +604,6 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
     have_previous = true;
   }
 
-  // The closing: its vertices after the grid's, its triangles after the grid's.
-  st.closing = make_closing(st.light.type, st.unproject, w, h, closing_ring(w, h, standard),
-                            static_cast<std::uint32_t>(grid_vertices));
-  const std::size_t closing_vertices = st.closing.positions.size() / 3;
-  for (std::size_t v = 0; v < closing_vertices; ++v) tally.add_vertex(&st.closing.positions[3 * v]);
   if (!sink(st.closing.positions.data(), closing_vertices)) return {};
   const auto position = [&](std::uint32_t v) -> const float* {
     if (v >= grid_vertices) return &st.closing.positions[3 * (v - grid_vertices)];
@@ -381,17 +613,17 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
     return col == 0 ? &left[3 * row] : &right[3 * row];
   };
   const std::vector<std::uint32_t>& ci = st.closing.indices;
-  for (std::size_t i = 0; i < ci.size(); i += 3)
-    tally.add_triangle(position(ci[i]), position(ci[i + 1]), position(ci[i + 2]));
+  faces.add(
+      ci.size() / 3, [&](std::size_t t, int k) { return position(ci[3 * t + k]); }, judge);
   const std::size_t grid_triangles = static_cast<std::size_t>(h - 1) * quad_triangles_per_row;
   volume.add(grid_triangles, ci.size() / 3,
              [&](std::size_t t, int k) { return position(ci[3 * (t - grid_triangles) + k]); });
-  LV_CHECK_EQ(tally.vertices, st.counts.vertices);
-  LV_CHECK_EQ(tally.triangles, st.counts.triangles);
-  if (Status s = representable_verdict(tally, st.light, st.space, st.light_source); !s) return s;
+  LV_CHECK_EQ(faces.triangles, st.counts.triangles);
+  if (Status s = representable_verdict(vertices, faces, st.light, st.space, st.light_source); !s)
+    return s;
   for (int k = 0; k < 3; ++k) {
-    bounds_.min[k] = k == 0 ? tally.lo.x : k == 1 ? tally.lo.y : tally.lo.z;
-    bounds_.max[k] = k == 0 ? tally.hi.x : k == 1 ? tally.hi.y : tally.hi.z;
+    bounds_.min[k] = vertices.lo[k];
+    bounds_.max[k] = vertices.hi[k];
   }
   volume_ = volume.volume();
   return {};

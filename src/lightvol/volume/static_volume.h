@@ -42,10 +42,12 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
 
 // The static volume of build_static_volume as a stream (core/mesh_stream.h): produced in blocks of
 // rows and never held whole (memory: a few rows and the border), with the same vertices and
-// triangles in the same order, so a file written from it has the same bytes. positions() fails as
-// build_static_volume does (a radial depth no ray reaches) and, at its end, before any triangle,
-// as check_representable does (`light_source` names the light); after it, bounds() and volume()
-// are bounding_box and signed_volume of the mesh. `light` and `depth` must outlive the stream.
+// triangles in the same order, so a file written from it has the same bytes. positions() makes
+// the rows twice (the float32 guard's faces need the largest coordinate first) and fails as
+// build_static_volume does (a radial depth no ray reaches) and as check_representable does, with
+// the same message (`light_source` names the light): before any position is handed on when the
+// vertices alone decide, else at its end, before any triangle. After it, bounds() and volume() are
+// bounding_box and signed_volume of the mesh. `light` and `depth` must outlive the stream.
 class StaticVolumeStream : public MeshStream {
  public:
   StaticVolumeStream(const Light& light, const DepthImage& depth, const VolumeOptions& options,
@@ -67,12 +69,19 @@ class StaticVolumeStream : public MeshStream {
 
 // Whether `mesh`, a volume of `light` built in `space`, holds in float32 as it is: every
 // coordinate finite and below 1e18 in magnitude (so that the products the checks and renderers
-// form stay finite), the volume at least 1e-12 across (so that they do not underflow), and no face
-// collapsed to zero area or to a repeated position by float32
-// rounding. Lights whose volumes cannot be represented are valid lights: the Error says which keys
-// of `light_source` are to blame and what to do (far from the origin: --space light; a frustum
-// too thin, too large, or with far/near beyond what the precision holds: the keys to change).
-// Every builder's result should pass this before it is checked or written: it never writes NaN.
+// form stay finite), the volume at least 1e-12 across (so that they do not underflow), no face
+// collapsed to zero area by float32 rounding or turned towards the light (judged as the proof from
+// the light of check_volume_linear judges it, in the volume's frame and with its tolerance: eight
+// float ulps of the largest coordinate), and float steps at most a sixteenth of a texel's spacing
+// across the light's rays (point lights: the angle a step subtends at the vertex nearest the light
+// against a texel's angle; directional: against a texel's width in the ortho extents). That
+// refuses a spot far from the origin or a needle of a frustum, but not a thin, wide box. Lights
+// whose volumes cannot be represented are valid lights: the Error says which keys of
+// `light_source` are to blame and what to do (far from the origin: --space light; a frustum too
+// thin, too large, or with far/near beyond what the precision holds: the keys to change).
+// build_volume runs it on every volume it returns, StaticVolumeStream on the volume it streams
+// (the same verdict and message); it never writes NaN. Two parallel passes: the vertices, then the
+// faces.
 Status check_representable(const Mesh& mesh, const Light& light, Space space,
                            const std::string& light_source);
 
