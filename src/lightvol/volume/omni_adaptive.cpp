@@ -52,6 +52,31 @@ std::vector<int> merged(const std::vector<int>& a, const std::vector<int>& b) {
   return out;
 }
 
+// Each seam's border vertices: the union of its two faces' (in each face's numbering). For each
+// face side that lacks some of them, calls require(face, side, union) and marks the face dirty;
+// returns whether any did.
+template <typename Require>
+bool unite_seams(const OmniAdjacency& adjacency, const std::array<AdaptiveGrid, kOmniFaces>& grids,
+                 int width, std::array<bool, kOmniFaces>* dirty, Require require) {
+  bool changed = false;
+  for (const OmniSeam& seam : adjacency.seams) {
+    const GridSide sa = grid_side(seam.border[0]), sb = grid_side(seam.border[1]);
+    const std::vector<int>& a = grids[seam.face[0]].border[sa];
+    const std::vector<int>& b = grids[seam.face[1]].border[sb];
+    std::vector<int> both = merged(a, mapped(b, seam.reversed, width));
+    std::vector<int> both_b = mapped(both, seam.reversed, width);
+    if (both != a) {
+      require(seam.face[0], sa, std::move(both));
+      (*dirty)[seam.face[0]] = changed = true;
+    }
+    if (both_b != b) {
+      require(seam.face[1], sb, std::move(both_b));
+      (*dirty)[seam.face[1]] = changed = true;
+    }
+  }
+  return changed;
+}
+
 }  // namespace
 
 Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFaces& cube,
@@ -110,23 +135,10 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
       grids[f] = pyramids[f].tessellate(bound, faces[f].standard_winding(), forced[f]);
       dirty[f] = false;
     }
-    bool changed = false;
-    for (const OmniSeam& seam : adjacency.seams) {
-      const GridSide sa = grid_side(seam.border[0]), sb = grid_side(seam.border[1]);
-      const std::vector<int>& a = grids[seam.face[0]].border[sa];
-      const std::vector<int>& b = grids[seam.face[1]].border[sb];
-      const std::vector<int> both = merged(a, mapped(b, seam.reversed, w));
-      if (both != a) {
-        forced[seam.face[0]].side[sa] = both;
-        dirty[seam.face[0]] = changed = true;
-      }
-      const std::vector<int> both_b = mapped(both, seam.reversed, w);
-      if (both_b != b) {
-        forced[seam.face[1]].side[sb] = both_b;
-        dirty[seam.face[1]] = changed = true;
-      }
-    }
-    if (!changed) break;
+    if (!unite_seams(adjacency, grids, w, &dirty, [&](int f, GridSide side, std::vector<int> p) {
+          forced[f].side[side] = std::move(p);
+        }))
+      break;
   }
   for (const AdaptiveGrid& g : grids) {
     r.balance_seconds += g.balance_seconds;
@@ -156,23 +168,10 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
         grids[f] = collapse_grid(pyramids[f].texels(), quadtree[f], bound, keep[f], &reports[f]);
       });
       dirty.fill(false);
-      bool changed = false;
-      for (const OmniSeam& seam : adjacency.seams) {
-        const GridSide sa = grid_side(seam.border[0]), sb = grid_side(seam.border[1]);
-        const std::vector<int>& a = grids[seam.face[0]].border[sa];
-        const std::vector<int>& b = grids[seam.face[1]].border[sb];
-        const std::vector<int> both = merged(a, mapped(b, seam.reversed, w));
-        if (both != a) {
-          keep[seam.face[0]].keep[sa] = both;
-          dirty[seam.face[0]] = changed = true;
-        }
-        const std::vector<int> both_b = mapped(both, seam.reversed, w);
-        if (both_b != b) {
-          keep[seam.face[1]].keep[sb] = both_b;
-          dirty[seam.face[1]] = changed = true;
-        }
-      }
-      if (!changed) break;
+      if (!unite_seams(adjacency, grids, w, &dirty, [&](int f, GridSide side, std::vector<int> p) {
+            keep[f].keep[side] = std::move(p);
+          }))
+        break;
     }
     CollapseOptions flips;  // borders locked, no collapses: the flips alone
     for (bool& side : flips.locked) side = true;
