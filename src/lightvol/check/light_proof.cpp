@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
@@ -78,7 +79,8 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
               c = position(mesh, ic) - eye;
   const Vec3d bc = cross(b, c);
   const double det = dot(a, bc);
-  const double la = length(a), lb = length(b), lc = length(c);
+  const double* d = view.distance;
+  const double la = d ? d[ia] : length(a), lb = d ? d[ib] : length(b), lc = d ? d[ic] : length(c);
   const double denom = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
   *omega = 2 * small_atan2(det, denom);
   // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
@@ -207,6 +209,17 @@ LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& sca
   view.apex = at_vertex ? scan.at_light.front() : ~0u;
   view.ulp_tol = 8 * eps_pos + quantum;
   return view;
+}
+
+std::vector<double> point_distances(const Mesh& mesh, const LightView& view) {
+  std::vector<double> distance(mesh.num_vertices());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.num_vertices(), 1 << 16),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t v = r.begin(); v != r.end(); ++v)
+                        distance[v] =
+                            length(position(mesh, static_cast<std::uint32_t>(v)) - view.eye);
+                    });
+  return distance;
 }
 
 LightView directional_view(const Light& light, double eps_pos, double quantum) {
