@@ -13,6 +13,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
+#include <lightvol/core/buffer.h>
 
 namespace lightvol {
 namespace detail {
@@ -116,15 +117,24 @@ int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, doubl
 // with grain 2^14 and summed in its order, so that the sums do not depend on the threads.
 constexpr std::size_t kLightGrain = std::size_t{1} << 14;
 
+// In the same loop, the faces' determinants are added to `*det` in face order (as signed_volume
+// adds them) and the degenerate faces counted: the faces are read once.
 LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin, std::size_t end,
-                     std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link) {
+                     std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link, double* det,
+                     std::uint64_t* degenerate) {
   if (end - begin > kLightGrain) {
     const std::size_t middle = begin + (end - begin) / 2;
-    const LightSums left = light_sums(mesh, view, begin, middle, apex_link);
-    return left + light_sums(mesh, view, middle, end, apex_link);
+    const LightSums left = light_sums(mesh, view, begin, middle, apex_link, det, degenerate);
+    return left + light_sums(mesh, view, middle, end, apex_link, det, degenerate);
   }
   LightSums s;
+  const float* p = mesh.positions.data();
+  const std::uint32_t* idx = mesh.indices.data();
+  double acc = *det;
+  std::uint64_t zero_area = 0;
   for (std::size_t t = begin; t != end; ++t) {
+    acc += volume_det(p + 3 * idx[3 * t], p + 3 * idx[3 * t + 1], p + 3 * idx[3 * t + 2]);
+    zero_area += is_degenerate(mesh, t);
     if (view.kind == LightView::Kind::point) {
       double omega = 0;
       const int side = classify_from_point(mesh, t, view, &omega);
@@ -157,6 +167,8 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
         break;
     }
   }
+  *det = acc;
+  *degenerate += zero_area;
   return s;
 }
 
@@ -168,6 +180,11 @@ class FacePass {
   FacePass(const Mesh& mesh, const LightView& view) : mesh_(mesh), view_(view) {}
   FacePass(FacePass& other, tbb::split) : mesh_(other.mesh_), view_(other.view_) {}
   void operator()(const tbb::blocked_range<std::size_t>& range) {
+    if (view_.kind != LightView::Kind::none) {
+      sums.light = sums.light + light_sums(mesh_, view_, range.begin(), range.end(),
+                                           &sums.apex_link, &sums.det, &sums.degenerate);
+      return;
+    }
     const float* p = mesh_.positions.data();
     const std::uint32_t* idx = mesh_.indices.data();
     double acc = sums.det;
@@ -178,9 +195,6 @@ class FacePass {
     }
     sums.det = acc;
     sums.degenerate += degenerate;
-    if (view_.kind != LightView::Kind::none)
-      sums.light =
-          sums.light + light_sums(mesh_, view_, range.begin(), range.end(), &sums.apex_link);
   }
   void join(FacePass& right) {
     sums.det += right.sums.det;
@@ -212,7 +226,9 @@ LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& sca
 }
 
 std::vector<double> point_distances(const Mesh& mesh, const LightView& view) {
-  std::vector<double> distance(mesh.num_vertices());
+  std::vector<double> distance;
+  reserve_large(distance, mesh.num_vertices());
+  distance.resize(mesh.num_vertices());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.num_vertices(), 1 << 16),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t v = r.begin(); v != r.end(); ++v)

@@ -18,6 +18,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/mesh.h>
 
 namespace lightvol {
@@ -41,7 +42,7 @@ constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
 // 16 K slots of 8 bytes, stay in a core's 512 KiB L2 cache), at most 2^12 of them.
 int partition_bits(std::size_t nv) {
   int bits = 0;
-  while (bits < 12 && (nv >> bits) > 12000) ++bits;
+  while (bits < 12 && (nv >> bits) > 40000) ++bits;
   return bits;
 }
 
@@ -78,7 +79,9 @@ bool first_at_position(const Mesh& mesh, std::vector<std::uint32_t>* first) {
   }
   // The entries, by partition and in each in vertex order: the hash's low 32 bits (the slot and
   // a tag that spares most comparisons of positions) and the vertex.
-  std::vector<std::uint64_t> entries(nv);
+  std::vector<std::uint64_t> entries;
+  reserve_large(entries, nv);
+  entries.resize(nv);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint64_t* next = &at[b * partitions];
     for (std::size_t v = b * kBlock, end = std::min(nv, v + kBlock); v < end; ++v) {

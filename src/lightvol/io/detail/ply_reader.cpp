@@ -19,6 +19,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/io/detail/ply_reader.h>
 
 namespace lightvol::detail {
@@ -336,9 +337,16 @@ class Builder {
   // (and zeroed) now, while the positions are, for triangles() to fill.
   Builder(const Header& header, bool triangles) : vertices_(header.vertices) {
     const auto faces = static_cast<std::size_t>(header.faces);
+    // Huge pages: a thousand page faults instead of 150,000 for a 33-million-triangle volume.
     tbb::parallel_invoke(
-        [&] { mesh_.positions.resize(3 * static_cast<std::size_t>(header.vertices)); },
-        [&] { triangles ? mesh_.indices.resize(3 * faces) : mesh_.indices.reserve(3 * faces); });
+        [&] {
+          reserve_large(mesh_.positions, 3 * static_cast<std::size_t>(header.vertices));
+          mesh_.positions.resize(3 * static_cast<std::size_t>(header.vertices));
+        },
+        [&] {
+          reserve_large(mesh_.indices, 3 * faces);
+          if (triangles) mesh_.indices.resize(3 * faces);
+        });
     if (triangles) triangles_ = faces;
   }
   float* positions() { return mesh_.positions.data(); }
