@@ -54,7 +54,7 @@ Mesh many_duplicates(std::size_t n, std::size_t distinct, std::uint32_t seed) {
 }
 
 TEST(Weld, PartitionedMappingEqualsTheFirstComeMapForAnyThreadCount) {
-  // 400,000 vertices at 50,000 positions (about 8 copies each) fall into 32 partitions.
+  // 400,000 vertices at 50,000 positions (about 8 copies each) fall into 16 partitions.
   const Mesh soup = many_duplicates(400000, 50000, 7);
   const Mesh expected = reference_weld(soup);
   ASSERT_LT(expected.num_vertices(), 50001u);
