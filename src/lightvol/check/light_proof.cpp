@@ -9,11 +9,9 @@
 #include <unordered_map>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
-#include <lightvol/core/buffer.h>
 
 namespace lightvol {
 namespace detail {
@@ -65,11 +63,24 @@ double small_atan2(double y, double x) {
   return r * (1 - r2 * (1.0 / 3 - r2 * (1.0 / 5)));
 }
 
+// The distances from the eye of the vertices [first, first + size): a face's three vertices are
+// each shared by about six faces, so a block of faces computes them once per vertex.
+struct NearDistances {
+  const double* distance = nullptr;
+  std::uint32_t first = 0, size = 0;
+  double of(std::uint32_t v, const Vec3d& from_eye) const {
+    return v - first < size ? distance[v - first] : length(from_eye);
+  }
+};
+
 // Van Oosterom–Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
 // The sign of det = a·(b×c) says which side the light at `eye` sees (+1 away, −1 facing it, 0
 // edge-on or a face of the apex vertex `apex`); |det| within what moving each vertex by `ulp_tol`
 // could change counts as edge-on. `*omega` is the signed solid angle.
-int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega) {
+// `near` (may be empty) holds the distances from the eye of some vertices, length(position −
+// eye) as computed here, so the same to the bit.
+int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega,
+                        const NearDistances& near = {}) {
   const Vec3d& eye = view.eye;
   const auto [ia, ib, ic] = mesh.triangle(t);
   if (ia == view.apex || ib == view.apex || ic == view.apex) {
@@ -80,8 +91,7 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
               c = position(mesh, ic) - eye;
   const Vec3d bc = cross(b, c);
   const double det = dot(a, bc);
-  const double* d = view.distance;
-  const double la = d ? d[ia] : length(a), lb = d ? d[ib] : length(b), lc = d ? d[ic] : length(c);
+  const double la = near.of(ia, a), lb = near.of(ib, b), lc = near.of(ic, c);
   const double denom = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
   *omega = 2 * small_atan2(det, denom);
   // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
@@ -130,6 +140,21 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
   LightSums s;
   const float* p = mesh.positions.data();
   const std::uint32_t* idx = mesh.indices.data();
+  // From a point: the distances of the vertices the faces name, when they span a range of at most
+  // twice as many vertices as there are faces (faces in vertex order, as build writes them).
+  NearDistances near;
+  thread_local std::vector<double> distances;
+  if (view.kind == LightView::Kind::point && end > begin) {
+    const auto [lo, hi] = std::minmax_element(idx + 3 * begin, idx + 3 * end);
+    if (*hi - *lo < 2 * (end - begin)) {
+      near.first = *lo;
+      near.size = *hi - *lo + 1;
+      distances.resize(near.size);
+      for (std::uint32_t k = 0; k < near.size; ++k)
+        distances[k] = length(position(mesh, near.first + k) - view.eye);
+      near.distance = distances.data();
+    }
+  }
   double acc = *det;
   std::uint64_t zero_area = 0;
   for (std::size_t t = begin; t != end; ++t) {
@@ -137,7 +162,7 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
     zero_area += is_degenerate(mesh, t);
     if (view.kind == LightView::Kind::point) {
       double omega = 0;
-      const int side = classify_from_point(mesh, t, view, &omega);
+      const int side = classify_from_point(mesh, t, view, &omega, near);
       if (side > 0) {
         s.positive += omega;
       } else if (side < 0) {
@@ -223,19 +248,6 @@ LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& sca
   view.apex = at_vertex ? scan.at_light.front() : ~0u;
   view.ulp_tol = 8 * eps_pos + quantum;
   return view;
-}
-
-std::vector<double> point_distances(const Mesh& mesh, const LightView& view) {
-  std::vector<double> distance;
-  reserve_large(distance, mesh.num_vertices());
-  distance.resize(mesh.num_vertices());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.num_vertices(), 1 << 16),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t v = r.begin(); v != r.end(); ++v)
-                        distance[v] =
-                            length(position(mesh, static_cast<std::uint32_t>(v)) - view.eye);
-                    });
-  return distance;
 }
 
 LightView directional_view(const Light& light, double eps_pos, double quantum) {

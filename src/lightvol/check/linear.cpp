@@ -104,9 +104,6 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
            : scan.at_light.size() <= 1 ? point_view(mesh, *light, scan, eps_pos, quantization_step)
                                        : LightView{};
   }
-  const std::vector<double> distance =
-      view.kind == LightView::Kind::point ? point_distances(mesh, view) : std::vector<double>{};
-  if (!distance.empty()) view.distance = distance.data();
   const FaceSums sums = face_pass(mesh, view);
   report.volume = sums.det / 6.0;
   if (topology) {

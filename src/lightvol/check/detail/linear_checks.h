@@ -121,9 +121,6 @@ struct LightView {
   // Point: the eye (the light, or the vertex at it) and that vertex (~0u: none).
   Vec3d eye;
   std::uint32_t apex = ~0u;
-  // Each vertex's distance from the eye, length(position − eye) as the faces would compute it
-  // (point_distances), or nullptr: then each face computes its three.
-  const double* distance = nullptr;
   // Directional: the unit direction, the near plane's origin and the tolerance of lying in it.
   Vec3d f, origin;
   double plane_tol = 0;
@@ -131,9 +128,6 @@ struct LightView {
 LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double eps_pos,
                      double quantum);
 LightView directional_view(const Light& light, double eps_pos, double quantum);
-// Each vertex's distance from a point view's eye, in one parallel pass: computed once a vertex
-// instead of once for each of its (about six) faces, and the same to the bit.
-std::vector<double> point_distances(const Mesh& mesh, const LightView& view);
 
 // The per-face sums of one parallel pass over the faces: the signed volume (exactly as
 // signed_volume sums it), the degenerate faces, and with a view the light's sums and the faces
