@@ -639,9 +639,23 @@ std::uint64_t read_triangles_parallel(const File& file, std::uintmax_t offset, s
       stop[b] = first;
       return;
     }
+    const unsigned char* records = buffer.data();
+    if (count_type == Type::u8 && fast_u32) {  // the layout lightvol writes, without conversions
+      for (std::size_t f = 0; f < n; ++f) {
+        const unsigned char* r = records + f * record;
+        std::uint32_t w[3];
+        std::memcpy(w, r + 1, 12);
+        if (r[0] != 3 || w[0] >= nv || w[1] >= nv || w[2] >= nv) {
+          stop[b] = first + f;
+          return;
+        }
+        std::memcpy(out + 3 * (first + f), w, 12);
+      }
+      return;
+    }
     for (std::size_t f = 0; f < n; ++f) {
       std::uint64_t v[3];
-      if (!load_triangle(buffer.data() + f * record, count_type, type, swap, fast_u32, nv, v)) {
+      if (!load_triangle(records + f * record, count_type, type, swap, fast_u32, nv, v)) {
         stop[b] = first + f;
         return;
       }
