@@ -1,4 +1,5 @@
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 #include <string_view>
@@ -330,6 +332,28 @@ double decode(const unsigned char* p, Type t, bool swap) {
   return 0;
 }
 
+// Maps the pages of each (start, bytes) range in blocks of 32 MiB, in parallel, before they are
+// first written (MADV_POPULATE_WRITE, Linux 5.14; advice only: without it the first write maps
+// them, in one thread).
+void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
+#ifdef MADV_POPULATE_WRITE
+  constexpr std::uintptr_t kPage = 4096, kBlock = std::uintptr_t{32} << 20;
+  std::vector<std::pair<std::uintptr_t, std::uintptr_t>> blocks;
+  for (const auto& [start, bytes] : ranges) {
+    const auto begin = reinterpret_cast<std::uintptr_t>(start);
+    const std::uintptr_t first = (begin + kPage - 1) & ~(kPage - 1);
+    const std::uintptr_t end = (begin + bytes) & ~(kPage - 1);
+    for (std::uintptr_t at = first; at < end; at += kBlock)
+      blocks.emplace_back(at, std::min(kBlock, end - at));
+  }
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
+    ::madvise(reinterpret_cast<void*>(blocks[i].first), blocks[i].second, MADV_POPULATE_WRITE);
+  });
+#else
+  (void)ranges;
+#endif
+}
+
 // The mesh as it fills: positions by vertex number, faces fan-triangulated as they come.
 class Builder {
  public:
@@ -338,15 +362,18 @@ class Builder {
   Builder(const Header& header, bool triangles) : vertices_(header.vertices) {
     const auto faces = static_cast<std::size_t>(header.faces);
     // Huge pages: a thousand page faults instead of 150,000 for a 33-million-triangle volume.
-    tbb::parallel_invoke(
-        [&] {
-          reserve_large(mesh_.positions, 3 * static_cast<std::size_t>(header.vertices));
-          mesh_.positions.resize(3 * static_cast<std::size_t>(header.vertices));
-        },
-        [&] {
-          reserve_large(mesh_.indices, 3 * faces);
-          if (triangles) mesh_.indices.resize(3 * faces);
-        });
+    // The kernel zeroes fresh pages as they are mapped: mapped in parallel blocks first, so that
+    // both threads share that, then zeroed again by the vectors (in cache-sized strides, fast).
+    const std::size_t positions = 3 * static_cast<std::size_t>(header.vertices);
+    reserve_large(mesh_.positions, positions);
+    reserve_large(mesh_.indices, 3 * faces);
+    populate_in_parallel(
+        {{mesh_.positions.data(), positions * sizeof(float)},
+         {mesh_.indices.data(), (triangles ? 3 * faces : 0) * sizeof(std::uint32_t)}});
+    tbb::parallel_invoke([&] { mesh_.positions.resize(positions); },
+                         [&] {
+                           if (triangles) mesh_.indices.resize(3 * faces);
+                         });
     if (triangles) triangles_ = faces;
   }
   float* positions() { return mesh_.positions.data(); }
