@@ -622,6 +622,31 @@ TEST(EdgeChunks, FacesInNoOrderGiveTheSameReport) {
   }
 }
 
+TEST(LightProof, DistancesPerBlockOfFacesSumToTheSameBitsAsPerFace) {
+  // build's faces come in vertex order, so each block of faces computes its vertices' distances
+  // from the light once; with the vertices renumbered at random every block names vertices all
+  // over the mesh and each face computes its own. Same positions and faces, same face order: the
+  // solid angles and the volume must add up to the same bits.
+  const Mesh mesh = large_spot_volume();
+  const Light light = spot_light();
+  const std::size_t nv = mesh.num_vertices();
+  ASSERT_GT(nv, std::size_t{2} * 16384);
+  std::vector<std::uint32_t> to(nv);
+  for (std::size_t v = 0; v < nv; ++v) to[v] = static_cast<std::uint32_t>((v * 7919) % nv);
+  ASSERT_EQ(std::set<std::uint32_t>(to.begin(), to.end()).size(), nv);
+  Mesh renumbered = mesh;
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) renumbered.positions[3 * to[v] + k] = mesh.positions[3 * v + k];
+  for (std::uint32_t& i : renumbered.indices) i = to[i];
+  const CheckReport a = check_volume_linear(mesh, &light),
+                    b = check_volume_linear(renumbered, &light);
+  EXPECT_TRUE(a.valid()) << a.first_failure();
+  EXPECT_TRUE(b.valid()) << b.first_failure();
+  EXPECT_EQ(a.light_sum, b.light_sum);
+  EXPECT_EQ(a.volume, b.volume);
+  EXPECT_NEAR(a.light_expected, b.light_expected, 1e-12);
+}
+
 TEST_F(BrokenVolume, DuplicatedFace) {
   // A face listed twice: its three edges are used three times (by it twice and its neighbour).
   const auto [a, b, c] = mesh.triangle(12);

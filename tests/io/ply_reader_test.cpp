@@ -3,6 +3,7 @@
 // message naming the file and where.
 #include <bit>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -273,6 +274,104 @@ TEST(ReadPly, PlainLayoutInBulkWithPolygonsAndEachBadFace) {
   EXPECT_EQ(big_mesh->num_triangles(), 200001u);
   EXPECT_EQ(big_mesh->triangle(123457), (std::array<std::uint32_t, 3>{0, 2, 3}));
   EXPECT_EQ(big_mesh->vertex(99999)[0], kSquare[99999 % 5][0] + 2.0f * (99999 / 5));
+}
+
+// Elements of 65,536 records or more are read in parallel blocks (of 256 KiB): the same mesh and
+// the same messages as record by record, whichever block the first bad face falls in.
+std::string big_ply(bool big, std::size_t vertices, const std::vector<std::vector<double>>& faces,
+                    bool extra) {
+  std::string ply = std::string("ply\nformat ") +
+                    (big ? "binary_big_endian" : "binary_little_endian") + " 1.0\nelement vertex " +
+                    std::to_string(vertices) +
+                    (extra ? "\nproperty uchar red\nproperty double x\nproperty float y\nproperty "
+                             "float z\nproperty short s\n"
+                           : "\nproperty float x\nproperty float y\nproperty float z\n") +
+                    "element face " + std::to_string(faces.size()) +
+                    "\nproperty list uchar uint vertex_indices\nend_header\n";
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const double x = static_cast<double>(v) * 0.5, y = -static_cast<double>(v % 977), z = 0.25;
+    if (extra) {
+      put<std::uint8_t>(&ply, 7, big);
+      put<double>(&ply, x, big);
+    } else {
+      put<float>(&ply, x, big);
+    }
+    put<float>(&ply, y, big);
+    put<float>(&ply, z, big);
+    if (extra) put<std::int16_t>(&ply, -3, big);
+  }
+  for (const auto& f : faces) {
+    put<std::uint8_t>(&ply, static_cast<double>(f.size()), big);
+    for (const double i : f) put<std::uint32_t>(&ply, i, big);
+  }
+  return ply;
+}
+
+TEST(ReadPly, BigElementsInParallelBlocks) {
+  TempDir dir;
+  constexpr std::size_t kVertices = 100000, kFaces = 250000;  // 19 blocks of faces
+  std::vector<std::vector<double>> faces(kFaces);
+  for (std::size_t t = 0; t < kFaces; ++t)
+    faces[t] = {static_cast<double>(t % kVertices), static_cast<double>((t * 7 + 1) % kVertices),
+                static_cast<double>((t * 13 + 5) % kVertices)};
+  for (const bool big : {false, true}) {
+    for (const bool extra : {false, true}) {
+      SCOPED_TRACE(std::to_string(big) + " " + std::to_string(extra));
+      const Result<Mesh> mesh =
+          read_mesh(dir.write("big.ply", big_ply(big, kVertices, faces, extra)));
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      ASSERT_EQ(mesh->num_vertices(), kVertices);
+      ASSERT_EQ(mesh->num_triangles(), kFaces);
+      bool same = true;
+      for (std::size_t v = 0; v < kVertices; ++v)
+        same &= mesh->vertex(v) == std::array<float, 3>{static_cast<float>(v) * 0.5f,
+                                                        -static_cast<float>(v % 977), 0.25f};
+      for (std::size_t t = 0; t < kFaces; ++t)
+        for (int k = 0; k < 3; ++k) same &= mesh->indices[3 * t + k] == faces[t][k];
+      EXPECT_TRUE(same);
+    }
+  }
+  // A quad in a late block: fan-triangulated, and the faces after it read record by record.
+  std::vector<std::vector<double>> with_quad = faces;
+  with_quad[200001] = {1, 2, 3, 4};
+  const Result<Mesh> quad =
+      read_mesh(dir.write("quad.ply", big_ply(false, kVertices, with_quad, false)));
+  ASSERT_TRUE(quad.ok()) << quad.error().message;
+  ASSERT_EQ(quad->num_triangles(), kFaces + 1);
+  EXPECT_EQ(quad->triangle(200000)[0], faces[200000][0]);
+  EXPECT_EQ(quad->triangle(200001), (std::array<std::uint32_t, 3>{1, 2, 3}));
+  EXPECT_EQ(quad->triangle(200002), (std::array<std::uint32_t, 3>{1, 3, 4}));
+  EXPECT_EQ(quad->triangle(kFaces)[2], faces[kFaces - 1][2]);
+
+  // The first bad face is reported, wherever the blocks that hold bad faces run.
+  const auto expect_error = [&](std::vector<std::vector<double>> bad_faces,
+                                const std::string& message) {
+    const std::string path = dir.write("bad.ply", big_ply(false, kVertices, bad_faces, false));
+    const Result<Mesh> m = read_mesh(path);
+    ASSERT_FALSE(m.ok()) << message;
+    EXPECT_EQ(m.error().message, path + ": " + message);
+  };
+  std::vector<std::vector<double>> bad = faces;
+  bad[240000] = {0, 1, 100000};
+  bad[150001] = {0, 100000, 1};
+  expect_error(bad, "PLY body: face 150001 names vertex 100000, but there are 100000");
+  bad[30000] = {5, 6};
+  bad[30001] = {1, 2, 3, 4};  // the file keeps the size the header's counts need
+  expect_error(bad, "PLY body: face 30000 has 2 vertices");
+}
+
+TEST(ReadPly, BigFileWithANonFiniteCoordinateIsRefused) {
+  TempDir dir;
+  std::vector<std::vector<double>> faces(70000, {0, 1, 2});
+  std::string ply = big_ply(false, 70000, faces, false);
+  // Vertex 69,999's y (the vertices end where the faces' 70,000 records of 13 bytes begin).
+  const std::size_t y = ply.size() - 13 * faces.size() - 8;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(&ply[y], &nan, 4);
+  const std::string path = dir.write("nan.ply", ply);
+  const Result<Mesh> mesh = read_mesh(path);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().message, path + ": has a vertex with a non-finite coordinate");
 }
 
 }  // namespace

@@ -63,11 +63,24 @@ double small_atan2(double y, double x) {
   return r * (1 - r2 * (1.0 / 3 - r2 * (1.0 / 5)));
 }
 
+// The distances from the eye of the vertices [first, first + size): a face's three vertices are
+// each shared by about six faces, so a block of faces computes them once per vertex.
+struct NearDistances {
+  const double* distance = nullptr;
+  std::uint32_t first = 0, size = 0;
+  double of(std::uint32_t v, const Vec3d& from_eye) const {
+    return v - first < size ? distance[v - first] : length(from_eye);
+  }
+};
+
 // Van Oosterom–Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
 // The sign of det = a·(b×c) says which side the light at `eye` sees (+1 away, −1 facing it, 0
 // edge-on or a face of the apex vertex `apex`); |det| within what moving each vertex by `ulp_tol`
 // could change counts as edge-on. `*omega` is the signed solid angle.
-int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega) {
+// `near` (may be empty) holds the distances from the eye of some vertices, length(position −
+// eye) as computed here, so the same to the bit.
+int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega,
+                        const NearDistances& near = {}) {
   const Vec3d& eye = view.eye;
   const auto [ia, ib, ic] = mesh.triangle(t);
   if (ia == view.apex || ib == view.apex || ic == view.apex) {
@@ -78,7 +91,7 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
               c = position(mesh, ic) - eye;
   const Vec3d bc = cross(b, c);
   const double det = dot(a, bc);
-  const double la = length(a), lb = length(b), lc = length(c);
+  const double la = near.of(ia, a), lb = near.of(ib, b), lc = near.of(ic, c);
   const double denom = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
   *omega = 2 * small_atan2(det, denom);
   // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
@@ -114,18 +127,42 @@ int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, doubl
 // with grain 2^14 and summed in its order, so that the sums do not depend on the threads.
 constexpr std::size_t kLightGrain = std::size_t{1} << 14;
 
+// In the same loop, the faces' determinants are added to `*det` in face order (as signed_volume
+// adds them) and the degenerate faces counted: the faces are read once.
 LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin, std::size_t end,
-                     std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link) {
+                     std::vector<std::pair<std::uint32_t, std::uint32_t>>* apex_link, double* det,
+                     std::uint64_t* degenerate) {
   if (end - begin > kLightGrain) {
     const std::size_t middle = begin + (end - begin) / 2;
-    const LightSums left = light_sums(mesh, view, begin, middle, apex_link);
-    return left + light_sums(mesh, view, middle, end, apex_link);
+    const LightSums left = light_sums(mesh, view, begin, middle, apex_link, det, degenerate);
+    return left + light_sums(mesh, view, middle, end, apex_link, det, degenerate);
   }
   LightSums s;
+  const float* p = mesh.positions.data();
+  const std::uint32_t* idx = mesh.indices.data();
+  // From a point: the distances of the vertices the faces name, when they span a range of at most
+  // twice as many vertices as there are faces (faces in vertex order, as build writes them).
+  NearDistances near;
+  thread_local std::vector<double> distances;
+  if (view.kind == LightView::Kind::point && end > begin) {
+    const auto [lo, hi] = std::minmax_element(idx + 3 * begin, idx + 3 * end);
+    if (*hi - *lo < 2 * (end - begin)) {
+      near.first = *lo;
+      near.size = *hi - *lo + 1;
+      distances.resize(near.size);
+      for (std::uint32_t k = 0; k < near.size; ++k)
+        distances[k] = length(position(mesh, near.first + k) - view.eye);
+      near.distance = distances.data();
+    }
+  }
+  double acc = *det;
+  std::uint64_t zero_area = 0;
   for (std::size_t t = begin; t != end; ++t) {
+    acc += volume_det(p + 3 * idx[3 * t], p + 3 * idx[3 * t + 1], p + 3 * idx[3 * t + 2]);
+    zero_area += is_degenerate(mesh, t);
     if (view.kind == LightView::Kind::point) {
       double omega = 0;
-      const int side = classify_from_point(mesh, t, view, &omega);
+      const int side = classify_from_point(mesh, t, view, &omega, near);
       if (side > 0) {
         s.positive += omega;
       } else if (side < 0) {
@@ -155,6 +192,8 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
         break;
     }
   }
+  *det = acc;
+  *degenerate += zero_area;
   return s;
 }
 
@@ -166,6 +205,11 @@ class FacePass {
   FacePass(const Mesh& mesh, const LightView& view) : mesh_(mesh), view_(view) {}
   FacePass(FacePass& other, tbb::split) : mesh_(other.mesh_), view_(other.view_) {}
   void operator()(const tbb::blocked_range<std::size_t>& range) {
+    if (view_.kind != LightView::Kind::none) {
+      sums.light = sums.light + light_sums(mesh_, view_, range.begin(), range.end(),
+                                           &sums.apex_link, &sums.det, &sums.degenerate);
+      return;
+    }
     const float* p = mesh_.positions.data();
     const std::uint32_t* idx = mesh_.indices.data();
     double acc = sums.det;
@@ -176,9 +220,6 @@ class FacePass {
     }
     sums.det = acc;
     sums.degenerate += degenerate;
-    if (view_.kind != LightView::Kind::none)
-      sums.light =
-          sums.light + light_sums(mesh_, view_, range.begin(), range.end(), &sums.apex_link);
   }
   void join(FacePass& right) {
     sums.det += right.sums.det;

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace lightvol {
@@ -13,16 +14,30 @@ namespace lightvol {
 // kernel to back large buffers with transparent huge pages: a 33-million-triangle volume then
 // takes hundreds, not hundreds of thousands, of page faults to fill. Advice only: harmless where
 // huge pages are unavailable.
-template <class T>
-void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
-  buffer.reserve(capacity);
+// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with transparent huge
+// pages, when there are at least four 2 MiB's worth of bytes.
+inline void advise_huge_pages(const void* data, std::size_t bytes) {
   constexpr std::size_t kHuge = std::size_t{2} << 20;
-  const std::size_t bytes = capacity * sizeof(T);
   if (bytes < 4 * kHuge) return;
-  const auto begin = reinterpret_cast<std::uintptr_t>(buffer.data());
+  const auto begin = reinterpret_cast<std::uintptr_t>(data);
   const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
   const std::uintptr_t end = (begin + bytes) & ~(kHuge - 1);
   if (end > aligned) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
+}
+
+template <class T>
+void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
+  buffer.reserve(capacity);
+  advise_huge_pages(buffer.data(), capacity * sizeof(T));
+}
+
+// An array of `n` elements left uninitialized (the caller's parallel loop writes each first, and
+// its threads take the page faults), on huge pages when large.
+template <class T>
+std::unique_ptr<T[]> uninitialized_large(std::size_t n) {
+  auto array = std::make_unique_for_overwrite<T[]>(n);
+  advise_huge_pages(array.get(), n * sizeof(T));
+  return array;
 }
 
 }  // namespace lightvol

@@ -14,6 +14,8 @@
 #include <OpenMesh/Core/IO/IOManager.hh>
 #include <OpenMesh/Core/IO/importer/BaseImporter.hh>
 #include <OpenMesh/Core/System/omstream.hh>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
@@ -449,9 +451,15 @@ Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};
   if (mesh->num_vertices() >= std::numeric_limits<std::uint32_t>::max())
     return Error{path + ": has too many vertices"};
-  for (const float x : mesh->positions) {
-    if (!std::isfinite(x)) return Error{path + ": has a vertex with a non-finite coordinate"};
-  }
+  const std::vector<float>& p = mesh->positions;
+  const bool finite = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, p.size(), std::size_t{1} << 18), true,
+      [&](const tbb::blocked_range<std::size_t>& r, bool ok) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) ok &= std::isfinite(p[i]);
+        return ok;
+      },
+      [](bool x, bool y) { return x && y; });
+  if (!finite) return Error{path + ": has a vertex with a non-finite coordinate"};
   return weld_identical_positions(std::move(*mesh));
 }
 
