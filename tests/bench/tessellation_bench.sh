@@ -62,8 +62,8 @@ row() {  # map mesher threshold mesh
 
 bench_map() {  # label: $work/map.exr and $work/map.f32 of size $n
   local label=$1
-  # A light box one unit across (texel (col, row) at (col, −row) / (N − 1)): heights in [0, 1] at
-  # coordinates up to N would be refused by build's float32 guard. The checker scales back.
+  # A light box one unit across (texel (col, row) at (col, −row) / (N − 1)), as the tables in
+  # docs/performance.md were measured (a box N units wide builds too). The checker scales back.
   local ortho
   ortho=$(awk -v n="$n" 'BEGIN { s = n - 1; printf "%.17g, %.17g, %.17g, %.17g", -0.5 / s, (s + 0.5) / s, -(s + 0.5) / s, 0.5 / s }')
   cat > "$work/light.json" <<JSON
