@@ -10,12 +10,10 @@
 
 namespace lightvol {
 
-// Reserves room for `capacity` elements (so later appends never copy the buffer) and asks the
-// kernel to back large buffers with transparent huge pages: a 33-million-triangle volume then
+// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with transparent huge
+// pages, when there are at least four 2 MiB's worth of bytes: a 33-million-triangle volume then
 // takes hundreds, not hundreds of thousands, of page faults to fill. Advice only: harmless where
 // huge pages are unavailable.
-// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with transparent huge
-// pages, when there are at least four 2 MiB's worth of bytes.
 inline void advise_huge_pages(const void* data, std::size_t bytes) {
   constexpr std::size_t kHuge = std::size_t{2} << 20;
   if (bytes < 4 * kHuge) return;
@@ -25,6 +23,8 @@ inline void advise_huge_pages(const void* data, std::size_t bytes) {
   if (end > aligned) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
 }
 
+// Reserves room for `capacity` elements (so later appends never copy the buffer), on huge pages
+// when large.
 template <class T>
 void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
   buffer.reserve(capacity);

@@ -1,7 +1,5 @@
 // TexelDepths: the texel error metric, the window depth of every texel and the world distance
 // along its ray between two window depths.
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -10,28 +8,12 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/light/texel.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 
 namespace lightvol {
-
-namespace {
-
-// An array of n doubles left uninitialized (the caller's parallel loop is the first touch),
-// advised onto transparent huge pages when large: fewer page faults. Advice only.
-std::unique_ptr<double[]> uninitialized_array(std::size_t n) {
-  auto a = std::make_unique_for_overwrite<double[]>(n);
-  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-  const auto begin = reinterpret_cast<std::uintptr_t>(a.get());
-  const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = (begin + n * sizeof(double)) & ~(kHuge - 1);
-  if (end > aligned + 4 * kHuge)
-    ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
-  return a;
-}
-
-}  // namespace
 
 // Long (over 80 lines) on purpose: the per-texel loop converts each encoding to window depth and
 // the error scale in one pass over the texels (one read of the image, written once), with the
@@ -44,7 +26,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   t.width_ = w;
   t.height_ = h;
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  t.depth_ = uninitialized_array(n);
+  t.depth_ = uninitialized_large<double>(n);
 
   // clip → world. A texel's homogeneous point at window depth d is h0 + d·h1 with
   // h0 = M·(x_ndc, y_ndc, −1, 1) and h1 = 2·M·e_z; two points of one ray lie
@@ -68,7 +50,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   if (t.uniform_) {
     t.uniform_scale_ = std::sqrt(h1[0] * h1[0] + h1[1] * h1[1] + h1[2] * h1[2]) / std::abs(t.w0_c_);
   } else {
-    t.scale_ = uninitialized_array(n);
+    t.scale_ = uninitialized_large<double>(n);
   }
 
   const bool window = light.depth == DepthEncoding::window;
