@@ -12,6 +12,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
+#include <lightvol/core/light_side.h>
 
 namespace lightvol {
 namespace detail {
@@ -97,10 +98,7 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
   // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
   // products' lengths.
   if (det > view.ulp_tol * (lb * lc + lc * la + la * lb) * (1 + 1e-12)) return 1;
-  const double tol = view.ulp_tol * (length(bc) + length(cross(c, a)) + length(cross(a, b)));
-  if (det > tol) return 1;
-  if (det < -tol) return -1;
-  return 0;
+  return side_from_point(a, b, c, bc, det, view.ulp_tol);
 }
 
 // Directional: +1 (an exit: normal along f), −1 (a face on the wrong side), 0 (edge-on), or 2
@@ -113,14 +111,8 @@ int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, doubl
   const auto [ia, ib, ic] = mesh.triangle(t);
   const Vec3d a = position(mesh, ia), b = position(mesh, ib), c = position(mesh, ic);
   *area = 0.5 * dot(cross(b - a, c - a), f);
-  // Moving a vertex by δ changes the projected area by at most δ/2 times the opposite edge as
-  // projected along f: walls parallel to f, however tall, stay within rounding of zero.
-  const auto across = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
-  const double tol = view.ulp_tol * (across(b - a) + across(c - b) + across(a - c));
   const bool source = on_near_plane(ia) && on_near_plane(ib) && on_near_plane(ic);
-  if (*area > tol) return source ? -1 : 1;
-  if (*area < -tol) return source ? 2 : -1;
-  return 0;
+  return side_along(a, b, c, f, *area, source, view.ulp_tol);
 }
 
 // The light sums of faces [begin, end), split as parallel_deterministic_reduce splits a range

@@ -83,20 +83,26 @@ double SignedVolumeSum::volume() const {
   return fold(0, triangles_, &leaf) / 6.0;
 }
 
-Status MeshBufferStream::positions(const PositionSink& sink) {
+namespace {
+
+// Hands `count` records of three values each from `buffer` to `sink`, 2^16 records at a time,
+// until the sink says stop.
+template <class T, class Sink>
+Status in_blocks(const std::vector<T>& buffer, std::size_t count, const Sink& sink) {
   constexpr std::size_t kBlock = std::size_t{1} << 16;
-  const std::size_t n = mesh_.num_vertices();
-  for (std::size_t v = 0; v < n; v += kBlock)
-    if (!sink(&mesh_.positions[3 * v], std::min(kBlock, n - v))) return {};
+  for (std::size_t i = 0; i < count; i += kBlock)
+    if (!sink(&buffer[3 * i], std::min(kBlock, count - i))) break;
   return {};
 }
 
+}  // namespace
+
+Status MeshBufferStream::positions(const PositionSink& sink) {
+  return in_blocks(mesh_.positions, mesh_.num_vertices(), sink);
+}
+
 Status MeshBufferStream::triangles(const TriangleSink& sink) {
-  constexpr std::size_t kBlock = std::size_t{1} << 16;
-  const std::size_t n = mesh_.num_triangles();
-  for (std::size_t t = 0; t < n; t += kBlock)
-    if (!sink(&mesh_.indices[3 * t], std::min(kBlock, n - t))) return {};
-  return {};
+  return in_blocks(mesh_.indices, mesh_.num_triangles(), sink);
 }
 
 }  // namespace lightvol

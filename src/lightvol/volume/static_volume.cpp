@@ -13,6 +13,7 @@
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
+#include <lightvol/core/light_side.h>
 #include <lightvol/light/texel.h>
 #include <lightvol/volume/closing.h>
 #include <lightvol/volume/static_volume.h>
@@ -250,27 +251,21 @@ struct FaceJudge {
     return dot(a - eye, n) >= 0;
   }
 
-  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), faces the wrong way.
+  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), faces the wrong way: the
+  // proof's own test (core/light_side.h). A face of the vertex at the eye has det 0 exactly: the
+  // proof leaves the apex's faces out.
   [[gnu::noinline]] bool turned(const Vec3d& a, const Vec3d& b, const Vec3d& c,
                                 const Vec3d& n) const {
     if (type == LightType::directional) {
-      const double area = 0.5 * dot(n, f);
       const auto on_near_plane = [&](const Vec3d& p) {
         return std::abs(dot(p - near_origin, f)) <= tol;
       };
       const bool source = on_near_plane(a) && on_near_plane(b) && on_near_plane(c);
-      if (source ? area <= 0 : area >= 0) return false;  // the right way round, or edge-on
-      const auto flat = [&](const Vec3d& e) { return length(e - dot(e, f) * f); };
-      const double bound = tol * (flat(b - a) + flat(c - b) + flat(a - c));
-      return source ? area > bound : area < -bound;
+      return side_along(a, b, c, f, 0.5 * dot(n, f), source, tol) == -1;
     }
-    // The proof's own formula. A face of the vertex at the eye has det 0 exactly: the proof leaves
-    // the apex's faces out.
     const Vec3d pa = a - eye, pb = b - eye, pc = c - eye;
     const Vec3d bc = cross(pb, pc);
-    const double det = dot(pa, bc);
-    if (det >= 0) return false;
-    return det < -tol * (length(bc) + length(cross(pc, pa)) + length(cross(pa, pb)));
+    return side_from_point(pa, pb, pc, bc, dot(pa, bc), tol) == -1;
   }
 };
 
