@@ -74,6 +74,27 @@ TEST(CheckCommand, ExitCodesAndReports) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+// A folded volume stays invalid in a file that also holds a far vertex no face uses: the proof's
+// tolerance is each face's own (issue: one vertex at 10^7 made `check --light` say valid).
+TEST(CheckCommand, AnUnusedFarVertexDoesNotMakeAFoldedVolumeValid) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  Mesh folded = sound_spot_volume();
+  // Border vertex (8, 3) lifted above the light, through its neighbours.
+  folded.positions[3 * (3 * 9 + 8) + 1] = 5;
+  ASSERT_TRUE(write_mesh(dir.file("folded.ply"), folded).ok());
+  auto r = test::run_lightvol("check '" + dir.file("folded.ply") + "' --light '" + light + "'");
+  ASSERT_EQ(r.exit_code, 1) << r.out << r.err;
+  for (const float far : {1e6f, 1e7f, 3.4e38f}) {
+    Mesh with_far = folded;
+    with_far.positions.insert(with_far.positions.end(), {0, far, 0});
+    ASSERT_TRUE(write_mesh(dir.file("far.ply"), with_far).ok());
+    r = test::run_lightvol("check '" + dir.file("far.ply") + "' --light '" + light + "' --quiet");
+    EXPECT_EQ(r.exit_code, 1) << far << ": " << r.err;
+    EXPECT_NE(r.err.find("non-self-nesting"), std::string::npos) << r.err;
+  }
+}
+
 TEST(BuildCommand, ChecksWhatItWrites) {
   TempDir dir;
   const std::string light = dir.write("light.json", test::spot_json());

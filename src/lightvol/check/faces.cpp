@@ -10,6 +10,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
+#include <lightvol/core/light_side.h>
 
 namespace lightvol::detail {
 
@@ -19,7 +20,6 @@ namespace {
 struct VertexPartial {
   std::array<double, 3> min{}, max{};
   bool any = false;
-  double max_abs = 0;
   std::vector<std::uint32_t> at_light;
   double light_offset = 0;
   VertexPartial join(VertexPartial&& o) && {
@@ -27,7 +27,6 @@ struct VertexPartial {
     if (!any) return std::move(o);
     for (int k = 0; k < 3; ++k)
       min[k] = std::min(min[k], o.min[k]), max[k] = std::max(max[k], o.max[k]);
-    max_abs = std::max(max_abs, o.max_abs);
     if (!o.at_light.empty()) {
       at_light.insert(at_light.end(), o.at_light.begin(), o.at_light.end());
       light_offset = o.light_offset;
@@ -60,7 +59,6 @@ VertexScan scan_vertices(const Mesh& mesh, const Light* light, double quantum) {
             const double x = p[3 * v + k];
             s.min[k] = std::min(s.min[k], x);
             s.max[k] = std::max(s.max[k], x);
-            s.max_abs = std::max(s.max_abs, std::abs(x));
           }
           if (!point) continue;
           const Vec3d d = Vec3d{p[3 * v], p[3 * v + 1], p[3 * v + 2]} - light_pos;
@@ -74,7 +72,6 @@ VertexScan scan_vertices(const Mesh& mesh, const Light* light, double quantum) {
       },
       [](VertexPartial x, VertexPartial y) { return std::move(x).join(std::move(y)); });
   if (all.any) out.bounds = {all.min, all.max};
-  out.max_abs = all.max_abs;
   out.at_light = std::move(all.at_light);
   out.light_offset = all.light_offset;
   return out;
@@ -95,10 +92,10 @@ CheckResult degenerate_check(const Mesh& mesh, std::uint64_t count, int max_offe
 }
 
 // T-junctions: a boundary vertex lying inside a boundary edge (strictly between its ends, within
-// a millionth of the edge's length plus float rounding). Boundary vertices are binned in a grid
-// whose cells are the mean boundary edge length; each edge visits the cells along it.
-CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double eps_pos,
-                             int max_offenders) {
+// a millionth of the edge's length plus the float rounding of the three points' own coordinates).
+// Boundary vertices are binned in a grid whose cells are the mean boundary edge length; each edge
+// visits the cells along it.
+CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, int max_offenders) {
   CheckResult r;
   r.name = kCheckTJunctions;
   if (edges.boundary.empty()) {
@@ -142,7 +139,6 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
     const double len2 = dot(d, d);
     if (len2 == 0) continue;
     const double len = std::sqrt(len2);
-    const double tol = 1e-6 * len + 4 * eps_pos;
     const int steps = static_cast<int>(std::min(len / cell, 1e7)) + 1;
     std::vector<std::uint64_t> visited;
     for (int s = 0; s <= steps; ++s) {
@@ -159,6 +155,8 @@ CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double 
               if (w == u || w == v || reported.count(w)) continue;
               const Vec3d pw = position(mesh, w);
               const double t = dot(pw - pu, d) / len2;
+              const double tol =
+                  1e-6 * len + 0.5 * corner_motion(pu, pv, pw);  // 4 ulps of their coordinates
               if (t * len <= tol || (1 - t) * len <= tol) continue;
               if (length(pw - (pu + t * d)) > tol) continue;
               reported[w] = true;

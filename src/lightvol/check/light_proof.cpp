@@ -76,8 +76,9 @@ struct NearDistances {
 
 // Van Oosterom–Strackee: tan(Ω/2) = a·(b×c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|).
 // The sign of det = a·(b×c) says which side the light at `eye` sees (+1 away, −1 facing it, 0
-// edge-on or a face of the apex vertex `apex`); |det| within what moving each vertex by `ulp_tol`
-// could change counts as edge-on. `*omega` is the signed solid angle.
+// edge-on or a face of the apex vertex `apex`); |det| within what moving each vertex by the face's
+// own corner motion (and the view's `extra`) could change counts as edge-on. `*omega` is the
+// signed solid angle.
 // `near` (may be empty) holds the distances from the eye of some vertices, length(position −
 // eye) as computed here, so the same to the bit.
 int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, double* omega,
@@ -88,8 +89,9 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
     *omega = 0;
     return 0;
   }
-  const Vec3d a = position(mesh, ia) - eye, b = position(mesh, ib) - eye,
-              c = position(mesh, ic) - eye;
+  const Vec3d pa = position(mesh, ia), pb = position(mesh, ib), pc = position(mesh, ic);
+  const double motion = corner_motion(pa, pb, pc) + view.extra;
+  const Vec3d a = pa - eye, b = pb - eye, c = pc - eye;
   const Vec3d bc = cross(b, c);
   const double det = dot(a, bc);
   const double la = near.of(ia, a), lb = near.of(ib, b), lc = near.of(ic, c);
@@ -97,22 +99,23 @@ int classify_from_point(const Mesh& mesh, std::size_t t, const LightView& view, 
   *omega = 2 * small_atan2(det, denom);
   // |b × c| ≤ |b||c| (with room for their rounding): most faces are decided without the cross
   // products' lengths.
-  if (det > view.ulp_tol * (lb * lc + lc * la + la * lb) * (1 + 1e-12)) return 1;
-  return side_from_point(a, b, c, bc, det, view.ulp_tol);
+  if (det > motion * (lb * lc + lc * la + la * lb) * (1 + 1e-12)) return 1;
+  return side_from_point(a, b, c, bc, det, motion);
 }
 
 // Directional: +1 (an exit: normal along f), −1 (a face on the wrong side), 0 (edge-on), or 2
 // (an entry: a near-plane face facing the light); `area` is the signed projected area.
 int classify_along(const Mesh& mesh, std::size_t t, const LightView& view, double* area) {
   const Vec3d& f = view.f;
-  const auto on_near_plane = [&](std::uint32_t v) {
-    return std::abs(dot(position(mesh, v) - view.origin, f)) <= view.plane_tol;
-  };
   const auto [ia, ib, ic] = mesh.triangle(t);
   const Vec3d a = position(mesh, ia), b = position(mesh, ib), c = position(mesh, ic);
+  const double motion = corner_motion(a, b, c) + view.extra;
+  const auto on_near_plane = [&](const Vec3d& p) {
+    return std::abs(dot(p - view.origin, f)) <= motion;
+  };
   *area = 0.5 * dot(cross(b - a, c - a), f);
-  const bool source = on_near_plane(ia) && on_near_plane(ib) && on_near_plane(ic);
-  return side_along(a, b, c, f, *area, source, view.ulp_tol);
+  const bool source = on_near_plane(a) && on_near_plane(b) && on_near_plane(c);
+  return side_along(a, b, c, f, *area, source, motion);
 }
 
 // The light sums of faces [begin, end), split as parallel_deterministic_reduce splits a range
@@ -229,8 +232,7 @@ class FacePass {
 
 }  // namespace
 
-LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double eps_pos,
-                     double quantum) {
+LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double quantum) {
   // The light at a vertex (a spot volume's apex): view from that vertex's exact position, so the
   // faces around it are exactly degenerate and the cone is measured from the same point.
   LightView view;
@@ -238,16 +240,16 @@ LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& sca
   const bool at_vertex = scan.at_light.size() == 1;
   view.eye = at_vertex ? position(mesh, scan.at_light.front()) : light.position;
   view.apex = at_vertex ? scan.at_light.front() : ~0u;
-  view.ulp_tol = 8 * eps_pos + quantum;
+  view.extra = quantum + frame_motion(view.eye);
   return view;
 }
 
-LightView directional_view(const Light& light, double eps_pos, double quantum) {
+LightView directional_view(const Light& light, double quantum) {
   LightView view;
   view.kind = LightView::Kind::directional;
   view.f = normalize(light.direction);
   view.origin = light.position + light.near * view.f;
-  view.plane_tol = view.ulp_tol = 8 * eps_pos + quantum;
+  view.extra = quantum + std::max(frame_motion(view.origin), frame_motion(light.position));
   return view;
 }
 

@@ -1,6 +1,6 @@
 // check_volume_linear: the linear-time checks in report order (faces.cpp, edges.cpp,
 // light_proof.cpp hold them), and check_closed_outward on top of it. The mesh is read in four
-// parallel passes: the vertices (bounds, largest coordinate, vertices at the light), the indices,
+// parallel passes: the vertices (bounds, vertices at the light), the indices,
 // the edges (in chunks of lower vertices) and the faces (volume, degenerate faces, the light's
 // sums); offenders are found again by sequential passes only when a check fails.
 #include <algorithm>
@@ -82,13 +82,6 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
     return report;
   }
 
-  double max_abs = scan.max_abs;
-  if (light) {
-    for (int k = 0; k < 3; ++k) max_abs = std::max(max_abs, std::abs(light->position[k]));
-  }
-  // The rounding of a coordinate to float: half an ulp of the largest, doubled for safety.
-  const double eps_pos = std::ldexp(max_abs, -23);
-
   EdgeResults edges = edge_checks(mesh, max_offenders);
   report.checks.push_back(edges.closed);
   report.checks.push_back(edges.manifold);
@@ -99,10 +92,9 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
   // One pass over the faces: the volume, the degenerate faces and the light's sums.
   LightView view;
   if (light && topology) {
-    view = light->type == LightType::directional
-               ? directional_view(*light, eps_pos, quantization_step)
-           : scan.at_light.size() <= 1 ? point_view(mesh, *light, scan, eps_pos, quantization_step)
-                                       : LightView{};
+    view = light->type == LightType::directional ? directional_view(*light, quantization_step)
+           : scan.at_light.size() <= 1           ? point_view(mesh, *light, scan, quantization_step)
+                                                 : LightView{};
   }
   const FaceSums sums = face_pass(mesh, view);
   report.volume = sums.det / 6.0;
@@ -121,7 +113,7 @@ CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_of
     report.checks.push_back(skipped(kCheckOutward, "needs a closed, edge-manifold, oriented mesh"));
   }
   report.checks.push_back(degenerate_check(mesh, sums.degenerate, max_offenders));
-  report.checks.push_back(t_junction_check(mesh, edges, eps_pos, max_offenders));
+  report.checks.push_back(t_junction_check(mesh, edges, max_offenders));
 
   if (!light) {
     report.checks.push_back(skipped(kCheckNesting, "no light given (CGAL's proof runs in check)"));

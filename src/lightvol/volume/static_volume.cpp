@@ -115,8 +115,9 @@ std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
 
 // The float32 guard (check_representable) judges a volume as check_volume_linear's proof from the
 // light would: in the volume's frame (world, or the light's eye space with the light at the origin,
-// spot and directional looking down −Z), with its tolerance, eight float ulps of the largest
-// coordinate. That coordinate is known only after every vertex, so the guard runs in two passes,
+// spot and directional looking down −Z), with its tolerance, each face's own corner motion (eight
+// float ulps of its corners' largest coordinate, core/light_side.h). The vertex at the light is
+// known only after every vertex, so the guard runs in two passes,
 // each a tally gathered vertex by vertex or face by face and merged in any order (maxima, minima
 // and counts: the same numbers however the work is split): first the vertices (VertexTally), then
 // the faces judged with what the vertices said (FaceJudge, FaceTally). A held mesh is read twice;
@@ -227,35 +228,35 @@ struct FaceJudge {
   LightType type = LightType::spot;
   Vec3d eye;  // point lights: the vertex at the light if there is exactly one, else the light
   Vec3d f, near_origin;
-  double tol = 0;  // eight float ulps of the largest coordinate, the light's position's included
+  double extra = 0;  // the rounding of the frame's own arithmetic (frame_motion), as the proof's
 
   FaceJudge(const VertexTally& v, const GuardLight& g)
       : type(g.type),
         eye(v.at_light == 1 ? v.apex : g.position),
         f(g.f),
         near_origin(g.near_origin),
-        tol(8 * std::ldexp(std::max({v.largest, std::abs(g.position.x), std::abs(g.position.y),
-                                     std::abs(g.position.z)}),
-                           -23)) {}
+        extra(g.type == LightType::directional
+                  ? std::max(frame_motion(g.near_origin), frame_motion(g.position))
+                  : frame_motion(eye)) {}
 
   // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), surely faces the right
   // way, from a test cheap enough for every face: nearly all of them pass it. Point lights:
   // det(a − eye, b − eye, c − eye) is (a − eye)·n, and a face where that is not negative faces
   // away (rounding moves it by some 1e-16 of its terms, the tolerance is 1e-6 of them: they could
   // only disagree for faces a billionth of a radian across, which the texel test of the verdict
-  // refuses anyway). Directional: a face with a vertex off the near plane is an exit, which faces
-  // the right way when its projected area is not negative.
-  bool away(const Vec3d& a, const Vec3d& n) const {
+  // refuses anyway). Directional: a face with a vertex off the near plane (beyond the face's
+  // motion `tol`) is an exit, which faces the right way when its projected area is not negative.
+  bool away(const Vec3d& a, const Vec3d& n, double tol) const {
     if (type == LightType::directional)
       return std::abs(dot(a - near_origin, f)) > tol && dot(n, f) >= 0;
     return dot(a - eye, n) >= 0;
   }
 
   // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), faces the wrong way: the
-  // proof's own test (core/light_side.h). A face of the vertex at the eye has det 0 exactly: the
-  // proof leaves the apex's faces out.
-  [[gnu::noinline]] bool turned(const Vec3d& a, const Vec3d& b, const Vec3d& c,
-                                const Vec3d& n) const {
+  // proof's own test (core/light_side.h), with the face's motion `tol`. A face of the vertex at
+  // the eye has det 0 exactly: the proof leaves the apex's faces out.
+  [[gnu::noinline]] bool turned(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n,
+                                double tol) const {
     if (type == LightType::directional) {
       const auto on_near_plane = [&](const Vec3d& p) {
         return std::abs(dot(p - near_origin, f)) <= tol;
@@ -276,7 +277,8 @@ inline FaceFinding judge_face(const float* qa, const float* qb, const float* qc,
   const Vec3d a{qa[0], qa[1], qa[2]}, b{qb[0], qb[1], qb[2]}, c{qc[0], qc[1], qc[2]};
   const Vec3d n = cross(b - a, c - a);
   if (n.x == 0 && n.y == 0 && n.z == 0) return FaceFinding::collapsed;
-  if (judge.away(a, n) || !judge.turned(a, b, c, n)) return FaceFinding::sound;
+  const double tol = corner_motion(a, b, c) + judge.extra;
+  if (judge.away(a, n, tol) || !judge.turned(a, b, c, n, tol)) return FaceFinding::sound;
   return FaceFinding::turned;
 }
 
@@ -403,9 +405,9 @@ Status representable_verdict(const VertexTally& vertices, const FaceTally& faces
                              const Light& light, Space space, const std::string& light_source) {
   if (Status s = vertex_verdict(vertices, light, light_source); !s) return s;
   const double largest = vertices.largest;
-  // The checks' rounding is of the largest coordinate, the light's position's included: a
-  // directional light far behind its near plane coarsens it however small the volume's own
-  // coordinates are.
+  // The float step judged against a texel is that of the largest coordinate, the light's
+  // position's included: a directional light far behind its near plane is refused however small
+  // the volume's own coordinates are (where its faces would be placed is as coarse as that).
   const GuardLight guard = guard_light(light, space);
   const double light_largest = std::max(
       {std::abs(guard.position.x), std::abs(guard.position.y), std::abs(guard.position.z)});

@@ -51,14 +51,13 @@ inline bool passed(const CheckReport& report, std::string_view name) {
   return c && c->status == CheckStatus::passed;
 }
 
-// One pass over the vertices: their bounds, the largest |coordinate|, and with a point light the
+// One pass over the vertices: their bounds, and with a point light the
 // vertices at the light: "at the light" means within the rounding of coordinates there (a few
 // float ulps of the light's own position), not of the largest coordinate: a spot volume's near
 // plane can lie 10^-6 of the far distance from its apex. Quantized positions are only known to
 // within their step (`quantum`) (faces.cpp).
 struct VertexScan {
   Bounds bounds;                        // all zeros without vertices
-  double max_abs = 0;                   // of the coordinates
   std::vector<std::uint32_t> at_light;  // all the vertices within the tolerance, in order
   double light_offset = 0;              // of the last of them from the light, max-norm
   double light_ulp = 0;                 // a float ulp of the light position's largest coordinate
@@ -94,10 +93,9 @@ inline bool is_degenerate(const Mesh& mesh, std::size_t t) {
 // The `count` degenerate faces, with the first offenders (faces.cpp).
 CheckResult degenerate_check(const Mesh& mesh, std::uint64_t count, int max_offenders);
 
-// Boundary vertices lying inside boundary edges, within `eps_pos` (the rounding of a coordinate)
-// (faces.cpp).
-CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, double eps_pos,
-                             int max_offenders);
+// Boundary vertices lying inside boundary edges, within the float rounding of the edge's and the
+// vertex's own coordinates (faces.cpp).
+CheckResult t_junction_check(const Mesh& mesh, const EdgeResults& edges, int max_offenders);
 
 // Per-face sums of the light proof.
 struct LightSums {
@@ -117,17 +115,19 @@ struct LightSums {
 // along a direction.
 struct LightView {
   enum class Kind { none, point, directional } kind = Kind::none;
-  double ulp_tol = 0;  // a face within this much motion of its vertices of edge-on counts zero
+  // A face within its corners' motion of edge-on counts zero: corner_motion of the face's own
+  // corners (core/light_side.h) plus this, the positions' quantization step and the rounding of
+  // the view's own arithmetic (frame_motion of the eye, or of the near plane's origin).
+  double extra = 0;
   // Point: the eye (the light, or the vertex at it) and that vertex (~0u: none).
   Vec3d eye;
   std::uint32_t apex = ~0u;
-  // Directional: the unit direction, the near plane's origin and the tolerance of lying in it.
+  // Directional: the unit direction and the near plane's origin (a face's corners lie in the
+  // plane within the face's motion).
   Vec3d f, origin;
-  double plane_tol = 0;
 };
-LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double eps_pos,
-                     double quantum);
-LightView directional_view(const Light& light, double eps_pos, double quantum);
+LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double quantum);
+LightView directional_view(const Light& light, double quantum);
 
 // The per-face sums of one parallel pass over the faces: the signed volume (exactly as
 // signed_volume sums it), the degenerate faces, and with a view the light's sums and the faces
