@@ -256,6 +256,11 @@ export class AirlightRenderer {
   render() {
     const { renderer, gl } = this;
     const previousTarget = renderer.getRenderTarget();
+    // The passes clear their targets themselves (the surface to 3e38, "nothing there"): three's
+    // own clear would set the surface to the renderer's clear colour, 0, and with no scene every
+    // pixel would end at distance 0 with no airlight.
+    const autoClear = renderer.autoClear;
+    renderer.autoClear = false;
     renderer.setRenderTarget(this.surfaceTarget);
     gl.clearBufferfv(gl.COLOR, 0, new Float32Array([3e38, 0, 0, 0]));
     gl.clearBufferfi(gl.DEPTH_STENCIL, 0, 1, 0);
@@ -270,6 +275,7 @@ export class AirlightRenderer {
     renderer.setRenderTarget(this.airlightTarget);
     renderer.render(this.resolveScene, this.dummyCamera);
     renderer.setRenderTarget(previousTarget);
+    renderer.autoClear = autoClear;
   }
 
   // The airlight, width × height floats, top row first (as lightvol writes images).

@@ -1,7 +1,8 @@
 // The web viewer in a real browser: Debian's chromium, headless, WebGL2 on SwiftShader, driven by
 // puppeteer-core. On `lightvol demo`'s outputs (static and adaptive volumes, scene, camera, medium),
 // a Draco-compressed volume and an omni volume of the bundled scene, the viewer's airlight (window.lightvolAirlight()) must match `lightvol render --method volume` of the
-// same camera within 1 % relative L2.
+// same camera within 1 % relative L2; without `scene=` (no surface: the airlight runs through the
+// whole volume) it must match `render` with a camera depth of 1 everywhere.
 //   node web/tests/browser_test.mjs PATH/TO/lightvol [--demo-size N] [--only CASE] [--screenshot FILE.png]
 //                                   [--keep DIR]
 // Exit 0 when every case passes, 1 when one fails, 2 when something could not run.
@@ -91,16 +92,22 @@ run('build', 'omni_{face}.exr', '--light', 'omni.json', '--out', 'volume_omni.gl
 // three's EXRLoader reads RGB(A) or Y channels only: the depth's Z channel as RGB, by oiiotool.
 execFileSync('oiiotool', ['camera_depth.exr', '--ch', 'R=Z,G=Z,B=Z', '-o', 'camera_depth_rgb.exr'], { cwd: work });
 const lightvolSurface = surfaceDistances(readExr(join(work, 'camera_depth_rgb.exr')).values, camera);
+// No scene: window depth 1 at every pixel, nothing hit.
+execFileSync('oiiotool', ['--pattern', 'constant:color=1', `${camera.width}x${camera.height}`, '1',
+                          '--chnames', 'Z', '-d', 'float', '-o', 'empty_depth.exr'], { cwd: work });
+const noSurface = new Float64Array(camera.width * camera.height).fill(Infinity);
 const only = option('--only', null);
 const allCases = [
   { name: 'static', volume: 'volume_static.glb', light: spot },
   { name: 'adaptive', volume: 'volume_adaptive.glb', light: spot },
   { name: 'draco', volume: 'volume_draco.glb', light: spot },
   { name: 'omni', volume: 'volume_omni.glb', light: join(work, 'omni.json') },
+  { name: 'no-scene', volume: 'volume_static.glb', light: spot, noScene: true },
 ];
 const cases = allCases.filter((c) => !only || c.name === only);
 for (const c of cases)
-  run('render', c.volume, '--light', c.light, '--camera', 'camera.json', '--depth', 'camera_depth.exr',
+  run('render', c.volume, '--light', c.light, '--camera', 'camera.json',
+      '--depth', c.noScene ? 'empty_depth.exr' : 'camera_depth.exr',
       '--medium', 'medium.json', '--method', 'volume', '--out', `${c.name}_reference.exr`);
 
 // ---- the browser ---------------------------------------------------------------------------------
@@ -123,7 +130,7 @@ try {
     page.on('console', (m) => messages.push(m.text()));
     page.on('pageerror', (e) => messages.push(e.message));
     const address = url(`/web/index.html?volume=/data/${c.volume}&camera=/data/camera.json` +
-                        `&medium=/data/medium.json&scene=/data/scene.glb`);
+                        `&medium=/data/medium.json` + (c.noScene ? '' : '&scene=/data/scene.glb'));
     const started = Date.now();
     await page.goto(address);
     await page.waitForFunction(() => document.title.startsWith('lightvol:') &&
@@ -148,7 +155,7 @@ try {
     const mask = new Uint8Array(airlight.length);
     let disagree = 0, cracks = 0;
     for (let i = 0; i < mask.length; ++i) {
-      const a = lightvolSurface[i], b = surface[i] >= 1e38 ? Infinity : surface[i];
+      const a = (c.noScene ? noSurface : lightvolSurface)[i], b = surface[i] >= 1e38 ? Infinity : surface[i];
       if (counts[i] !== 0 && counts[i] !== 1) {
         mask[i] = 1;
         ++cracks;
