@@ -23,7 +23,7 @@
 //       left edge. At E = 0.001 (the benchmark's light box) the leaf next to the cliff's cells
 //       breaks the bound once its neighbour splits, and splitting it makes the next one split: the
 //       fix-up rounds walk across the map one 8-texel cell each (N / 8 of them).
-//   heightfield_tool upsample IN K OUT.exr
+//   heightfield_tool upsample IN K OUT.exr OUT.f32
 //       a depth image K times larger each way, every texel repeated K×K times: plateaus and
 //       one-texel steps, what a high-resolution map of a simple scene looks like.
 #include <algorithm>
@@ -220,7 +220,7 @@ int main(int argc, char** argv) {
                static_cast<std::streamsize>(4 * d.values.size()));
     return 0;
   }
-  if (argc == 5 && std::string(argv[1]) == "upsample") {
+  if (argc == 6 && std::string(argv[1]) == "upsample") {
     const int k = std::atoi(argv[3]);
     lightvol::Result<lightvol::DepthImage> d = lightvol::read_depth_image(argv[2], {});
     if (!d || k < 1) {
@@ -239,6 +239,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "heightfield_tool: %s\n", s.error().message.c_str());
       return 2;
     }
+    std::ofstream(argv[5], std::ios::binary)
+        .write(reinterpret_cast<const char*>(up.values.data()),
+               static_cast<std::streamsize>(4 * up.values.size()));
     return 0;
   }
   if ((argc == 5 || argc == 6) && std::string(argv[1]) == "error")
@@ -246,6 +249,7 @@ int main(int argc, char** argv) {
   std::fprintf(
       stderr,
       "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt} [XY_SCALE] | "
-      "from IN N SCALE OUT.exr OUT.f32 | steps N OUT.exr OUT.f32 | upsample IN K OUT.exr\n");
+      "from IN N SCALE OUT.exr OUT.f32 | steps N OUT.exr OUT.f32 | upsample IN K OUT.exr "
+      "OUT.f32\n");
   return 2;
 }
