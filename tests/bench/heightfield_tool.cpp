@@ -17,6 +17,15 @@
 //   heightfield_tool from IN N SCALE OUT.exr OUT.f32
 //       a real N×N depth image (e.g. a shadow map of `lightvol shadowmap` with linear depth) as a
 //       height field: every value times SCALE (e.g. 1/far, so that values lie in [0, 1]).
+//   heightfield_tool steps N OUT.exr OUT.f32
+//       plateaus with steps that cascade: 2×2-texel plateaus on a floor at height 0.5, in every
+//       8-column, 16-row tile one 0.0009 higher and one 0.0004 lower, and a cliff (0.7) along the
+//       left edge. At E = 0.001 (the benchmark's light box) the leaf next to the cliff's cells
+//       breaks the bound once its neighbour splits, and splitting it makes the next one split: the
+//       fix-up rounds walk across the map one 8-texel cell each (N / 8 of them).
+//   heightfield_tool upsample IN K OUT.exr OUT.f32
+//       a depth image K times larger each way, every texel repeated K×K times: plateaus and
+//       one-texel steps, what a high-resolution map of a simple scene looks like.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -184,11 +193,63 @@ int main(int argc, char** argv) {
                static_cast<std::streamsize>(4 * d->values.size()));
     return 0;
   }
+  if (argc == 5 && std::string(argv[1]) == "steps") {
+    const int n = std::atoi(argv[2]);
+    lightvol::DepthImage d;
+    d.width = d.height = n;
+    d.values.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+    for (int r = 0; r < n; ++r)
+      for (int c = 0; c < n; ++c) {
+        const int pc = c / 2 * 2, pr = r % 16 / 2 * 2;  // the plateau's first texel
+        float v = 0.5f;
+        if (pc < 2) {
+          v = 0.7f;
+        } else if (pc % 8 == 0 && pr == 4) {
+          v = 0.5009f;
+        } else if (pc % 8 == 2 && pr == 2) {
+          v = 0.4996f;
+        }
+        d.values[static_cast<std::size_t>(r) * static_cast<std::size_t>(n) + c] = v;
+      }
+    if (const lightvol::Status s = lightvol::write_depth_image(argv[3], d); !s) {
+      std::fprintf(stderr, "heightfield_tool: %s\n", s.error().message.c_str());
+      return 2;
+    }
+    std::ofstream(argv[4], std::ios::binary)
+        .write(reinterpret_cast<const char*>(d.values.data()),
+               static_cast<std::streamsize>(4 * d.values.size()));
+    return 0;
+  }
+  if (argc == 6 && std::string(argv[1]) == "upsample") {
+    const int k = std::atoi(argv[3]);
+    lightvol::Result<lightvol::DepthImage> d = lightvol::read_depth_image(argv[2], {});
+    if (!d || k < 1) {
+      std::fprintf(stderr, "heightfield_tool: %s: not a readable depth image, or K < 1\n", argv[2]);
+      return 2;
+    }
+    lightvol::DepthImage up;
+    up.width = d->width * k;
+    up.height = d->height * k;
+    up.values.resize(static_cast<std::size_t>(up.width) * static_cast<std::size_t>(up.height));
+    for (int r = 0; r < up.height; ++r)
+      for (int c = 0; c < up.width; ++c)
+        up.values[static_cast<std::size_t>(r) * static_cast<std::size_t>(up.width) + c] =
+            d->at(c / k, r / k);
+    if (const lightvol::Status s = lightvol::write_depth_image(argv[4], up); !s) {
+      std::fprintf(stderr, "heightfield_tool: %s\n", s.error().message.c_str());
+      return 2;
+    }
+    std::ofstream(argv[5], std::ios::binary)
+        .write(reinterpret_cast<const char*>(up.values.data()),
+               static_cast<std::streamsize>(4 * up.values.size()));
+    return 0;
+  }
   if ((argc == 5 || argc == 6) && std::string(argv[1]) == "error")
     return measure(argv[2], std::atoi(argv[3]), argv[4], argc == 6 ? std::atof(argv[5]) : 1.0);
   std::fprintf(
       stderr,
       "usage: heightfield_tool map N OUT.exr OUT.f32 | error MAP.f32 N MESH.{ply,mrt} [XY_SCALE] | "
-      "from IN N SCALE OUT.exr OUT.f32\n");
+      "from IN N SCALE OUT.exr OUT.f32 | steps N OUT.exr OUT.f32 | upsample IN K OUT.exr "
+      "OUT.f32\n");
   return 2;
 }

@@ -16,6 +16,14 @@
 # run per face: their union is no closed volume (each face meshes its borders on its own, so the
 # seams do not share vertices), and an omni face's error is a distance along perspective rays,
 # not a height.
+# Upsampled maps (UPSAMPLED, default "2048 4096"; "" skips; add 16384 for the largest): plateaus
+# with steps, lightvol only (Martini needs 2^k + 1 texels). The 1024² Sponza spot map (depth/far)
+# with each texel repeated (N/1024)² times, and heightfield_tool's `steps` map, whose fix-up rounds
+# cascade across the map (N/8 − 1 rounds). Their own table: triangles, largest error (lightvol's
+# report), fix-up rounds, the balance step's seconds (threshold, balance and fix-up), whole-process
+# wall, CPU and peak memory; then per map and tessellation the ratio of each size's wall time to
+# the first size's. LIGHTVOL (default BUILD_DIR/lightvol) picks the lightvol to time, e.g. an older
+# build for a before/after in one run.
 # Usage: tests/bench/tessellation_bench.sh BUILD_DIR [SIZES] [E] [REAL_SIZES] [SCENES_DIR]
 #   BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON (heightfield_tool); SIZES "1025 4097";
 #   E 0.001; REAL_SIZES "1025 4097"; SCENES_DIR with sponza/sponza.obj and sibenik/sibenik.obj.
@@ -32,17 +40,19 @@ real_sizes=${4-"1025 4097"}
 meshers=${MESHERS:-"collapse quadtree martini delatin"}
 delatin_max=${DELATIN_MAX:-0}
 omni_size=${OMNI_SIZE:-512}
+upsampled=${UPSAMPLED-"2048 4096"}
 runs() { [[ " $meshers " == *" $1 "* ]]; }
 scenes=${5:-$here/../../../shared/scenes}
 scratch=${TIN_DIR:-/tmp/lightvol-martini}
 mkdir -p "$scratch"
-if [ ! -d "$scratch/node_modules/@mapbox/martini" ] || [ ! -d "$scratch/node_modules/delatin" ]; then
+if { runs martini || runs delatin; } &&
+  { [ ! -d "$scratch/node_modules/@mapbox/martini" ] || [ ! -d "$scratch/node_modules/delatin" ]; }; then
   (cd "$scratch" && npm install --silent --no-audit --no-fund @mapbox/martini@0.2.0 delatin@0.2.0 >/dev/null)
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 tool="$build/tests/bench/heightfield_tool"
-lv="$build/lightvol"
+lv=${LIGHTVOL:-$build/lightvol}
 
 # timed CMD...: runs it under /usr/bin/time; sets wall, cpu (user+sys), mem (MB); returns its status.
 timed() {
@@ -150,3 +160,52 @@ print(a["grid_triangles"], "%.6g" % a["max_error_reached"], a["min_angle_degrees
       "$omni_size" "$t" "$oe" "$tris" "$reached" "$wall" "$cpu" "$mem" "$angle"
   done
 done
+
+[ -n "$upsampled" ] || exit 0
+# Upsampled maps: one table, then the wall-time ratios to the first size.
+upsampled_row() {  # label n
+  local label=$1 n=$2
+  awk -v n="$n" 'BEGIN { s = n - 1; printf "{\"type\": \"directional\", \"position\": [0, 0, 0], \"direction\": [0, 0, -1], \"up\": [0, 1, 0], \"ortho\": [%.17g, %.17g, %.17g, %.17g], \"near\": 0, \"far\": 1, \"depth\": \"linear\"}\n", -0.5 / s, (s + 0.5) / s, -(s + 0.5) / s, 0.5 / s }' > "$work/light.json"
+  for t in collapse quadtree; do
+    runs $t || continue
+    if ! timed "$lv" build "$work/map.exr" --light "$work/light.json" --adaptive --max-error "$bound" \
+      --tessellation $t --out "$work/v.ply" --report "$work/r.json" --quiet 2> "$work/err"; then
+      printf '| %s | lightvol %s | (build failed: %s) ||||||\n' "$label $n²" "$t" "$(head -c 160 "$work/err")"
+      continue
+    fi
+    read -r tris reached rounds balance < <(python3 -c '
+import json, sys
+a = json.load(open(sys.argv[1]))["adaptive"]
+print(a["grid_triangles"], "%.6g" % a["max_error_reached"], a["fixup_rounds"], "%.3f" % a["seconds"]["balance"])' "$work/r.json")
+    printf '| %s | lightvol %s | %s | %s | %s | %s s | %s s | %s s | %s MB |\n' "$label $n²" "$t" "$tris" \
+      "$reached" "$rounds" "$balance" "$wall" "$cpu" "$mem"
+    echo "$label|$t|$n|$wall" >> "$work/walls"
+  done
+}
+echo
+echo "Upsampled maps, E = $bound; $(nproc) cores; load $(cut -d' ' -f1-3 /proc/loadavg)"
+printf '| map | mesher | triangles | max error reached | fix-up rounds | balance | wall | CPU | peak memory |\n'
+printf '|---|---|---:|---:|---:|---:|---:|---:|---:|\n'
+: > "$work/walls"
+obj="$scenes/sponza/sponza.obj"
+if [ -f "$obj" ]; then
+  cat > "$work/spot.json" <<JSON
+{ "type": "spot", "position": [0, 14, -1], "direction": [0, -14, 4], "near": 0.5, "far": 40, "up": [1, 0, 0], "fov_y_deg": 90, "depth": "linear" }
+JSON
+  "$lv" shadowmap "$obj" --light "$work/spot.json" --size 1024 --out "$work/shadow.exr" --quiet
+  "$tool" from "$work/shadow.exr" 1024 0.025 "$work/sponza1024.exr" "$work/map.f32"
+  for n in $upsampled; do
+    "$tool" upsample "$work/sponza1024.exr" $((n / 1024)) "$work/map.exr" "$work/map.f32"
+    upsampled_row "Sponza spot 1024² (depth/far) upsampled to" "$n"
+  done
+else
+  echo "(no $obj: the upsampled Sponza map skipped)" >&2
+fi
+for n in $upsampled; do
+  "$tool" steps "$n" "$work/map.exr" "$work/map.f32"
+  upsampled_row "steps" "$n"
+done
+rm -f "$work/map.exr" "$work/map.f32" "$work/v.ply"
+echo
+awk -F'|' '{ key = $1 " (" $2 ")"; if (!(key in first)) { first[key] = $4; size[key] = $3 }
+             else printf "%s: wall %s² / %s² = %.2f\n", key, $3, size[key], $4 / first[key] }' "$work/walls"

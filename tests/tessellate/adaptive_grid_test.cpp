@@ -1,11 +1,14 @@
 // Adaptive tessellation of one grid: vertices in texel order and all used, forced border vertices,
-// and the fix-up that splits a leaf whose configuration breaks the bound. The bound over whole
+// the fix-up that splits a leaf whose configuration breaks the bound, and its rounds (each re-tests
+// only what the round before changed: the same grid as the full rounds). The bound over whole
 // volumes is tested in tests/volume/adaptive_volume_test.cpp.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -100,6 +103,111 @@ TEST(Adaptive, LeafWhoseSplitConfigurationBreaksTheBoundIsSplit) {
   const RayErrors r = ray_errors(*mesh, light, depth);
   EXPECT_EQ(r.missed, 0);
   EXPECT_LE(r.max_error, 1.0 + 1e-5);
+}
+
+// ---- the fix-up's rounds: linear in the quadtree's size, the same grid as the full rounds
+// --------
+
+// Plateaus with steps that cascade (tests/bench/heightfield_tool's `steps` map): 2×2-texel
+// plateaus on a floor at 0.5, in every 8-column, 16-row tile one 0.0009 higher (its texels
+// (8k, 4..5) on the left edge of the level-3 cell [8k, 8k+8]) and one 0.0004 lower, and a cliff
+// (0.7) in columns 0–1. At E = 0.001 (directional, linear: world error = depth error) every cell
+// fits the bound unsplit (0.00085 at most), but once the cell left of [8k, 8k+8] splits, the fan
+// from the raised midpoint misses the lowered plateau: it splits too, which splits the next. The
+// cliff starts it; the fix-up rounds walk across the map one cell each: n / 8 − 1 rounds.
+DepthImage cascading_steps(int n) {
+  return make_depth(n, n, [](int c, int r) {
+    const int pc = c / 2 * 2, pr = r % 16 / 2 * 2;
+    if (pc < 2) return 0.7f;
+    if (pc % 8 == 0 && pr == 4) return 0.5009f;
+    if (pc % 8 == 2 && pr == 2) return 0.4996f;
+    return 0.5f;
+  });
+}
+
+void expect_same_grid(const AdaptiveGrid& a, const AdaptiveGrid& b) {
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.indices, b.indices);
+  for (int side = 0; side < 4; ++side) EXPECT_EQ(a.border[side], b.border[side]) << side;
+  EXPECT_EQ(a.leaves, b.leaves);
+  EXPECT_EQ(a.fixup_rounds, b.fixup_rounds);
+}
+
+TEST(Adaptive, FixupRoundsCascadingAcrossPlateausVisitEachCellAFewTimes) {
+  const int n = 256;
+  const Light light = light_from_json(directional_json("linear"));
+  const DepthImage depth = cascading_steps(n);
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
+  ASSERT_TRUE(t.ok());
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  const AdaptiveGrid g = pyramid.tessellate(0.001, true);
+  const AdaptiveGrid full = pyramid.tessellate_by_full_rounds(0.001, true);
+  EXPECT_EQ(g.fixup_rounds, n / 8 - 1);
+  expect_same_grid(g, full);
+  EXPECT_LE(pyramid.measure(g), 0.001);
+  // The quadtree's cells (levels 1 to 8 over 255 × 255 quads). The full rounds sweep the levels
+  // 2 to 8 twice per round; the rounds after the first visit only the splits and their neighbours.
+  std::uint64_t cells = 0;
+  for (int level = 1; level <= 8; ++level) {
+    const std::uint64_t side = (255u + (1u << level) - 1) >> level;
+    cells += side * side;
+  }
+  EXPECT_LE(g.balance_visits, 2 * cells);
+  EXPECT_GT(full.balance_visits, 10 * cells);
+}
+
+TEST(Adaptive, FixupRoundsGiveTheFullRoundsGridOnRandomPlateaus) {
+  // Random variations of cascading_steps: the raised and lowered plateaus 0.75–0.95 and 0.3–0.6
+  // of the bound away from the floor, each tile's pair present with probability 0.8 (a missing
+  // one stops a cascade), the cliff on the left or not, a floor tilted by up to 0.05 E per texel;
+  // under a directional light (uniform error scale) and a spot light (linear depth: the error
+  // scale varies over the map); two bounds; a forced border vertex on two sides or none. Every
+  // grid equals the full rounds' and meets the bound, and some take many rounds.
+  std::mt19937 rng(7);
+  const auto uniform = [&](double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng);
+  };
+  const std::string lights[2] = {directional_json("linear"), test::spot_json("linear")};
+  int most_rounds = 0;
+  for (int trial = 0; trial < 24; ++trial) {
+    const int li = trial % 2, n = (64 << rng() % 3) + 1;
+    const double e = trial % 4 < 2 ? 0.001 : 0.01, base = li == 0 ? 5.0 : 3.0;
+    const double up = uniform(0.75, 0.95) * e, down = uniform(0.3, 0.6) * e;
+    const double tilt_x = uniform(-0.05, 0.05) * e, tilt_y = uniform(-0.05, 0.05) * e;
+    const bool cliff = rng() % 4 != 0;
+    std::vector<std::uint8_t> present(static_cast<std::size_t>(n) * n);
+    for (std::uint8_t& p : present) p = rng() % 5 != 0 ? 1 : 0;
+    const int orientation = static_cast<int>(rng() % 8);
+    const DepthImage depth = make_depth(n, n, [&](int col, int row) {
+      int c = orientation & 1 ? n - 1 - col : col, r = orientation & 2 ? n - 1 - row : row;
+      if (orientation & 4) std::swap(c, r);
+      const int pc = c / 2 * 2, pr = r % 16 / 2 * 2;
+      double v = base + tilt_x * c + tilt_y * r;
+      const bool here = present[static_cast<std::size_t>(r / 16) * n + c / 8] != 0;
+      if (cliff && pc < 2)
+        v = base + 0.2;
+      else if (here && pc % 8 == 0 && pr == 4)
+        v += up;
+      else if (here && pc % 8 == 2 && pr == 2)
+        v -= down;
+      return static_cast<float>(v);
+    });
+    const Light light = light_from_json(lights[li]);
+    Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
+    ASSERT_TRUE(t.ok());
+    const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+    BorderSplits forced;
+    if (trial % 3 == 0) {
+      forced.side[kTop] = {n / 3};
+      forced.side[kRight] = {n / 2 + 1};
+    }
+    SCOPED_TRACE(testing::Message() << "trial " << trial << ", " << n << "², E " << e);
+    const AdaptiveGrid g = pyramid.tessellate(e, true, forced);
+    expect_same_grid(g, pyramid.tessellate_by_full_rounds(e, true, forced));
+    EXPECT_LE(pyramid.measure(g), e);
+    most_rounds = std::max(most_rounds, g.fixup_rounds);
+  }
+  EXPECT_GE(most_rounds, 5);
 }
 
 }  // namespace

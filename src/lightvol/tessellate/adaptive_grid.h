@@ -98,6 +98,9 @@ struct AdaptiveGrid {
   std::uint64_t leaves = 0;             // quadtree leaves (cells emitted)
   int fixup_rounds = 0;        // rounds of splitting leaves whose configuration broke the bound
   double balance_seconds = 0;  // threshold, balance and fix-up
+  // Cells the balance and fix-up visited over all rounds: a small multiple of the quadtree's cells
+  // (tessellate), or one sweep of every level per round (tessellate_by_full_rounds).
+  std::uint64_t balance_visits = 0;
   double emit_seconds = 0;
 
   std::size_t num_triangles() const { return indices.size() / 3; }
@@ -117,12 +120,18 @@ class RefinementPyramid {
   // Tessellates at `bound` (max_error: world units; laplacian: the threshold T). `standard`
   // chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
   AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
+  // The same grid by the plain rounds: every fix-up round re-balances and re-tests the whole
+  // quadtree (time: rounds × cells). The reference tessellate is tested against.
+  AdaptiveGrid tessellate_by_full_rounds(double bound, bool standard,
+                                         const BorderSplits& forced = {}) const;
 
   // The largest world distance, over all texels, between a texel's point and its ray's point on
   // the grid's triangles (measured on the triangles themselves, not on the quadtree).
   double measure(const AdaptiveGrid& grid) const;
 
  private:
+  AdaptiveGrid tessellate_rounds(double bound, bool standard, const BorderSplits& forced,
+                                 bool full_rounds) const;
   TexelDepths texels_;
   Refinement refinement_;
   int top_ = 0;                            // level of the root cell

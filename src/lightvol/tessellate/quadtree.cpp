@@ -53,10 +53,20 @@ class Refiner {
   // 2:1 balance: a split cell needs its four same-level neighbours to exist, so their parents
   // split; and a split cell's parent splits. One sweep from fine to coarse settles every level.
   void balance();
+  // The same closure after the cells in changed_ from index `from` on were split: each split only
+  // visits its parent and its neighbours' parents, and whatever it splits is appended to changed_
+  // and visited in turn. Time: linear in the cells it splits.
+  void balance_from(std::size_t from);
   // max_error's fix-up: splits the leaves whose split configuration breaks the bound (their
-  // children meet it with their own triangles: the pyramid's values never grow downwards).
-  // Returns whether any leaf split.
+  // children meet it with their own triangles: the pyramid's values never grow downwards), and
+  // appends them to changed_. Returns whether any leaf split. Tests every leaf.
   bool split_failing_leaves();
+  // The same, testing only the leaves whose test can have changed since the previous round: the
+  // children and same-level neighbours of the cells in changed_ (a leaf whose own cell, parent and
+  // neighbours kept their state has the configuration it passed with). Clears changed_ first.
+  bool split_failing_changed_leaves();
+  // Cells the balance and fix-up visited (sweeps: every cell of the levels swept).
+  std::uint64_t visits() const { return visits_; }
   // Emission: the vertex bitmap and triangle counts, the vertices ranked in texel order, the
   // triangles (wound as `standard` says), and the border vertices per side.
   void emit(bool standard, AdaptiveGrid* grid);
@@ -80,6 +90,10 @@ class Refiner {
   // Configuration of a leaf: the edges whose same-level neighbour is split and whose midpoint is
   // a texel inside the (clipped) edge.
   unsigned config_of(int level, int i, int j, const Quadtree::Box& b) const;
+  // Whether the leaf's split configuration breaks the bound.
+  bool leaf_fails(int level, int i, int j) const;
+  // Splits the cells (level ≥ 2) marked in fail and appends them to changed_.
+  void split_marked(const std::vector<std::vector<std::uint8_t>>& fail);
   // Calls fn(i, j) for each leaf of block `blk`, in order.
   template <typename Fn>
   void for_each_leaf(const Block& blk, Fn&& fn) const;
@@ -116,6 +130,12 @@ class Refiner {
   const Quadtree q_;
   // split_[L][cell]: the cell (level ≥ 1) is divided into its children.
   std::vector<std::vector<std::uint8_t>> split_;
+  // Cells split since the leaves were last tested, by the fix-up or the balance it caused.
+  struct Cell {
+    int level, i, j;
+  };
+  std::vector<Cell> changed_;
+  std::uint64_t visits_ = 0;
 };
 
 void Refiner::threshold() {
@@ -198,6 +218,7 @@ void Refiner::balance() {
   for (int level = 2; level <= q_.top; ++level) {
     const int nx = q_.nx(level);
     std::vector<std::uint8_t>& s = split_[level];
+    visits_ += s.size();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, s.size(), 1024),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t cell = range.begin(); cell != range.end(); ++cell) {
@@ -217,47 +238,131 @@ void Refiner::balance() {
   }
 }
 
+void Refiner::balance_from(std::size_t from) {
+  const auto force = [&](int level, int i, int j) {  // the level-(level+1) parent of (i, j)
+    if (i < 0 || j < 0 || i >= q_.nx(level) || j >= q_.ny(level)) return;
+    const int pl = level + 1, pi = i >> 1, pj = j >> 1;
+    if (is_split(pl, pi, pj)) return;
+    set_split(pl, pi, pj);
+    changed_.push_back({pl, pi, pj});
+  };
+  for (std::size_t k = from; k < changed_.size(); ++k) {
+    const Cell c = changed_[k];
+    ++visits_;
+    if (c.level >= q_.top) continue;
+    force(c.level, c.i, c.j);
+    force(c.level, c.i - 1, c.j);
+    force(c.level, c.i + 1, c.j);
+    force(c.level, c.i, c.j - 1);
+    force(c.level, c.i, c.j + 1);
+  }
+}
+
+bool Refiner::leaf_fails(int level, int i, int j) const {
+  // Level 1 never fails: every configuration keeps the diagonal, and the texels that are not
+  // vertices (unsplit edge midpoints, the centre on the diagonal) interpolate as in the unsplit
+  // cell.
+  if (level <= 1) return false;
+  const Quadtree::Box b = q_.box(level, i, j);
+  const unsigned config = config_of(level, i, j, b);
+  if (config == 0) return false;
+  // With a uniform error scale, a configuration moves the surface by at most the deviation of its
+  // split midpoints, texels of the cell: its error is at most twice the cell's own (≤ its pyramid
+  // value v). 2v within the bound needs no evaluation.
+  const double v = value_[level][static_cast<std::size_t>(j) * q_.nx(level) + i];
+  if (texels_.uniform() && 2 * v * (1 + 1e-9) <= bound_) return false;
+  std::array<Pt, 3> tri[6];
+  const int n = cell_triangles(b, 1 << (level - 1), config, tri);
+  for (int t = 0; t < n; ++t)
+    if (triangle_error(texels_, tri[t][0], tri[t][1], tri[t][2]) > bound_) return true;
+  return false;
+}
+
+void Refiner::split_marked(const std::vector<std::vector<std::uint8_t>>& fail) {
+  for (int level = 2; level <= q_.top; ++level) {
+    const int nx = q_.nx(level);
+    for (std::size_t c = 0; c < fail[level].size(); ++c) {
+      if (!fail[level][c]) continue;
+      split_[level][c] = 1;
+      changed_.push_back({level, static_cast<int>(c % nx), static_cast<int>(c / nx)});
+    }
+  }
+}
+
 bool Refiner::split_failing_leaves() {
   const std::vector<Block> blks = blocks();
   std::vector<std::vector<std::uint8_t>> fail(split_.size());
-  for (int level = 1; level <= q_.top; ++level) fail[level].assign(split_[level].size(), 0);
+  for (int level = 2; level <= q_.top; ++level) {
+    fail[level].assign(split_[level].size(), 0);
+    visits_ += split_[level].size();
+  }
   const bool any_fail = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, blks.size(), 1), false,
       [&](const tbb::blocked_range<std::size_t>& range, bool acc) {
         for (std::size_t k = range.begin(); k != range.end(); ++k) {
           const int level = blks[k].level;
-          // Level 1 never fails: every configuration keeps the diagonal, and the texels that are
-          // not vertices (unsplit edge midpoints, the centre on the diagonal) interpolate as in
-          // the unsplit cell.
           if (level <= 1) continue;
           for_each_leaf(blks[k], [&](int i, int j) {
-            const Quadtree::Box b = q_.box(level, i, j);
-            const unsigned config = config_of(level, i, j, b);
-            if (config == 0) return;
-            // With a uniform error scale, a configuration moves the surface by at most the
-            // deviation of its split midpoints, texels of the cell: its error is at most twice
-            // the cell's own (≤ its pyramid value v). 2v within the bound needs no evaluation.
-            const double v = value_[level][static_cast<std::size_t>(j) * q_.nx(level) + i];
-            if (texels_.uniform() && 2 * v * (1 + 1e-9) <= bound_) return;
-            std::array<Pt, 3> tri[6];
-            const int n = cell_triangles(b, 1 << (level - 1), config, tri);
-            for (int t = 0; t < n; ++t) {
-              if (triangle_error(texels_, tri[t][0], tri[t][1], tri[t][2]) > bound_) {
-                fail[level][static_cast<std::size_t>(j) * q_.nx(level) + i] = 1;
-                acc = true;
-                return;
-              }
-            }
+            if (!leaf_fails(level, i, j)) return;
+            fail[level][static_cast<std::size_t>(j) * q_.nx(level) + i] = 1;
+            acc = true;
           });
         }
         return acc;
       },
       [](bool a, bool b) { return a || b; });
-  if (!any_fail) return false;
-  for (int level = 1; level <= q_.top; ++level)
-    for (std::size_t c = 0; c < fail[level].size(); ++c)
-      if (fail[level][c]) split_[level][c] = 1;
-  return true;
+  changed_.clear();
+  if (any_fail) split_marked(fail);
+  return any_fail;
+}
+
+bool Refiner::split_failing_changed_leaves() {
+  // The candidates, as (level, cell index) keys: sorted and unique, so each is tested once.
+  std::vector<std::uint64_t> keys;
+  const auto add = [&](int level, int i, int j) {
+    if (level < 2 || i < 0 || j < 0 || i >= q_.nx(level) || j >= q_.ny(level)) return;
+    keys.push_back((static_cast<std::uint64_t>(level) << 58) |
+                   (static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(q_.nx(level)) +
+                    static_cast<std::uint64_t>(i)));
+  };
+  for (const Cell& c : changed_) {
+    for (int dj = 0; dj < 2; ++dj)
+      for (int di = 0; di < 2; ++di) add(c.level - 1, 2 * c.i + di, 2 * c.j + dj);
+    add(c.level, c.i - 1, c.j);
+    add(c.level, c.i + 1, c.j);
+    add(c.level, c.i, c.j - 1);
+    add(c.level, c.i, c.j + 1);
+  }
+  changed_.clear();
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  visits_ += keys.size();
+  std::vector<std::uint8_t> fails(keys.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys.size(), 64),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                        const int level = static_cast<int>(keys[k] >> 58);
+                        const std::uint64_t cell = keys[k] & ((std::uint64_t{1} << 58) - 1);
+                        const int nx = q_.nx(level);
+                        const int i = static_cast<int>(cell % static_cast<std::uint64_t>(nx)),
+                                  j = static_cast<int>(cell / static_cast<std::uint64_t>(nx));
+                        const bool leaf = !is_split(level, i, j) &&
+                                          (level == q_.top || is_split(level + 1, i / 2, j / 2));
+                        fails[k] = leaf && leaf_fails(level, i, j) ? 1 : 0;
+                      }
+                    });
+  bool any_fail = false;
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    if (!fails[k]) continue;
+    any_fail = true;
+    const int level = static_cast<int>(keys[k] >> 58);
+    const std::uint64_t cell = keys[k] & ((std::uint64_t{1} << 58) - 1);
+    const int nx = q_.nx(level);
+    split_[level][cell] = 1;
+    changed_.push_back({level, static_cast<int>(cell % static_cast<std::uint64_t>(nx)),
+                        static_cast<int>(cell / static_cast<std::uint64_t>(nx))});
+  }
+  return any_fail;
 }
 
 std::vector<std::uint64_t> Refiner::mark_vertices(const std::vector<Block>& blocks,
@@ -375,6 +480,17 @@ void Refiner::emit(bool standard, AdaptiveGrid* grid) {
 
 AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
                                            const BorderSplits& forced) const {
+  return tessellate_rounds(bound, standard, forced, false);
+}
+
+AdaptiveGrid RefinementPyramid::tessellate_by_full_rounds(double bound, bool standard,
+                                                          const BorderSplits& forced) const {
+  return tessellate_rounds(bound, standard, forced, true);
+}
+
+AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
+                                                  const BorderSplits& forced,
+                                                  bool full_rounds) const {
   const auto start = std::chrono::steady_clock::now();
   AdaptiveGrid grid;
   grid.width = texels_.width();
@@ -382,13 +498,26 @@ AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
   Refiner refiner(texels_, value_, bound);
   refiner.threshold();
   refiner.force_border(forced);
-  // Balance, then (max_error) split the leaves that break the bound, until none does.
-  for (;;) {
-    refiner.balance();
-    if (refinement_ != Refinement::max_error || !refiner.split_failing_leaves()) break;
-    ++grid.fixup_rounds;
+  // Balance, then (max_error) split the leaves that break the bound, until none does. The first
+  // round sweeps and tests the whole tree; each later one (unless full_rounds) only propagates the
+  // splits of the round before and re-tests the leaves they touched: the same rounds, the same
+  // splits, in time linear in the quadtree's size however many rounds a map takes.
+  refiner.balance();
+  if (refinement_ == Refinement::max_error) {
+    for (bool first = true;; first = false) {
+      const bool split = first || full_rounds ? refiner.split_failing_leaves()
+                                              : refiner.split_failing_changed_leaves();
+      if (!split) break;
+      ++grid.fixup_rounds;
+      if (full_rounds) {
+        refiner.balance();
+      } else {
+        refiner.balance_from(0);
+      }
+    }
   }
   grid.balance_seconds = seconds_since(start);
+  grid.balance_visits = refiner.visits();
   const auto emit_start = std::chrono::steady_clock::now();
   refiner.emit(standard, &grid);
   grid.emit_seconds = seconds_since(emit_start);
