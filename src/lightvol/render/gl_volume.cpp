@@ -7,6 +7,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/render/detail/airlight_glsl.h>
 #include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_volume.h>
 
 namespace lightvol {
 
@@ -142,6 +143,8 @@ struct GlVolumeRenderer::State {
   RenderScene scene;
   GlVolumeOptions options;
   Program volume, resolve;
+  Program live_program;              // compiled by the first set_volume(LiveVolume)
+  const LiveVolume* live = nullptr;  // drawn instead of the mesh when set
   Framebuffer accumulate, output;
   TextureHandle surface, table;
   VertexArrayHandle vao, empty_vao;
@@ -235,6 +238,34 @@ void GlVolumeRenderer::set_volume(const Mesh& volume) {
                volume.indices.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   s.index_count = static_cast<GLsizei>(volume.indices.size());
+  s.live = nullptr;
+}
+
+Status GlVolumeRenderer::set_volume(const LiveVolume& live) {
+  State& s = *state_;
+  if (s.live_program.id() == 0) {
+    Result<Program> program =
+        Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
+                         stage_source("LIGHTVOL_VOLUME_FRAGMENT"), "live volume");
+    if (!program) return program.error();
+    s.live_program = std::move(*program);
+    const Program& p = s.live_program;
+    p.use();
+    set_scene_uniforms(p, s.scene);
+    glUniform1i(p.uniform("baseline"), s.options.baseline ? 1 : 0);
+    glUniform1i(p.uniform("f_table"), 1);
+    glUniform1i(p.uniform("surface"), 0);
+    glUniform1i(p.uniform("panels"), s.scene.medium.profile.enabled()
+                                         ? std::max(s.options.panels, 8)
+                                         : s.options.panels);
+    glUniform1f(p.uniform("facing_sign"), s.facing_sign);
+    glUniformMatrix4fv(p.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
+    glUseProgram(0);
+    if (std::string e = pending_error(); !e.empty())
+      return Error{"OpenGL: setting up the live volume's program: " + e};
+  }
+  s.live = &live;
+  return {};
 }
 
 Image GlVolumeRenderer::render(double* seconds) {
@@ -250,13 +281,21 @@ Image GlVolumeRenderer::render(double* seconds) {
   glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_ADD);
   glBlendFunc(GL_ONE, GL_ONE);
-  s.volume.use();
+  // A live volume's vertices are made here, from its shadow map (texture unit 2), by the vertex
+  // stage; a mesh's come from its buffer.
+  const Program& program = s.live ? s.live_program : s.volume;
+  program.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, s.table.id());
-  glBindVertexArray(s.vao.id());
-  glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  if (s.live) {
+    s.live->bind(program, 2);
+    glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
+  } else {
+    glBindVertexArray(s.vao.id());
+    glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  }
   glDisable(GL_BLEND);
   glDisable(GL_DEPTH_CLAMP);
   // Pass 2: per-pixel constants and the baseline.

@@ -33,6 +33,8 @@
 
 namespace lightvol {
 
+class LiveVolume;
+
 struct GlVolumeOptions {
   bool baseline = true;  // integrate fragments from the closest point to the light (see above)
   int panels = 2;  // Gauss–Legendre panels (8 nodes each) per fragment for quadrature phases
@@ -49,6 +51,11 @@ class GlVolumeRenderer {
 
   // Uploads the volume (world space, closed, oriented outward).
   void set_volume(const Mesh& volume);
+  // Draws `live` from now on (render/live_volume.h): each render() makes its vertices from its
+  // shadow map as it then is, in the volume pass's vertex stage, and draws them as a mesh is
+  // drawn. `live` must outlive its use here (until the next set_volume); its light should be the
+  // scene's. Errors: the live vertex stage does not compile (a driver problem).
+  Status set_volume(const LiveVolume& live);
 
   // Draws the volume and the resolve pass, waits for the GPU, and returns the airlight image
   // (first row = top). `seconds`, when given, receives the wall-clock time of the GPU work

@@ -1,0 +1,263 @@
+#include <algorithm>
+#include <cstddef>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include <lightvol/core/check.h>
+#include <lightvol/render/detail/airlight_glsl.h>
+#include <lightvol/render/live_volume.h>
+#include <lightvol/volume/static_volume.h>
+
+namespace lightvol {
+
+using namespace gl;
+
+namespace {
+
+// The uniforms of the live vertex stage for one light and map size, computed in double.
+struct LiveUniforms {
+  int width = 0, height = 0;
+  int flip_y = 0, depth = 0, directional = 0, standard = 1;
+  float min_t = 0;
+  float ray_x[4] = {}, ray_y[4] = {}, near_0[4] = {}, far_0[4] = {};
+  float eye_to_world[16] = {};  // row-major
+  float apex[3] = {}, cap[3] = {};
+};
+
+LiveUniforms live_uniforms(const Light& light, int width, int height) {
+  const Unprojector unproject(light, width, height, 0, Space::world);
+  LiveUniforms u;
+  u.width = width;
+  u.height = height;
+  u.flip_y = light.flip_y ? 1 : 0;
+  u.depth = static_cast<int>(light.depth);
+  u.directional = light.type == LightType::directional ? 1 : 0;
+  u.standard = unproject.standard_winding() ? 1 : 0;
+  u.min_t = static_cast<float>(unproject.min_t());
+  bool ok = false;
+  const Mat4d inv_p = inverse(light.projection, &ok);
+  LV_CHECK(ok);
+  const Mat4d to_world = inverse(light.view, &ok);
+  LV_CHECK(ok);
+  for (int i = 0; i < 4; ++i) {
+    u.ray_x[i] = static_cast<float>(inv_p(i, 0));
+    u.ray_y[i] = static_cast<float>(inv_p(i, 1));
+    u.near_0[i] = static_cast<float>(inv_p(i, 3) - inv_p(i, 2));  // invP · (0, 0, −1, 1)
+    u.far_0[i] = static_cast<float>(inv_p(i, 3) + inv_p(i, 2));   // invP · (0, 0, 1, 1)
+  }
+  for (int i = 0; i < 16; ++i) u.eye_to_world[i] = static_cast<float>(to_world.m[i]);
+  const Vec3d apex = unproject.apex();
+  const Vec3d cap =
+      0.25 * (unproject.near_point(0, 0) + unproject.near_point(width - 1, 0) +
+              unproject.near_point(0, height - 1) + unproject.near_point(width - 1, height - 1));
+  for (int k = 0; k < 3; ++k) {
+    u.apex[k] = static_cast<float>(apex[k]);
+    u.cap[k] = static_cast<float>(cap[k]);
+  }
+  return u;
+}
+
+bool is_depth_format(GLint format) {
+  switch (format) {
+    case GL_DEPTH_COMPONENT16:
+    case GL_DEPTH_COMPONENT24:
+    case GL_DEPTH_COMPONENT32:
+    case GL_DEPTH_COMPONENT32F:
+    case GL_DEPTH24_STENCIL8:
+    case GL_DEPTH32F_STENCIL8:
+      return true;
+    default:
+      return false;
+  }
+}
+
+std::string texture_name(const GlShadowMap& map) {
+  return "shadow map texture " + std::to_string(map.texture);
+}
+
+// Why `map` cannot be the shadow map of `light`, or "".
+std::string map_problem(const Light& light, const GlShadowMap& map) {
+  const std::string name = texture_name(map);
+  if (map.width < 2 || map.height < 2)
+    return name + ": size " + std::to_string(map.width) + "x" + std::to_string(map.height) +
+           " given; a volume needs at least 2x2 texels";
+  // Vertex ids are GLSL ints: W·H plus the closing must stay below 2^31.
+  const VolumeCounts counts = static_volume_counts(light.type, map.width, map.height);
+  if (counts.vertices >= std::uint64_t{1} << 31 ||
+      3 * counts.triangles >= std::uint64_t{std::numeric_limits<GLsizei>::max()})
+    return name + ": " + std::to_string(map.width) + "x" + std::to_string(map.height) +
+           " texels are more than one draw call holds";
+  (void)pending_error();
+  if (map.texture == 0 || glIsTexture(map.texture) != GL_TRUE) return name + ": not a texture name";
+  glBindTexture(GL_TEXTURE_2D, map.texture);
+  if (!pending_error().empty()) return name + ": not a 2D texture";
+  GLint w = 0, h = 0, format = 0, compare = GL_NONE;
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_WIDTH, &w);
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_HEIGHT, &h);
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);
+  glGetTexParameteriv(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, &compare);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  if (w != map.width || h != map.height)
+    return name + ": level 0 is " + std::to_string(w) + "x" + std::to_string(h) + ", not the " +
+           std::to_string(map.width) + "x" + std::to_string(map.height) + " given";
+  const bool depth_format = is_depth_format(format);
+  if (!depth_format && format != GL_R32F) {
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%04X", static_cast<unsigned>(format));
+    return name + ": internal format " + hex + " is neither a depth format nor GL_R32F";
+  }
+  if (depth_format && light.depth != DepthEncoding::window)
+    return name + ": a depth texture holds window depth in [0, 1]; the light's \"depth\" is \"" +
+           std::string(to_string(light.depth)) + "\", which needs a GL_R32F texture";
+  if (depth_format && compare != GL_NONE)
+    return name + ": GL_TEXTURE_COMPARE_MODE is on; texelFetch needs it GL_NONE";
+  return "";
+}
+
+std::string stage_source(const char* stage) {
+  return "#version 450 core\n#define " + std::string(stage) + "\n" + detail::kAirlightGlsl;
+}
+
+}  // namespace
+
+gl::TextureHandle upload_shadow_map(const Light& light, const DepthImage& depth) {
+  const std::size_t w = static_cast<std::size_t>(depth.width);
+  const int h = depth.height;
+  std::vector<float> rows(depth.values.size());
+  for (int t = 0; t < h; ++t) {
+    // GL row t (t = 0 at the bottom, NDC y = −1) is image row H − 1 − t, or t with flip_y.
+    const int row = light.flip_y ? t : h - 1 - t;
+    std::copy_n(depth.values.begin() + static_cast<std::ptrdiff_t>(row * w), w,
+                rows.begin() + static_cast<std::ptrdiff_t>(t * w));
+  }
+  return make_texture_2d(depth.width, h, GL_R32F, rows.data(), 1);
+}
+
+struct LiveVolume::State {
+  Light light;
+  GlShadowMap map;
+  LiveUniforms uniforms;
+  Program capture;
+  VertexArrayHandle vao;
+  BufferHandle indices;
+  GLsizei index_count = 0;
+  std::uint64_t vertices = 0, triangles = 0;
+};
+
+LiveVolume::~LiveVolume() = default;
+
+Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light, const GlShadowMap& map) {
+  if (light.type == LightType::omni)
+    return Error{"live volume: omni lights are not made on the GPU yet (spot and directional are)"};
+  std::unique_ptr<LiveVolume> live(new LiveVolume());
+  live->state_ = std::make_unique<State>();
+  State& s = *live->state_;
+  s.light = light;
+  Result<Program> capture =
+      Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
+                       "#version 450 core\nout vec4 colour;\nvoid main() { colour = vec4(0.0); }\n",
+                       "live volume capture", {"world"});
+  if (!capture) return capture.error();
+  s.capture = std::move(*capture);
+  GLuint id = 0;
+  glGenVertexArrays(1, &id);
+  s.vao = VertexArrayHandle(id);
+  glGenBuffers(1, &id);
+  s.indices = BufferHandle(id);
+  glBindVertexArray(s.vao.id());
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.indices.id());
+  glBindVertexArray(0);
+  if (Status st = live->set_shadow_map(map); !st) return st.error();
+  return live;
+}
+
+Status LiveVolume::set_shadow_map(const GlShadowMap& map) {
+  State& s = *state_;
+  if (const std::string problem = map_problem(s.light, map); !problem.empty())
+    return Error{problem};
+  const bool resized = map.width != s.map.width || map.height != s.map.height;
+  s.map = map;
+  if (!resized) return {};
+  s.uniforms = live_uniforms(s.light, map.width, map.height);
+  const std::vector<std::uint32_t> indices = static_volume_indices(s.light, map.width, map.height);
+  glBindVertexArray(s.vao.id());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
+               GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  s.index_count = static_cast<GLsizei>(indices.size());
+  const VolumeCounts counts = static_volume_counts(s.light.type, map.width, map.height);
+  s.vertices = counts.vertices;
+  s.triangles = counts.triangles;
+  if (std::string e = pending_error(); !e.empty())
+    return Error{"OpenGL: uploading the live volume's triangles: " + e};
+  return {};
+}
+
+const Light& LiveVolume::light() const { return state_->light; }
+const GlShadowMap& LiveVolume::shadow_map() const { return state_->map; }
+std::uint64_t LiveVolume::num_vertices() const { return state_->vertices; }
+std::uint64_t LiveVolume::num_triangles() const { return state_->triangles; }
+GLsizei LiveVolume::index_count() const { return state_->index_count; }
+
+void LiveVolume::bind(const Program& program, int unit) const {
+  const State& s = *state_;
+  const LiveUniforms& u = s.uniforms;
+  glUniform2i(program.uniform("live_size"), u.width, u.height);
+  glUniform1i(program.uniform("live_flip_y"), u.flip_y);
+  glUniform1i(program.uniform("live_depth"), u.depth);
+  glUniform1i(program.uniform("live_directional"), u.directional);
+  glUniform1i(program.uniform("live_standard"), u.standard);
+  glUniform1f(program.uniform("live_min_t"), u.min_t);
+  glUniform4f(program.uniform("live_ray_x"), u.ray_x[0], u.ray_x[1], u.ray_x[2], u.ray_x[3]);
+  glUniform4f(program.uniform("live_ray_y"), u.ray_y[0], u.ray_y[1], u.ray_y[2], u.ray_y[3]);
+  glUniform4f(program.uniform("live_near_0"), u.near_0[0], u.near_0[1], u.near_0[2], u.near_0[3]);
+  glUniform4f(program.uniform("live_far_0"), u.far_0[0], u.far_0[1], u.far_0[2], u.far_0[3]);
+  glUniformMatrix4fv(program.uniform("live_eye_to_world"), 1, GL_TRUE, u.eye_to_world);
+  glUniform3f(program.uniform("live_apex"), u.apex[0], u.apex[1], u.apex[2]);
+  glUniform3f(program.uniform("live_cap"), u.cap[0], u.cap[1], u.cap[2]);
+  glUniform1i(program.uniform("shadow_map"), unit);
+  glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
+  glBindTexture(GL_TEXTURE_2D, s.map.texture);
+  glBindVertexArray(s.vao.id());
+}
+
+Result<std::vector<float>> LiveVolume::read_positions() const {
+  const State& s = *state_;
+  const std::size_t floats = 3 * static_cast<std::size_t>(s.vertices);
+  GLuint id = 0;
+  glGenBuffers(1, &id);
+  const BufferHandle buffer(id);
+  glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, buffer.id());
+  glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, static_cast<GLsizeiptr>(floats * sizeof(float)),
+               nullptr, GL_STREAM_READ);
+  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, buffer.id());
+  // A draw needs a complete framebuffer even with rasterization off (a surfaceless context has
+  // none of its own).
+  Result<Framebuffer> target = Framebuffer::create(1, 1, {GL_R32F}, false);
+  if (!target) return target.error();
+  target->bind();
+  s.capture.use();
+  const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  glUniformMatrix4fv(s.capture.uniform("view_projection"), 1, GL_TRUE, identity);
+  bind(s.capture, 0);
+  glEnable(GL_RASTERIZER_DISCARD);
+  glBeginTransformFeedback(GL_POINTS);
+  glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(s.vertices));
+  glEndTransformFeedback();
+  glDisable(GL_RASTERIZER_DISCARD);
+  std::vector<float> positions(floats);
+  glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0,
+                     static_cast<GLsizeiptr>(floats * sizeof(float)), positions.data());
+  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
+  glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, 0);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (std::string e = pending_error(); !e.empty())
+    return Error{"OpenGL: capturing the live volume's vertices: " + e};
+  return positions;
+}
+
+}  // namespace lightvol
