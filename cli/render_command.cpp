@@ -138,10 +138,13 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
     // The shadow map goes to the GPU as a texture; each frame makes the volume from it there.
     Result<ShadowMaps> maps = read_shadow_maps(scene.light, o.shadow_maps, {o.channel});
     if (!maps) return maps.error();
-    const DepthImage map = maps->images().front();
-    const gl::TextureHandle texture = upload_shadow_map(scene.light, map);
-    Result<std::unique_ptr<LiveVolume>> live =
-        LiveVolume::create(scene.light, {texture.id(), map.width, map.height});
+    std::vector<gl::TextureHandle> textures;
+    std::vector<GlShadowMap> on_gpu;
+    for (const DepthImage& map : maps->images()) {
+      textures.push_back(upload_shadow_map(scene.light, map));
+      on_gpu.push_back({textures.back().id(), map.width, map.height});
+    }
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(scene.light, on_gpu);
     if (!live) return live.error();
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     if (!renderer) return renderer.error();
@@ -232,10 +235,9 @@ void add_render_command(CLI::App& app, Runner* run) {
       "Example:\n  lightvol render volume.ply --light light.json --camera cam.json --depth "
       "camdepth.exr \\\n      --medium medium.json --out airlight.png\n"
       "Methods: volume (the light volume drawn with signed additive blending, OpenGL), live (the\n"
-      "same, its volume made on the GPU each frame from --shadow-map: spot and directional\n"
-      "lights; no MESH), reference (the exact sum on the CPU, double precision), raymarch (steps\n"
-      "through the shadow map, --shadow-map) and radial (a radial blur of the camera depth), the\n"
-      "last two for comparison.\n"
+      "same, its volume made on the GPU each frame from --shadow-map; no MESH), reference (the\n"
+      "exact sum on the CPU, double precision), raymarch (steps through the shadow map,\n"
+      "--shadow-map) and radial (a radial blur of the camera depth), the last two for comparison.\n"
       ".exr output keeps linear floats; .png is tone-mapped. Exit 2 on bad input.");
   cmd->add_option("MESH", o->mesh_path, "Light volume (world space), for volume and reference");
   cmd->add_option("--light", o->light_path, "Light description (JSON)")->required();
@@ -254,8 +256,7 @@ void add_render_command(CLI::App& app, Runner* run) {
       ->capture_default_str();
   cmd->add_option(
       "--shadow-map", o->shadow_maps,
-      "live, raymarch: the light's shadow map (raymarch, omni: six faces, a {face} path or a W x "
-      "6W strip)");
+      "live, raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
       ->capture_default_str();

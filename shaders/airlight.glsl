@@ -21,12 +21,12 @@
 //       the scene with the depth test on into an R32F target cleared to 3e38; each fragment writes
 //       its distance along the pixel's ray, the `surface` texture pass 1 reads.
 //   LIGHTVOL_LIVE_VOLUME_VERTEX  pass 1's vertex stage for a live volume (docs/engines.md): the
-//       static volume of a spot or directional light made from its shadow map as it is drawn, with
-//       no vertex attributes. Vertex gl_VertexID is vertex gl_VertexID of `lightvol build`'s static
-//       volume of that map: grid vertex row * W + col at texel (col, row)'s centre ray and depth,
-//       then the closing's (spot: the apex; directional: the border's near-plane copies, then the
-//       cap's centre). Drawn with build's triangles as the index buffer, with
-//       LIGHTVOL_VOLUME_FRAGMENT.
+//       static volume of a light made from its shadow map(s) as it is drawn, with no vertex
+//       attributes. Vertex gl_VertexID is vertex gl_VertexID of `lightvol build`'s static volume
+//       of those maps: grid vertex row * W + col (omni: face * W * W + row * W + col) at texel
+//       (col, row)'s centre ray and depth, then the closing's (spot: the apex; directional: the
+//       border's near-plane copies, then the cap's centre; omni: none). Drawn with build's
+//       triangles as the index buffer, with LIGHTVOL_VOLUME_FRAGMENT.
 
 #if defined(LIGHTVOL_VOLUME_VERTEX) || defined(LIGHTVOL_SURFACE_VERTEX)
 layout(location = 0) in vec3 position;
@@ -39,13 +39,15 @@ void main() {
 #endif
 
 #ifdef LIGHTVOL_LIVE_VOLUME_VERTEX
-// The shadow map as the light's projection rendered it: texture row t (t = 0 at the bottom) holds
-// NDC y = -1 + 2(t + 1/2)/H. A depth texture (compare mode off) or R32F, read with texelFetch.
-uniform sampler2D shadow_map;
-uniform ivec2 live_size;       // W, H
+// The shadow maps as the light's projection rendered them: texture row t (t = 0 at the bottom)
+// holds NDC y = -1 + 2(t + 1/2)/H. Depth textures (compare mode off) or R32F, read with texelFetch.
+// Spot and directional lights use shadow_maps[0]; omni lights the six faces +X -X +Y -Y +Z -Z.
+uniform sampler2D shadow_maps[6];
+uniform ivec2 live_size;       // W, H (of each face)
 uniform int live_flip_y;       // the light's flip_y: image row 0 is NDC y = -1
 uniform int live_depth;        // 0 window depth, 1 linear (eye -z), 2 radial (distance to the eye)
-uniform int live_directional;  // 0 spot (closed by a fan to the apex), 1 directional (walls, cap)
+uniform int live_type;         // 0 spot (closed by a fan to the apex), 1 directional (walls and a
+                               // cap), 2 omni (six faces joined by seams and corners)
 uniform int live_standard;     // 1 when the border ring runs top, right, bottom, left; 0 reversed
 uniform float live_min_t;      // the smallest parameter along a texel's near-far segment
 // A texel's near and far points in the light's eye space, homogeneous and affine in its NDC
@@ -55,7 +57,7 @@ uniform vec4 live_ray_x;
 uniform vec4 live_ray_y;
 uniform vec4 live_near_0;
 uniform vec4 live_far_0;
-uniform mat4 live_eye_to_world;
+uniform mat4 live_eye_to_world[6];  // the light's (omni: each face's) eye to world
 uniform vec3 live_apex;        // world: the spot's apex
 uniform vec3 live_cap;         // world: the directional cap's centre
 uniform mat4 view_projection;
@@ -74,10 +76,20 @@ vec3 live_segment(vec2 ndc, float t) {
   return pn + t * (pf - pn);
 }
 
-// Texel (col, row)'s grid vertex (eye space), as lightvol's Unprojector places it.
-vec3 live_grid_point(ivec2 texel) {
+// The stored depth of face f's texel t (samplers are indexed by constants only).
+float live_fetch(int f, ivec2 t) {
+  if (f == 0) return texelFetch(shadow_maps[0], t, 0).r;
+  if (f == 1) return texelFetch(shadow_maps[1], t, 0).r;
+  if (f == 2) return texelFetch(shadow_maps[2], t, 0).r;
+  if (f == 3) return texelFetch(shadow_maps[3], t, 0).r;
+  if (f == 4) return texelFetch(shadow_maps[4], t, 0).r;
+  return texelFetch(shadow_maps[5], t, 0).r;
+}
+
+// Face f's texel (col, row)'s grid vertex (eye space), as lightvol's Unprojector places it.
+vec3 live_grid_point(int f, ivec2 texel) {
   int row = live_flip_y == 1 ? texel.y : live_size.y - 1 - texel.y;
-  float d = texelFetch(shadow_map, ivec2(texel.x, row), 0).r;
+  float d = live_fetch(f, ivec2(texel.x, row));
   vec2 ndc = live_ndc(texel);
   vec4 base = live_ray_x * ndc.x + live_ray_y * ndc.y;
   if (live_depth == 0) {
@@ -114,20 +126,22 @@ ivec2 live_ring_texel(int k) {
 }
 
 void main() {
-  int grid = live_size.x * live_size.y;
+  int texels = live_size.x * live_size.y;
   int v = gl_VertexID;
-  if (v < grid) {
-    vec3 eye = live_grid_point(ivec2(v % live_size.x, v / live_size.x));
-    world = (live_eye_to_world * vec4(eye, 1.0)).xyz;
-  } else if (live_directional == 0) {
+  if (v < (live_type == 2 ? 6 * texels : texels)) {
+    int f = v / texels;
+    int i = v - f * texels;
+    vec3 eye = live_grid_point(f, ivec2(i % live_size.x, i / live_size.x));
+    world = (live_eye_to_world[f] * vec4(eye, 1.0)).xyz;
+  } else if (live_type == 0) {
     world = live_apex;
   } else {
-    int k = v - grid;
+    int k = v - texels;
     if (k == 2 * (live_size.x - 1) + 2 * (live_size.y - 1)) {
       world = live_cap;
     } else {
       vec3 eye = live_segment(live_ndc(live_ring_texel(k)), 0.0);
-      world = (live_eye_to_world * vec4(eye, 1.0)).xyz;
+      world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
     }
   }
   gl_Position = view_projection * vec4(world, 1.0);

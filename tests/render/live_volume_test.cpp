@@ -9,8 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/render/live_volume.h>
+#include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/analytic_scene.h"
@@ -30,19 +32,22 @@ Light with_encoding(const std::string& json_linear, DepthEncoding encoding, bool
   return light;
 }
 
-// The analytic scene's W×H map of `light` in its encoding (computed in double from the linear
-// map, rounded to float as a depth pass would store it).
-DepthImage scene_map(const Light& light, int width, int height, const test::Box& box = {}) {
+// The analytic scene's W×H map of `light` (omni: of face `face`) in its encoding (computed in
+// double from the linear map, rounded to float as a depth pass would store it).
+DepthImage scene_map(const Light& light, int width, int height, const test::Box& box = {},
+                     int face = 0) {
   Light linear = light;
   linear.depth = DepthEncoding::linear;
-  DepthImage map = test::scene_shadow_map(linear, width, height, box);
+  DepthImage map = test::scene_shadow_map(linear, width, height, box, face);
   if (light.depth == DepthEncoding::linear) return map;
-  const Unprojector eye(linear, width, height, 0, Space::light);
+  const Unprojector world(linear, width, height, face, Space::world);
+  const Mat4d view = light.type == LightType::omni ? omni_face_view(light, face) : light.view;
   for (int row = 0; row < height; ++row)
     for (int col = 0; col < width; ++col) {
       float& d = map.values[static_cast<std::size_t>(row) * width + col];
-      Vec3d p;
-      EXPECT_TRUE(eye.point(col, row, d, &p));
+      Vec3d q;
+      EXPECT_TRUE(world.point(col, row, d, &q));
+      const Vec3d p = view.transform_point(q);
       if (light.depth == DepthEncoding::radial) {
         d = static_cast<float>(length(p));
       } else {
@@ -130,6 +135,47 @@ TEST(LiveVolume, VerticesAreBuildsToFloatRounding) {
                 std::string(to_string(c.encoding)).c_str(), worst);
     EXPECT_LE(worst, kPositionTolerance) << c.name << " " << to_string(c.encoding);
   }
+}
+
+// An omni light off the box's axes, its six faces.
+const char kOmniJson[] =
+    R"({"type": "omni", "position": [0.3, 2.5, 0.2], "near": 0.1, "far": 30, "depth": "linear"})";
+
+CubeFaces omni_maps(const Light& light, int width) {
+  CubeFaces cube;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    cube.faces[f] = scene_map(light, width, width, kOffAxisBox, f);
+    cube.sources[f] = omni_face_name(f);
+  }
+  return cube;
+}
+
+TEST(LiveVolume, OmniVerticesAndTrianglesAreBuilds) {
+  REQUIRE_GL_CONTEXT();
+  for (DepthEncoding e : {DepthEncoding::window, DepthEncoding::linear, DepthEncoding::radial})
+    for (const auto& [width, flip_y] : {std::pair{32, false}, std::pair{48, true}}) {
+      const Light light = with_encoding(kOmniJson, e, flip_y);
+      const CubeFaces cube = omni_maps(light, width);
+      Result<Mesh> built = build_omni_volume(light, cube, {});
+      ASSERT_TRUE(built) << built.error().message;
+      EXPECT_EQ(omni_volume_indices(light, width), built->indices);
+      std::vector<TextureHandle> textures;
+      std::vector<GlShadowMap> maps;
+      for (const DepthImage& face : cube.faces) {
+        textures.push_back(upload_shadow_map(light, face));
+        maps.push_back({textures.back().id(), width, width});
+      }
+      Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, maps);
+      ASSERT_TRUE(live) << live.error().message;
+      EXPECT_EQ((*live)->num_vertices(), built->num_vertices());
+      EXPECT_EQ((*live)->num_triangles(), built->num_triangles());
+      Result<std::vector<float>> gpu = (*live)->read_positions();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      const double worst = largest_difference(*gpu, *built, light);
+      std::printf("  omni %dx%d%s %-6s largest difference %.2e of the scale\n", width, width,
+                  flip_y ? " flip_y" : "", std::string(to_string(e)).c_str(), worst);
+      EXPECT_LE(worst, kPositionTolerance) << width << " " << to_string(e);
+    }
 }
 
 TEST(LiveVolume, ADepthTextureGivesTheSameVertices) {
@@ -230,6 +276,40 @@ TEST(LiveVolume, DrawsTheAirlightOfBuildsMesh) {
   }
 }
 
+TEST(LiveVolume, DrawsTheAirlightOfBuildsOmniMesh) {
+  REQUIRE_GL_CONTEXT();
+  const Light light = with_encoding(kOmniJson, DepthEncoding::window, false);
+  const CubeFaces cube = omni_maps(light, 48);
+  Result<Mesh> built = build_omni_volume(light, cube, {});
+  ASSERT_TRUE(built) << built.error().message;
+  std::vector<TextureHandle> textures;
+  std::vector<GlShadowMap> maps;
+  for (const DepthImage& face : cube.faces) {
+    textures.push_back(upload_shadow_map(light, face));
+    maps.push_back({textures.back().id(), 48, 48});
+  }
+  Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, maps);
+  ASSERT_TRUE(live) << live.error().message;
+  // Outside the lit space's walls; then inside the box's shadow, looking out of it.
+  for (auto [eye, target] :
+       {std::pair<Vec3d, Vec3d>{{5, 3, 5}, {0, 1, 0}}, {{0.3, 0.5, 0.2}, {3, 0.9, 1}}}) {
+    const RenderScene scene = test::make_render_scene(
+        test::make_camera(eye, target, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+    ASSERT_TRUE(renderer) << renderer.error().message;
+    (*renderer)->set_volume(*built);
+    const Image expected = (*renderer)->render();
+    ASSERT_TRUE((*renderer)->set_volume(**live));
+    const ImageDifference d = compare_images((*renderer)->render(), expected);
+    double total = 0;
+    for (double v : expected.values) total += v;
+    std::printf("  omni eye (%g, %g, %g): relative L2 %.2e  max abs %.2e\n", eye.x, eye.y, eye.z,
+                d.relative_l2, d.max_abs);
+    EXPECT_GT(total, 0);
+    EXPECT_LE(d.relative_l2, kImageTolerance);
+  }
+}
+
 TEST(LiveVolume, FollowsTheMapWhenItChangesBetweenFrames) {
   REQUIRE_GL_CONTEXT();
   constexpr int kMap = 64;
@@ -284,35 +364,44 @@ TEST(LiveVolume, RefusesTexturesItCannotRead) {
   const TextureHandle r32f = make_texture_2d(32, 16, GL_R32F, zeros.data(), 1);
   const TextureHandle rgba = make_texture_2d(32, 16, GL_RGBA32F, zeros.data(), 4);
   const TextureHandle depth = make_texture_2d(32, 16, GL_DEPTH_COMPONENT32F, zeros.data(), 1);
+  const TextureHandle depth16 = make_texture_2d(16, 16, GL_R32F, zeros.data(), 1);
   const std::string r32f_name = "shadow map texture " + std::to_string(r32f.id());
-  const auto error = [](const Light& light, GlShadowMap map) {
-    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, map);
+  const auto error = [](const Light& light, const std::vector<GlShadowMap>& maps) {
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, maps);
     return live ? std::string("accepted") : live.error().message;
   };
-  EXPECT_EQ(error(window, {r32f.id(), 32, 32}),
+  EXPECT_EQ(error(window, {{r32f.id(), 32, 32}}),
             r32f_name + ": level 0 is 32x16, not the 32x32 given");
-  EXPECT_EQ(error(window, {r32f.id(), 1, 16}),
+  EXPECT_EQ(error(window, {{r32f.id(), 1, 16}}),
             r32f_name + ": size 1x16 given; a volume needs at least 2x2 texels");
-  EXPECT_EQ(error(window, {rgba.id(), 32, 16}),
+  EXPECT_EQ(error(window, {{rgba.id(), 32, 16}}),
             "shadow map texture " + std::to_string(rgba.id()) +
                 ": internal format 0x8814 is neither a depth format nor GL_R32F");
-  EXPECT_EQ(error(linear, {depth.id(), 32, 16}),
+  EXPECT_EQ(error(linear, {{depth.id(), 32, 16}}),
             "shadow map texture " + std::to_string(depth.id()) +
                 ": a depth texture holds window depth in [0, 1]; the light's \"depth\" is "
                 "\"linear\", which needs a GL_R32F texture");
-  EXPECT_EQ(error(window, {987654, 32, 16}), "shadow map texture 987654: not a texture name");
+  EXPECT_EQ(error(window, {{987654, 32, 16}}), "shadow map texture 987654: not a texture name");
   glBindTexture(GL_TEXTURE_2D, depth.id());
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glBindTexture(GL_TEXTURE_2D, 0);
-  EXPECT_EQ(error(window, {depth.id(), 32, 16}),
+  EXPECT_EQ(error(window, {{depth.id(), 32, 16}}),
             "shadow map texture " + std::to_string(depth.id()) +
                 ": GL_TEXTURE_COMPARE_MODE is on; texelFetch needs it GL_NONE");
   Light omni = test::light_from_json(
       R"({"type": "omni", "position": [0, 2, 0], "near": 0.1, "far": 30, "depth": "linear"})");
-  EXPECT_EQ(error(omni, {r32f.id(), 32, 16}),
-            "live volume: omni lights are not made on the GPU yet (spot and directional are)");
+  EXPECT_EQ(error(omni, {{r32f.id(), 32, 16}}),
+            "live volume: omni lights need 6 shadow maps (their cube faces), got 1");
+  EXPECT_EQ(error(window, std::vector<GlShadowMap>(6, {r32f.id(), 32, 16})),
+            "live volume: spot lights need 1 shadow map, got 6");
+  std::vector<GlShadowMap> faces(6, {depth16.id(), 16, 16});
+  faces[3] = {r32f.id(), 32, 16};
+  EXPECT_EQ(error(omni, faces),
+            r32f_name +
+                " (face -Y (ny)): 32x16; omni faces are square and all of one size (face "
+                "+X (px) is 16x16)");
   // A good texture after all that: no GL error left behind.
-  EXPECT_EQ(error(window, {r32f.id(), 32, 16}), "accepted");
+  EXPECT_EQ(error(window, {{r32f.id(), 32, 16}}), "accepted");
   EXPECT_EQ(pending_error(), "");
 }
 

@@ -5,8 +5,10 @@
 #include <string>
 
 #include <lightvol/core/check.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/render/detail/airlight_glsl.h>
 #include <lightvol/render/live_volume.h>
+#include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 namespace lightvol {
@@ -18,10 +20,10 @@ namespace {
 // The uniforms of the live vertex stage for one light and map size, computed in double.
 struct LiveUniforms {
   int width = 0, height = 0;
-  int flip_y = 0, depth = 0, directional = 0, standard = 1;
+  int flip_y = 0, depth = 0, type = 0, standard = 1;
   float min_t = 0;
   float ray_x[4] = {}, ray_y[4] = {}, near_0[4] = {}, far_0[4] = {};
-  float eye_to_world[16] = {};  // row-major
+  float eye_to_world[kOmniFaces][16] = {};  // row-major; spot, directional: [0]
   float apex[3] = {}, cap[3] = {};
 };
 
@@ -32,13 +34,11 @@ LiveUniforms live_uniforms(const Light& light, int width, int height) {
   u.height = height;
   u.flip_y = light.flip_y ? 1 : 0;
   u.depth = static_cast<int>(light.depth);
-  u.directional = light.type == LightType::directional ? 1 : 0;
+  u.type = static_cast<int>(light.type);
   u.standard = unproject.standard_winding() ? 1 : 0;
   u.min_t = static_cast<float>(unproject.min_t());
   bool ok = false;
   const Mat4d inv_p = inverse(light.projection, &ok);
-  LV_CHECK(ok);
-  const Mat4d to_world = inverse(light.view, &ok);
   LV_CHECK(ok);
   for (int i = 0; i < 4; ++i) {
     u.ray_x[i] = static_cast<float>(inv_p(i, 0));
@@ -46,7 +46,13 @@ LiveUniforms live_uniforms(const Light& light, int width, int height) {
     u.near_0[i] = static_cast<float>(inv_p(i, 3) - inv_p(i, 2));  // invP · (0, 0, −1, 1)
     u.far_0[i] = static_cast<float>(inv_p(i, 3) + inv_p(i, 2));   // invP · (0, 0, 1, 1)
   }
-  for (int i = 0; i < 16; ++i) u.eye_to_world[i] = static_cast<float>(to_world.m[i]);
+  for (int f = 0; f < (light.type == LightType::omni ? kOmniFaces : 1); ++f) {
+    const Mat4d to_world =
+        inverse(light.type == LightType::omni ? omni_face_view(light, f) : light.view, &ok);
+    LV_CHECK(ok);
+    for (int i = 0; i < 16; ++i) u.eye_to_world[f][i] = static_cast<float>(to_world.m[i]);
+  }
+  if (light.type == LightType::omni) return u;
   const Vec3d apex = unproject.apex();
   const Vec3d cap =
       0.25 * (unproject.near_point(0, 0) + unproject.near_point(width - 1, 0) +
@@ -72,18 +78,15 @@ bool is_depth_format(GLint format) {
   }
 }
 
-std::string texture_name(const GlShadowMap& map) {
-  return "shadow map texture " + std::to_string(map.texture);
-}
-
-// Why `map` cannot be the shadow map of `light`, or "".
-std::string map_problem(const Light& light, const GlShadowMap& map) {
-  const std::string name = texture_name(map);
+// Why `map` cannot be a shadow map of `light`, or "". `name` names it.
+std::string map_problem(const Light& light, const GlShadowMap& map, const std::string& name) {
   if (map.width < 2 || map.height < 2)
     return name + ": size " + std::to_string(map.width) + "x" + std::to_string(map.height) +
            " given; a volume needs at least 2x2 texels";
   // Vertex ids are GLSL ints: W·H plus the closing must stay below 2^31.
-  const VolumeCounts counts = static_volume_counts(light.type, map.width, map.height);
+  const VolumeCounts counts = light.type == LightType::omni
+                                  ? static_volume_counts(light.type, map.width, map.width)
+                                  : static_volume_counts(light.type, map.width, map.height);
   if (counts.vertices >= std::uint64_t{1} << 31 ||
       3 * counts.triangles >= std::uint64_t{std::numeric_limits<GLsizei>::max()})
     return name + ": " + std::to_string(map.width) + "x" + std::to_string(map.height) +
@@ -134,9 +137,34 @@ gl::TextureHandle upload_shadow_map(const Light& light, const DepthImage& depth)
   return make_texture_2d(depth.width, h, GL_R32F, rows.data(), 1);
 }
 
+namespace {
+
+// Why `maps` cannot be the shadow maps of `light`, or "".
+std::string maps_problem(const Light& light, const std::vector<GlShadowMap>& maps) {
+  const bool omni = light.type == LightType::omni;
+  const std::size_t expected = omni ? kOmniFaces : 1;
+  if (maps.size() != expected)
+    return "live volume: " + std::string(to_string(light.type)) + " lights need " +
+           std::to_string(expected) + (omni ? " shadow maps (their cube faces)" : " shadow map") +
+           ", got " + std::to_string(maps.size());
+  for (std::size_t f = 0; f < maps.size(); ++f) {
+    const GlShadowMap& map = maps[f];
+    const std::string name = "shadow map texture " + std::to_string(map.texture) +
+                             (omni ? " (face " + omni_face_name(static_cast<int>(f)) + ")" : "");
+    if (omni && (map.width != map.height || map.width != maps[0].width))
+      return name + ": " + std::to_string(map.width) + "x" + std::to_string(map.height) +
+             "; omni faces are square and all of one size (face " + omni_face_name(0) + " is " +
+             std::to_string(maps[0].width) + "x" + std::to_string(maps[0].height) + ")";
+    if (std::string problem = map_problem(light, map, name); !problem.empty()) return problem;
+  }
+  return "";
+}
+
+}  // namespace
+
 struct LiveVolume::State {
   Light light;
-  GlShadowMap map;
+  std::vector<GlShadowMap> maps;
   LiveUniforms uniforms;
   Program capture;
   VertexArrayHandle vao;
@@ -147,13 +175,14 @@ struct LiveVolume::State {
 
 LiveVolume::~LiveVolume() = default;
 
-Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light, const GlShadowMap& map) {
-  if (light.type == LightType::omni)
-    return Error{"live volume: omni lights are not made on the GPU yet (spot and directional are)"};
+Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light,
+                                                       const std::vector<GlShadowMap>& maps) {
   std::unique_ptr<LiveVolume> live(new LiveVolume());
   live->state_ = std::make_unique<State>();
   State& s = *live->state_;
   s.light = light;
+  if (const std::string problem = maps_problem(light, maps); !problem.empty())
+    return Error{problem};
   Result<Program> capture =
       Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
                        "#version 450 core\nout vec4 colour;\nvoid main() { colour = vec4(0.0); }\n",
@@ -168,26 +197,30 @@ Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light, const
   glBindVertexArray(s.vao.id());
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.indices.id());
   glBindVertexArray(0);
-  if (Status st = live->set_shadow_map(map); !st) return st.error();
+  if (Status st = live->set_shadow_maps(maps); !st) return st.error();
   return live;
 }
 
-Status LiveVolume::set_shadow_map(const GlShadowMap& map) {
+Status LiveVolume::set_shadow_maps(const std::vector<GlShadowMap>& maps) {
   State& s = *state_;
-  if (const std::string problem = map_problem(s.light, map); !problem.empty())
+  if (const std::string problem = maps_problem(s.light, maps); !problem.empty())
     return Error{problem};
-  const bool resized = map.width != s.map.width || map.height != s.map.height;
-  s.map = map;
+  const bool resized =
+      s.maps.empty() || maps[0].width != s.maps[0].width || maps[0].height != s.maps[0].height;
+  s.maps = maps;
   if (!resized) return {};
-  s.uniforms = live_uniforms(s.light, map.width, map.height);
-  const std::vector<std::uint32_t> indices = static_volume_indices(s.light, map.width, map.height);
+  const int w = maps[0].width, h = maps[0].height;
+  s.uniforms = live_uniforms(s.light, w, h);
+  const bool omni = s.light.type == LightType::omni;
+  const std::vector<std::uint32_t> indices =
+      omni ? omni_volume_indices(s.light, w) : static_volume_indices(s.light, w, h);
   glBindVertexArray(s.vao.id());
   glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
                GL_STATIC_DRAW);
   glBindVertexArray(0);
   s.index_count = static_cast<GLsizei>(indices.size());
-  const VolumeCounts counts = static_volume_counts(s.light.type, map.width, map.height);
+  const VolumeCounts counts = static_volume_counts(s.light.type, w, h);
   s.vertices = counts.vertices;
   s.triangles = counts.triangles;
   if (std::string e = pending_error(); !e.empty())
@@ -196,7 +229,7 @@ Status LiveVolume::set_shadow_map(const GlShadowMap& map) {
 }
 
 const Light& LiveVolume::light() const { return state_->light; }
-const GlShadowMap& LiveVolume::shadow_map() const { return state_->map; }
+const std::vector<GlShadowMap>& LiveVolume::shadow_maps() const { return state_->maps; }
 std::uint64_t LiveVolume::num_vertices() const { return state_->vertices; }
 std::uint64_t LiveVolume::num_triangles() const { return state_->triangles; }
 GLsizei LiveVolume::index_count() const { return state_->index_count; }
@@ -207,19 +240,28 @@ void LiveVolume::bind(const Program& program, int unit) const {
   glUniform2i(program.uniform("live_size"), u.width, u.height);
   glUniform1i(program.uniform("live_flip_y"), u.flip_y);
   glUniform1i(program.uniform("live_depth"), u.depth);
-  glUniform1i(program.uniform("live_directional"), u.directional);
+  glUniform1i(program.uniform("live_type"), u.type);
   glUniform1i(program.uniform("live_standard"), u.standard);
   glUniform1f(program.uniform("live_min_t"), u.min_t);
   glUniform4f(program.uniform("live_ray_x"), u.ray_x[0], u.ray_x[1], u.ray_x[2], u.ray_x[3]);
   glUniform4f(program.uniform("live_ray_y"), u.ray_y[0], u.ray_y[1], u.ray_y[2], u.ray_y[3]);
   glUniform4f(program.uniform("live_near_0"), u.near_0[0], u.near_0[1], u.near_0[2], u.near_0[3]);
   glUniform4f(program.uniform("live_far_0"), u.far_0[0], u.far_0[1], u.far_0[2], u.far_0[3]);
-  glUniformMatrix4fv(program.uniform("live_eye_to_world"), 1, GL_TRUE, u.eye_to_world);
+  glUniformMatrix4fv(program.uniform("live_eye_to_world"), kOmniFaces, GL_TRUE,
+                     &u.eye_to_world[0][0]);
   glUniform3f(program.uniform("live_apex"), u.apex[0], u.apex[1], u.apex[2]);
   glUniform3f(program.uniform("live_cap"), u.cap[0], u.cap[1], u.cap[2]);
-  glUniform1i(program.uniform("shadow_map"), unit);
-  glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit));
-  glBindTexture(GL_TEXTURE_2D, s.map.texture);
+  // Every element of the sampler array on a unit of its own; a spot's or directional light's one
+  // map on all six (only element 0 is read).
+  static constexpr const char* kSamplers[kOmniFaces] = {"shadow_maps[0]", "shadow_maps[1]",
+                                                        "shadow_maps[2]", "shadow_maps[3]",
+                                                        "shadow_maps[4]", "shadow_maps[5]"};
+  for (int f = 0; f < kOmniFaces; ++f) {
+    const GlShadowMap& map = s.maps[s.maps.size() == 1 ? 0 : static_cast<std::size_t>(f)];
+    glUniform1i(program.uniform(kSamplers[f]), unit + f);
+    glActiveTexture(static_cast<GLenum>(GL_TEXTURE0 + unit + f));
+    glBindTexture(GL_TEXTURE_2D, map.texture);
+  }
   glBindVertexArray(s.vao.id());
 }
 

@@ -1,11 +1,12 @@
-// The live light volume (docs/rendering.md, "Live volumes"): the static volume of a spot or
-// directional light made on the GPU, every frame, from a shadow map already on the GPU, the way
-// the paper's real-time system makes it: no vertex buffer, no read-back and no allocation per
+// The live light volume (docs/rendering.md, "Live volumes"): the static volume of a spot,
+// directional or omni light made on the GPU, every frame, from shadow maps already on the GPU, the
+// way the paper's real-time system makes it: no vertex buffer, no read-back and no allocation per
 // frame. The airlight's vertex stage (shaders/airlight.glsl, LIGHTVOL_LIVE_VOLUME_VERTEX) places
 // vertex gl_VertexID where `lightvol build` places vertex gl_VertexID of its static volume of the
 // same map (texel centres, depth encodings, the clamps to near and far, the spot's fan and the
-// directional walls and cap); the triangles are build's (static_volume_indices), uploaded once
-// per map size. GlVolumeRenderer::set_volume(const LiveVolume&) draws it.
+// directional walls and cap, the omni faces' seams and corners); the triangles are build's
+// (static_volume_indices, omni_volume_indices), uploaded once per map size.
+// GlVolumeRenderer::set_volume(const LiveVolume&) draws it.
 //
 // Precision: the GPU computes in float what build computes in double and rounds to float. Each
 // vertex is a convex blend of its texel ray's near and far points (window depth blends them
@@ -42,21 +43,28 @@ gl::TextureHandle upload_shadow_map(const Light& light, const DepthImage& depth)
 
 class LiveVolume {
  public:
-  // For a spot or directional `light` (its `depth` says how the map's texels encode depth).
-  // Compiles the capture program and uploads build's triangles for the map's size. Errors: an
-  // omni light, and set_shadow_map's.
-  static Result<std::unique_ptr<LiveVolume>> create(const Light& light, const GlShadowMap& map);
+  // For `light` (its `depth` says how the maps' texels encode depth) and its maps: one for a spot
+  // or directional light, six square faces of one size for an omni light (+X −X +Y −Y +Z −Z, each
+  // rendered with omni_face_view and the light's projection). Compiles the capture program and
+  // uploads build's triangles for the maps' size. Errors: set_shadow_maps'.
+  static Result<std::unique_ptr<LiveVolume>> create(const Light& light,
+                                                    const std::vector<GlShadowMap>& maps);
+  static Result<std::unique_ptr<LiveVolume>> create(const Light& light, const GlShadowMap& map) {
+    return create(light, std::vector<GlShadowMap>{map});
+  }
   ~LiveVolume();
 
-  // Uses `map` from the next frame on. Its contents may change between frames without a call
+  // Uses `maps` from the next frame on. Their contents may change between frames without a call
   // (that is the point); a new size rebuilds the triangles (the only allocation). Errors, each
-  // naming the texture: not a 2D texture, a size other than the one given or under 2 × 2, a
-  // format other than a depth format or GL_R32F, a depth format with a linear or radial
+  // naming the texture (and the omni face): the wrong number of maps for the light, omni faces
+  // not square or of different sizes, not a 2D texture, a size other than the one given or under
+  // 2 × 2, a format other than a depth format or GL_R32F, a depth format with a linear or radial
   // encoding, a depth compare mode on.
-  Status set_shadow_map(const GlShadowMap& map);
+  Status set_shadow_maps(const std::vector<GlShadowMap>& maps);
+  Status set_shadow_map(const GlShadowMap& map) { return set_shadow_maps({map}); }
 
   const Light& light() const;
-  const GlShadowMap& shadow_map() const;
+  const std::vector<GlShadowMap>& shadow_maps() const;
   // build's counts for the map (static_volume_counts).
   std::uint64_t num_vertices() const;
   std::uint64_t num_triangles() const;
@@ -66,8 +74,8 @@ class LiveVolume {
   Result<std::vector<float>> read_positions() const;
 
   // For GlVolumeRenderer: with `program` (compiled from the LIGHTVOL_LIVE_VOLUME_VERTEX stage) in
-  // use, sets its live_* uniforms, binds the map to texture unit `unit` and binds the vertex array
-  // whose element buffer holds the triangles. No allocation.
+  // use, sets its live_* uniforms, binds the maps to texture units `unit`.. `unit` + 5 and binds
+  // the vertex array whose element buffer holds the triangles. No allocation.
   void bind(const gl::Program& program, int unit) const;
   // Indices to draw (3 per triangle).
   GLsizei index_count() const;

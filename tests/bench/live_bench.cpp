@@ -1,0 +1,132 @@
+// The live volume's cost per frame (render/live_volume.h): the static volume made on the GPU from
+// the shadow map texture and drawn, against drawing the same volume prebuilt (the mesh `lightvol
+// build` writes, uploaded once), and against what an engine without it would do every frame for a
+// moving shadow map: build the volume on the CPU and upload it before drawing (the read-back of
+// the map left out). On the analytic floor-and-box scene of the render tests (a spot light, the
+// camera of render_bench), for each shadow map size. Times are medians of FRAMES frames of
+// GlVolumeRenderer::render (the volume pass, the resolve pass and glFinish; not the read-back of
+// the image); ratios come from the same run. Runs as it is where a GPU is present (EGL's device
+// platform): the renderer line says which one ran.
+//
+//   live_bench [WIDTH HEIGHT FRAMES MAP...]   (defaults 1024 768 5 1024 2048)
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include <lightvol/gl/context.h>
+#include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_volume.h>
+#include <lightvol/volume/static_volume.h>
+
+#include "support/analytic_scene.h"
+#include "support/test_support.h"
+
+using namespace lightvol;
+
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Median seconds per frame of `frames` renders after a warm-up one (shader compilation, uploads).
+double time_frames(GlVolumeRenderer& renderer, int frames, Image* image) {
+  *image = renderer.render();
+  std::vector<double> t;
+  for (int i = 0; i < frames; ++i) {
+    double s = 0;
+    renderer.render(&s);
+    t.push_back(s);
+  }
+  return median(t);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int width = argc > 1 ? std::atoi(argv[1]) : 1024;
+  const int height = argc > 2 ? std::atoi(argv[2]) : 768;
+  const int frames = std::max(1, argc > 3 ? std::atoi(argv[3]) : 5);
+  std::vector<int> maps;
+  for (int i = 4; i < argc; ++i) maps.push_back(std::atoi(argv[i]));
+  if (maps.empty()) maps = {1024, 2048};
+
+  Result<std::unique_ptr<gl::Context>> context = gl::Context::create();
+  if (!context) {
+    std::fprintf(stderr, "live_bench: %s\n", context.error().message.c_str());
+    return 2;
+  }
+  std::printf("renderer: %s, %s (EGL %s)\n", (*context)->renderer().c_str(),
+              (*context)->version().c_str(), (*context)->platform().c_str());
+  std::printf("scene: spot light (linear depth), camera %dx%d, median of %d frames\n\n", width,
+              height, frames);
+  std::printf("%-6s %10s | %12s %12s %12s | %10s %10s | %12s\n", "map", "triangles", "live ms",
+              "prebuilt ms", "CPU+upl. ms", "live/pre", "CPU/live", "rel. L2");
+
+  const Light light = test::light_from_json(test::spot_json("linear"));
+  Medium medium;
+  medium.scattering = 0.06;
+  medium.absorption = 0.02;
+  medium.intensity = 20;
+  medium.phase = {PhaseType::hg, 0.3, 0};
+  const RenderScene scene = test::make_render_scene(
+      test::make_camera({7, 2, 7}, {0, 0.3, 0}, width, height, 40), light, medium);
+
+  for (const int size : maps) {
+    const DepthImage map = test::scene_shadow_map(light, size, size);
+    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+    if (!renderer) {
+      std::fprintf(stderr, "live_bench: %s\n", renderer.error().message.c_str());
+      return 2;
+    }
+    GlVolumeRenderer& r = **renderer;
+
+    // The prebuilt mesh, uploaded once; and the CPU rebuild + upload a frame would cost.
+    std::vector<double> rebuild;
+    Result<Mesh> mesh = Error{""};
+    for (int i = 0; i < std::max(1, frames / 2); ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      mesh = build_static_volume(light, map, {}, "shadow");
+      if (!mesh) {
+        std::fprintf(stderr, "live_bench: %s\n", mesh.error().message.c_str());
+        return 2;
+      }
+      r.set_volume(*mesh);
+      rebuild.push_back(seconds_since(start));
+    }
+    Image prebuilt_image;
+    const double prebuilt = time_frames(r, frames, &prebuilt_image);
+
+    // The live volume: the map uploaded once as a texture (an engine's depth pass writes it).
+    const gl::TextureHandle texture = upload_shadow_map(light, map);
+    Result<std::unique_ptr<LiveVolume>> live =
+        LiveVolume::create(light, {texture.id(), size, size});
+    if (!live) {
+      std::fprintf(stderr, "live_bench: %s\n", live.error().message.c_str());
+      return 2;
+    }
+    if (Status s = r.set_volume(**live); !s) {
+      std::fprintf(stderr, "live_bench: %s\n", s.error().message.c_str());
+      return 2;
+    }
+    Image live_image;
+    const double live_s = time_frames(r, frames, &live_image);
+    const double cpu = median(rebuild) + prebuilt;
+    std::printf("%-6d %10zu | %12.2f %12.2f %12.2f | %10.2f %10.2f | %12.2e\n", size,
+                mesh->num_triangles(), 1e3 * live_s, 1e3 * prebuilt, 1e3 * cpu, live_s / prebuilt,
+                cpu / live_s, compare_images(live_image, prebuilt_image).relative_l2);
+    std::fflush(stdout);
+  }
+  std::printf(
+      "\nlive: the volume made from the shadow map texture in the vertex stage and drawn; "
+      "prebuilt: the same mesh drawn from buffers; CPU+upl.: build_static_volume, the upload and "
+      "the prebuilt draw, per frame.\n");
+  return 0;
+}
