@@ -67,8 +67,9 @@ int main(int argc, char** argv) {
               (*context)->version().c_str(), (*context)->platform().c_str());
   std::printf("scene: spot light (linear depth), camera %dx%d, median of %d frames\n\n", width,
               height, frames);
-  std::printf("%-6s %10s | %12s %12s %12s | %10s %10s | %12s\n", "map", "triangles", "live ms",
-              "prebuilt ms", "CPU+upl. ms", "live/pre", "CPU/live", "rel. L2");
+  std::printf("%-6s %10s | %9s %7s | %11s %7s | %11s | %8s %8s | %9s\n", "map", "triangles",
+              "live ms", "FPS", "prebuilt ms", "FPS", "CPU+upl. ms", "live/pre", "CPU/live",
+              "rel. L2");
 
   const Light light = test::light_from_json(test::spot_json("linear"));
   Medium medium;
@@ -119,9 +120,10 @@ int main(int argc, char** argv) {
     Image live_image;
     const double live_s = time_frames(r, frames, &live_image);
     const double cpu = median(rebuild) + prebuilt;
-    std::printf("%-6d %10zu | %12.2f %12.2f %12.2f | %10.2f %10.2f | %12.2e\n", size,
-                mesh->num_triangles(), 1e3 * live_s, 1e3 * prebuilt, 1e3 * cpu, live_s / prebuilt,
-                cpu / live_s, compare_images(live_image, prebuilt_image).relative_l2);
+    std::printf("%-6d %10zu | %9.1f %7.3f | %11.1f %7.3f | %11.1f | %8.2f %8.2f | %9.2e\n", size,
+                mesh->num_triangles(), 1e3 * live_s, 1 / live_s, 1e3 * prebuilt, 1 / prebuilt,
+                1e3 * cpu, live_s / prebuilt, cpu / live_s,
+                compare_images(live_image, prebuilt_image).relative_l2);
     std::fflush(stdout);
   }
   std::printf(
