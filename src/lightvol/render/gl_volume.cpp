@@ -145,6 +145,7 @@ struct GlVolumeRenderer::State {
   Program volume, resolve;
   Program live_program;              // compiled by the first set_volume(LiveVolume)
   const LiveVolume* live = nullptr;  // drawn instead of the mesh when set
+  LiveDraw live_draw = LiveDraw::vertex_stage;
   Framebuffer accumulate, output;
   TextureHandle surface, table;
   VertexArrayHandle vao, empty_vao;
@@ -241,7 +242,7 @@ void GlVolumeRenderer::set_volume(const Mesh& volume) {
   s.live = nullptr;
 }
 
-Status GlVolumeRenderer::set_volume(const LiveVolume& live) {
+Status GlVolumeRenderer::set_volume(const LiveVolume& live, LiveDraw draw) {
   State& s = *state_;
   if (s.live_program.id() == 0) {
     Result<Program> program =
@@ -265,12 +266,15 @@ Status GlVolumeRenderer::set_volume(const LiveVolume& live) {
       return Error{"OpenGL: setting up the live volume's program: " + e};
   }
   s.live = &live;
+  s.live_draw = draw;
   return {};
 }
 
 Image GlVolumeRenderer::render(double* seconds) {
   State& s = *state_;
   const auto start = std::chrono::steady_clock::now();
+  const bool in_vertex_stage = s.live && s.live_draw == LiveDraw::vertex_stage;
+  if (s.live && !in_vertex_stage) s.live->generate();  // the live volume's vertices, once each
   // Pass 1: every fragment of the volume, additive, no depth test, no clipping in depth.
   s.accumulate.bind();
   glClearColor(0, 0, 0, 0);
@@ -281,16 +285,19 @@ Image GlVolumeRenderer::render(double* seconds) {
   glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_ADD);
   glBlendFunc(GL_ONE, GL_ONE);
-  // A live volume's vertices are made here, from its shadow map (texture unit 2), by the vertex
-  // stage; a mesh's come from its buffer.
-  const Program& program = s.live ? s.live_program : s.volume;
+  // A live volume drawn in the vertex stage makes its vertices here, from its shadow maps (texture
+  // units 2 to 7); a mesh's, or a generated live volume's, come from their buffers.
+  const Program& program = in_vertex_stage ? s.live_program : s.volume;
   program.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, s.table.id());
-  if (s.live) {
+  if (in_vertex_stage) {
     s.live->bind(program, 2);
+    glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
+  } else if (s.live) {
+    glBindVertexArray(s.live->mesh_vertex_array());
     glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
   } else {
     glBindVertexArray(s.vao.id());

@@ -167,8 +167,10 @@ struct LiveVolume::State {
   std::vector<GlShadowMap> maps;
   LiveUniforms uniforms;
   Program capture;
-  VertexArrayHandle vao;
-  BufferHandle indices;
+  VertexArrayHandle vao;       // no attributes; the triangles (drawn by the live vertex stage)
+  VertexArrayHandle mesh_vao;  // attribute 0: positions; the triangles
+  BufferHandle indices, positions;
+  Framebuffer target;  // 1×1: a draw needs a complete framebuffer even with rasterization off
   GLsizei index_count = 0;
   std::uint64_t vertices = 0, triangles = 0;
 };
@@ -192,11 +194,24 @@ Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light,
   GLuint id = 0;
   glGenVertexArrays(1, &id);
   s.vao = VertexArrayHandle(id);
+  glGenVertexArrays(1, &id);
+  s.mesh_vao = VertexArrayHandle(id);
   glGenBuffers(1, &id);
   s.indices = BufferHandle(id);
+  glGenBuffers(1, &id);
+  s.positions = BufferHandle(id);
   glBindVertexArray(s.vao.id());
   glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.indices.id());
+  glBindVertexArray(s.mesh_vao.id());
+  glBindBuffer(GL_ARRAY_BUFFER, s.positions.id());
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glEnableVertexAttribArray(0);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.indices.id());
   glBindVertexArray(0);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  Result<Framebuffer> target = Framebuffer::create(1, 1, {GL_R32F}, false);
+  if (!target) return target.error();
+  s.target = std::move(*target);
   if (Status st = live->set_shadow_maps(maps); !st) return st.error();
   return live;
 }
@@ -223,6 +238,10 @@ Status LiveVolume::set_shadow_maps(const std::vector<GlShadowMap>& maps) {
   const VolumeCounts counts = static_volume_counts(s.light.type, w, h);
   s.vertices = counts.vertices;
   s.triangles = counts.triangles;
+  glBindBuffer(GL_ARRAY_BUFFER, s.positions.id());
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(3 * s.vertices * sizeof(float)), nullptr,
+               GL_DYNAMIC_COPY);
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
   if (std::string e = pending_error(); !e.empty())
     return Error{"OpenGL: uploading the live volume's triangles: " + e};
   return {};
@@ -265,36 +284,33 @@ void LiveVolume::bind(const Program& program, int unit) const {
   glBindVertexArray(s.vao.id());
 }
 
-Result<std::vector<float>> LiveVolume::read_positions() const {
+GLuint LiveVolume::mesh_vertex_array() const { return state_->mesh_vao.id(); }
+
+void LiveVolume::generate() const {
   const State& s = *state_;
-  const std::size_t floats = 3 * static_cast<std::size_t>(s.vertices);
-  GLuint id = 0;
-  glGenBuffers(1, &id);
-  const BufferHandle buffer(id);
-  glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, buffer.id());
-  glBufferData(GL_TRANSFORM_FEEDBACK_BUFFER, static_cast<GLsizeiptr>(floats * sizeof(float)),
-               nullptr, GL_STREAM_READ);
-  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, buffer.id());
-  // A draw needs a complete framebuffer even with rasterization off (a surfaceless context has
-  // none of its own).
-  Result<Framebuffer> target = Framebuffer::create(1, 1, {GL_R32F}, false);
-  if (!target) return target.error();
-  target->bind();
+  s.target.bind();
   s.capture.use();
-  const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-  glUniformMatrix4fv(s.capture.uniform("view_projection"), 1, GL_TRUE, identity);
-  bind(s.capture, 0);
+  static constexpr float kIdentity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  glUniformMatrix4fv(s.capture.uniform("view_projection"), 1, GL_TRUE, kIdentity);
+  bind(s.capture, 2);
+  glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, s.positions.id());
   glEnable(GL_RASTERIZER_DISCARD);
   glBeginTransformFeedback(GL_POINTS);
   glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(s.vertices));
   glEndTransformFeedback();
   glDisable(GL_RASTERIZER_DISCARD);
-  std::vector<float> positions(floats);
-  glGetBufferSubData(GL_TRANSFORM_FEEDBACK_BUFFER, 0,
-                     static_cast<GLsizeiptr>(floats * sizeof(float)), positions.data());
   glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
-  glBindBuffer(GL_TRANSFORM_FEEDBACK_BUFFER, 0);
   glBindVertexArray(0);
+}
+
+Result<std::vector<float>> LiveVolume::read_positions() const {
+  const State& s = *state_;
+  generate();
+  std::vector<float> positions(3 * static_cast<std::size_t>(s.vertices));
+  glBindBuffer(GL_COPY_READ_BUFFER, s.positions.id());
+  glGetBufferSubData(GL_COPY_READ_BUFFER, 0,
+                     static_cast<GLsizeiptr>(positions.size() * sizeof(float)), positions.data());
+  glBindBuffer(GL_COPY_READ_BUFFER, 0);
   glUseProgram(0);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   if (std::string e = pending_error(); !e.empty())

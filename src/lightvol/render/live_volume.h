@@ -73,6 +73,14 @@ class LiveVolume {
   // captured by transform feedback and read back (xyz floats, world space, build's order).
   Result<std::vector<float>> read_positions() const;
 
+  // Makes the vertices from the maps as they are now into the volume's own vertex buffer by
+  // transform feedback (rasterization off; each vertex once), for drawing as a mesh from
+  // mesh_vertex_array(). Leaves its own 1×1 framebuffer bound. No allocation.
+  void generate() const;
+  // A vertex array whose attribute 0 is that buffer (xyz floats) and whose element buffer holds
+  // the triangles.
+  GLuint mesh_vertex_array() const;
+
   // For GlVolumeRenderer: with `program` (compiled from the LIGHTVOL_LIVE_VOLUME_VERTEX stage) in
   // use, sets its live_* uniforms, binds the maps to texture units `unit`.. `unit` + 5 and binds
   // the vertex array whose element buffer holds the triangles. No allocation.
