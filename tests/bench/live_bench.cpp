@@ -14,6 +14,8 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <lightvol/gl/context.h>
@@ -37,18 +39,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Median seconds per frame of `frames` renders after a warm-up one (shader compilation, uploads).
-double time_frames(GlVolumeRenderer& renderer, int frames, Image* image) {
-  *image = renderer.render();
-  std::vector<double> t;
-  for (int i = 0; i < frames; ++i) {
-    double s = 0;
-    renderer.render(&s);
-    t.push_back(s);
-  }
-  return median(t);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,7 +56,7 @@ int main(int argc, char** argv) {
   }
   std::printf("renderer: %s, %s (EGL %s)\n", (*context)->renderer().c_str(),
               (*context)->version().c_str(), (*context)->platform().c_str());
-  std::printf("scene: spot light (linear depth), camera %dx%d, median of %d frames\n\n", width,
+  std::printf("scene: spot light (linear depth), camera %dx%d, median of %d rounds\n\n", width,
               height, frames);
   std::printf("%-5s %9s | %8s %6s | %8s %6s | %8s | %8s %6s | %8s | %8s %8s %8s | %8s\n", "map",
               "triangles", "live ms", "FPS", "2-pass", "FPS", "generate", "prebuilt", "FPS",
@@ -81,65 +71,65 @@ int main(int argc, char** argv) {
   const RenderScene scene = test::make_render_scene(
       test::make_camera({7, 2, 7}, {0, 0.3, 0}, width, height, 40), light, medium);
 
+  const auto fail = [](const std::string& message) {
+    std::fprintf(stderr, "live_bench: %s\n", message.c_str());
+    return 2;
+  };
   for (const int size : maps) {
     const DepthImage map = test::scene_shadow_map(light, size, size);
-    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
-    if (!renderer) {
-      std::fprintf(stderr, "live_bench: %s\n", renderer.error().message.c_str());
-      return 2;
+    // One renderer per way of drawing, so that each round draws all of them back to back.
+    std::unique_ptr<GlVolumeRenderer> renderers[3];
+    for (auto& r : renderers) {
+      Result<std::unique_ptr<GlVolumeRenderer>> made = GlVolumeRenderer::create(scene);
+      if (!made) return fail(made.error().message);
+      r = std::move(*made);
     }
-    GlVolumeRenderer& r = **renderer;
-
-    // The prebuilt mesh, uploaded once; and the CPU rebuild + upload a frame would cost.
-    std::vector<double> rebuild;
-    Result<Mesh> mesh = Error{""};
-    for (int i = 0; i < std::max(1, frames / 2); ++i) {
-      const auto start = std::chrono::steady_clock::now();
-      mesh = build_static_volume(light, map, {}, "shadow");
-      if (!mesh) {
-        std::fprintf(stderr, "live_bench: %s\n", mesh.error().message.c_str());
-        return 2;
-      }
-      r.set_volume(*mesh);
-      rebuild.push_back(seconds_since(start));
-    }
-    Image prebuilt_image;
-    const double prebuilt = time_frames(r, frames, &prebuilt_image);
-
+    GlVolumeRenderer &prebuilt = *renderers[0], &live_draw = *renderers[1],
+                     &two_pass_draw = *renderers[2];
+    Result<Mesh> mesh = build_static_volume(light, map, {}, "shadow");
+    if (!mesh) return fail(mesh.error().message);
+    prebuilt.set_volume(*mesh);
     // The live volume: the map uploaded once as a texture (an engine's depth pass writes it).
     const gl::TextureHandle texture = upload_shadow_map(light, map);
     Result<std::unique_ptr<LiveVolume>> live =
         LiveVolume::create(light, {texture.id(), size, size});
-    if (!live) {
-      std::fprintf(stderr, "live_bench: %s\n", live.error().message.c_str());
-      return 2;
-    }
-    if (Status s = r.set_volume(**live); !s) {
-      std::fprintf(stderr, "live_bench: %s\n", s.error().message.c_str());
-      return 2;
-    }
-    Image live_image, two_pass_image;
-    const double live_s = time_frames(r, frames, &live_image);
-    if (Status s = r.set_volume(**live, LiveDraw::two_pass); !s) {
-      std::fprintf(stderr, "live_bench: %s\n", s.error().message.c_str());
-      return 2;
-    }
-    const double two_pass = time_frames(r, frames, &two_pass_image);
-    // The generation alone (the paper's "tessellate" row): the two-pass mode's first pass.
-    std::vector<double> generation;
+    if (!live) return fail(live.error().message);
+    if (Status s = live_draw.set_volume(**live); !s) return fail(s.error().message);
+    if (Status s = two_pass_draw.set_volume(**live, LiveDraw::two_pass); !s)
+      return fail(s.error().message);
+    // Warm-up frames (shader compilation, uploads), kept for the images' comparison.
+    const Image prebuilt_image = prebuilt.render(), live_image = live_draw.render(),
+                two_pass_image = two_pass_draw.render();
+
+    // Rounds: each draws every way once, so that a change of load hits them alike; ratios are
+    // the medians of the rounds' ratios.
+    std::vector<double> t_pre, t_live, t_two, t_gen, t_cpu, live_ratio, two_ratio, cpu_ratio;
     for (int i = 0; i < frames; ++i) {
-      const auto start = std::chrono::steady_clock::now();
+      double a = 0, b = 0, c = 0;
+      prebuilt.render(&a);
+      live_draw.render(&b);
+      two_pass_draw.render(&c);
+      // The generation alone (the paper's "tessellate" row): the two-pass way's first pass.
+      auto start = std::chrono::steady_clock::now();
       (*live)->generate();
       gl::glFinish();
-      generation.push_back(seconds_since(start));
+      t_gen.push_back(seconds_since(start));
+      // What a frame costs an engine without the live volume: build on the CPU, upload, draw.
+      start = std::chrono::steady_clock::now();
+      Result<Mesh> rebuilt = build_static_volume(light, map, {}, "shadow");
+      if (!rebuilt) return fail(rebuilt.error().message);
+      prebuilt.set_volume(*rebuilt);
+      const double cpu = seconds_since(start) + a;
+      t_pre.push_back(a), t_live.push_back(b), t_two.push_back(c), t_cpu.push_back(cpu);
+      live_ratio.push_back(b / a), two_ratio.push_back(c / a), cpu_ratio.push_back(cpu / b);
     }
-    const double cpu = median(rebuild) + prebuilt;
+    const double pre = median(t_pre), live_s = median(t_live), two = median(t_two);
     std::printf(
         "%-5d %9zu | %8.1f %6.3f | %8.1f %6.3f | %8.1f | %8.1f %6.3f | %8.1f | %8.2f %8.2f %8.2f | "
         "%8.1e\n",
-        size, mesh->num_triangles(), 1e3 * live_s, 1 / live_s, 1e3 * two_pass, 1 / two_pass,
-        1e3 * median(generation), 1e3 * prebuilt, 1 / prebuilt, 1e3 * cpu, live_s / prebuilt,
-        two_pass / prebuilt, cpu / live_s,
+        size, mesh->num_triangles(), 1e3 * live_s, 1 / live_s, 1e3 * two, 1 / two,
+        1e3 * median(t_gen), 1e3 * pre, 1 / pre, 1e3 * median(t_cpu), median(live_ratio),
+        median(two_ratio), median(cpu_ratio),
         std::max(compare_images(live_image, prebuilt_image).relative_l2,
                  compare_images(two_pass_image, prebuilt_image).relative_l2));
     std::fflush(stdout);
