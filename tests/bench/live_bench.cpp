@@ -94,7 +94,8 @@ int main(int argc, char** argv) {
     Result<std::unique_ptr<LiveVolume>> live =
         LiveVolume::create(light, {texture.id(), size, size});
     if (!live) return fail(live.error().message);
-    if (Status s = live_draw.set_volume(**live); !s) return fail(s.error().message);
+    if (Status s = live_draw.set_volume(**live, LiveDraw::vertex_stage); !s)
+      return fail(s.error().message);
     if (Status s = two_pass_draw.set_volume(**live, LiveDraw::two_pass); !s)
       return fail(s.error().message);
     // Warm-up frames (shader compilation, uploads), kept for the images' comparison.

@@ -332,7 +332,7 @@ TEST(LiveVolume, FollowsTheMapWhenItChangesBetweenFrames) {
   const TextureHandle texture = upload_shadow_map(light, map1);
   Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, {texture.id(), kMap, kMap});
   ASSERT_TRUE(live) << live.error().message;
-  ASSERT_TRUE((*renderer)->set_volume(**live));
+  ASSERT_TRUE((*renderer)->set_volume(**live, LiveDraw::vertex_stage));
   const Image frame1 = (*renderer)->render();
   ASSERT_TRUE((*renderer)->set_volume(**live, LiveDraw::two_pass));
   const Image frame1_two_pass = (*renderer)->render();
@@ -344,7 +344,7 @@ TEST(LiveVolume, FollowsTheMapWhenItChangesBetweenFrames) {
   glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, kMap, kMap, GL_RED, GL_FLOAT, rows.data());
   glBindTexture(GL_TEXTURE_2D, 0);
   const Image frame2_two_pass = (*renderer)->render();
-  ASSERT_TRUE((*renderer)->set_volume(**live));
+  ASSERT_TRUE((*renderer)->set_volume(**live, LiveDraw::vertex_stage));
   const Image frame2 = (*renderer)->render();
 
   const ImageDifference d1 = compare_images(frame1, expected1);

@@ -145,7 +145,7 @@ struct GlVolumeRenderer::State {
   Program volume, resolve;
   Program live_program;              // compiled by the first set_volume(LiveVolume)
   const LiveVolume* live = nullptr;  // drawn instead of the mesh when set
-  LiveDraw live_draw = LiveDraw::vertex_stage;
+  LiveDraw live_draw = LiveDraw::two_pass;
   Framebuffer accumulate, output;
   TextureHandle surface, table;
   VertexArrayHandle vao, empty_vao;

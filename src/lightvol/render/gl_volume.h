@@ -35,10 +35,11 @@ namespace lightvol {
 
 class LiveVolume;
 
-// How a live volume is drawn: its vertices made by the volume pass's own vertex stage, once for
-// every index drawn (one pass: the paper's displaced grid), or first made once each into a vertex
-// buffer by transform feedback and then drawn from it as a mesh is (two passes).
-enum class LiveDraw { vertex_stage, two_pass };
+// How a live volume is drawn: its vertices first made once each into a vertex buffer by transform
+// feedback and then drawn from it as a mesh is (two passes: the default, the faster on llvmpipe,
+// docs/performance.md), or made by the volume pass's own vertex stage for every index drawn (one
+// pass: the paper's displaced grid).
+enum class LiveDraw { two_pass, vertex_stage };
 
 struct GlVolumeOptions {
   bool baseline = true;  // integrate fragments from the closest point to the light (see above)
@@ -60,7 +61,7 @@ class GlVolumeRenderer {
   // shadow maps as they then are, as `draw` says, and draws them with the volume pass. `live`
   // must outlive its use here (until the next set_volume); its light should be the scene's.
   // Errors: the live vertex stage does not compile (a driver problem).
-  Status set_volume(const LiveVolume& live, LiveDraw draw = LiveDraw::vertex_stage);
+  Status set_volume(const LiveVolume& live, LiveDraw draw = LiveDraw::two_pass);
 
   // Draws the volume and the resolve pass, waits for the GPU, and returns the airlight image
   // (first row = top). `seconds`, when given, receives the wall-clock time of the GPU work
