@@ -20,6 +20,7 @@
 #include <lightvol/gl/context.h>
 #include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_volume.h>
 #endif
 
 #include "commands.h"
@@ -61,8 +62,10 @@ bool needs_mesh(const RenderOptions& o) { return o.method == "volume" || o.metho
 std::string conflicting_flags(const RenderOptions& o) {
   if (needs_mesh(o) && o.mesh_path.empty())
     return "render: --method " + o.method + " needs the light volume MESH";
-  if (o.method == "raymarch" && o.shadow_maps.empty())
+  if ((o.method == "raymarch" || o.method == "live") && o.shadow_maps.empty())
     return "render: --method " + o.method + " needs --shadow-map DEPTH (the light's shadow map(s))";
+  if (o.method == "live" && !o.mesh_path.empty())
+    return "render: --method live makes the volume from --shadow-map on the GPU; it takes no MESH";
   if (o.samples < 1) return "--samples: must be >= 1, got " + std::to_string(o.samples);
   if (o.interleave < 1) return "--interleave: must be >= 1, got " + std::to_string(o.interleave);
   if (o.frames < 0) return "--frames: must be >= 0, got " + std::to_string(o.frames);
@@ -130,6 +133,22 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     if (!renderer) return renderer.error();
     (*renderer)->set_volume(volume);
+    image = render_frames(**renderer, o.frames, frame_seconds);
+  } else if (o.method == "live") {
+    // The shadow map goes to the GPU as a texture; each frame makes the volume from it there.
+    Result<ShadowMaps> maps = read_shadow_maps(scene.light, o.shadow_maps, {o.channel});
+    if (!maps) return maps.error();
+    std::vector<gl::TextureHandle> textures;
+    std::vector<GlShadowMap> on_gpu;
+    for (const DepthImage& map : maps->images()) {
+      textures.push_back(upload_shadow_map(scene.light, map));
+      on_gpu.push_back({textures.back().id(), map.width, map.height});
+    }
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(scene.light, on_gpu);
+    if (!live) return live.error();
+    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+    if (!renderer) return renderer.error();
+    if (Status s = (*renderer)->set_volume(**live); !s) return s.error();
     image = render_frames(**renderer, o.frames, frame_seconds);
   } else {
     ShadowMaps maps;  // radial needs none
@@ -215,8 +234,9 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->footer(
       "Example:\n  lightvol render volume.ply --light light.json --camera cam.json --depth "
       "camdepth.exr \\\n      --medium medium.json --out airlight.png\n"
-      "Methods: volume (the light volume drawn with signed additive blending, OpenGL), reference\n"
-      "(the exact sum on the CPU, double precision), raymarch (steps through the shadow map,\n"
+      "Methods: volume (the light volume drawn with signed additive blending, OpenGL), live (the\n"
+      "same, its volume made on the GPU each frame from --shadow-map; no MESH), reference (the\n"
+      "exact sum on the CPU, double precision), raymarch (steps through the shadow map,\n"
       "--shadow-map) and radial (a radial blur of the camera depth), the last two for comparison.\n"
       ".exr output keeps linear floats; .png is tone-mapped. Exit 2 on bad input.");
   cmd->add_option("MESH", o->mesh_path, "Light volume (world space), for volume and reference");
@@ -231,12 +251,12 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option("--out", o->out_path,
                   "Output image: .exr keeps linear floats, .png is tone-mapped")
       ->required();
-  cmd->add_option("--method", o->method, "volume | reference | raymarch | radial")
-      ->check(CLI::IsMember({"volume", "reference", "raymarch", "radial"}))
+  cmd->add_option("--method", o->method, "volume | live | reference | raymarch | radial")
+      ->check(CLI::IsMember({"volume", "live", "reference", "raymarch", "radial"}))
       ->capture_default_str();
   cmd->add_option(
       "--shadow-map", o->shadow_maps,
-      "raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
+      "live, raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
       ->capture_default_str();

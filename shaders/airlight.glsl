@@ -20,6 +20,13 @@
 //   LIGHTVOL_SURFACE_VERTEX, LIGHTVOL_SURFACE_FRAGMENT  for hosts without a distance buffer: draw
 //       the scene with the depth test on into an R32F target cleared to 3e38; each fragment writes
 //       its distance along the pixel's ray, the `surface` texture pass 1 reads.
+//   LIGHTVOL_LIVE_VOLUME_VERTEX  pass 1's vertex stage for a live volume (docs/engines.md): the
+//       static volume of a light made from its shadow map(s) as it is drawn, with no vertex
+//       attributes. Vertex gl_VertexID is vertex gl_VertexID of `lightvol build`'s static volume
+//       of those maps: grid vertex row * W + col (omni: face * W * W + row * W + col) at texel
+//       (col, row)'s centre ray and depth, then the closing's (spot: the apex; directional: the
+//       border's near-plane copies, then the cap's centre; omni: none). Drawn with build's
+//       triangles as the index buffer, with LIGHTVOL_VOLUME_FRAGMENT.
 
 #if defined(LIGHTVOL_VOLUME_VERTEX) || defined(LIGHTVOL_SURFACE_VERTEX)
 layout(location = 0) in vec3 position;
@@ -28,6 +35,116 @@ out vec3 world;
 void main() {
   world = position;
   gl_Position = view_projection * vec4(position, 1.0);
+}
+#endif
+
+#ifdef LIGHTVOL_LIVE_VOLUME_VERTEX
+// The shadow maps as the light's projection rendered them: texture row t (t = 0 at the bottom)
+// holds NDC y = -1 + 2(t + 1/2)/H. Depth textures (compare mode off) or R32F, read with texelFetch.
+// Spot and directional lights use shadow_maps[0]; omni lights the six faces +X -X +Y -Y +Z -Z.
+uniform sampler2D shadow_maps[6];
+uniform ivec2 live_size;       // W, H (of each face)
+uniform int live_flip_y;       // the light's flip_y: image row 0 is NDC y = -1
+uniform int live_depth;        // 0 window depth, 1 linear (eye -z), 2 radial (distance to the eye)
+uniform int live_type;         // 0 spot (closed by a fan to the apex), 1 directional (walls and a
+                               // cap), 2 omni (six faces joined by seams and corners)
+uniform int live_standard;     // 1 when the border ring runs top, right, bottom, left; 0 reversed
+uniform float live_min_t;      // the smallest parameter along a texel's near-far segment
+// A texel's near and far points in the light's eye space, homogeneous and affine in its NDC
+// (x, y): ray_x * x + ray_y * y + near_0 (far_0). Window depth d blends them without cancellation:
+// (1 - d) near + d far, homogeneous.
+uniform vec4 live_ray_x;
+uniform vec4 live_ray_y;
+uniform vec4 live_near_0;
+uniform vec4 live_far_0;
+uniform mat4 live_eye_to_world[6];  // the light's (omni: each face's) eye to world
+uniform vec3 live_apex;        // world: the spot's apex
+uniform vec3 live_cap;         // world: the directional cap's centre
+uniform mat4 view_projection;
+out vec3 world;
+
+vec2 live_ndc(ivec2 texel) {
+  vec2 t = (2.0 * vec2(texel) + 1.0) / vec2(live_size) - 1.0;
+  return vec2(t.x, live_flip_y == 1 ? t.y : -t.y);
+}
+
+// Texel (col, row)'s point at parameter t of its near-far segment (eye space).
+vec3 live_segment(vec2 ndc, float t) {
+  vec4 base = live_ray_x * ndc.x + live_ray_y * ndc.y;
+  vec3 pn = (base + live_near_0).xyz / (base + live_near_0).w;
+  vec3 pf = (base + live_far_0).xyz / (base + live_far_0).w;
+  return pn + t * (pf - pn);
+}
+
+// The stored depth of face f's texel t (samplers are indexed by constants only).
+float live_fetch(int f, ivec2 t) {
+  if (f == 0) return texelFetch(shadow_maps[0], t, 0).r;
+  if (f == 1) return texelFetch(shadow_maps[1], t, 0).r;
+  if (f == 2) return texelFetch(shadow_maps[2], t, 0).r;
+  if (f == 3) return texelFetch(shadow_maps[3], t, 0).r;
+  if (f == 4) return texelFetch(shadow_maps[4], t, 0).r;
+  return texelFetch(shadow_maps[5], t, 0).r;
+}
+
+// Face f's texel (col, row)'s grid vertex (eye space), as lightvol's Unprojector places it.
+vec3 live_grid_point(int f, ivec2 texel) {
+  int row = live_flip_y == 1 ? texel.y : live_size.y - 1 - texel.y;
+  float d = live_fetch(f, ivec2(texel.x, row));
+  vec2 ndc = live_ndc(texel);
+  vec4 base = live_ray_x * ndc.x + live_ray_y * ndc.y;
+  if (live_depth == 0) {
+    float w = clamp(d, live_min_t, 1.0);
+    vec4 h = base + ((1.0 - w) * live_near_0 + w * live_far_0);
+    return h.xyz / h.w;
+  }
+  vec3 pn = (base + live_near_0).xyz / (base + live_near_0).w;
+  vec3 pf = (base + live_far_0).xyz / (base + live_far_0).w;
+  vec3 dv = pf - pn;
+  float t = 0.0;
+  if (live_depth == 1) {
+    t = (-d - pn.z) / dv.z;
+  } else {
+    // |pn + t dv| = d, the far root; a depth no ray reaches gives the near point.
+    float a = dot(dv, dv), half_b = dot(pn, dv), c = dot(pn, pn) - d * d;
+    float disc = half_b * half_b - a * c;
+    t = disc < 0.0 ? 0.0 : (-half_b + sqrt(disc)) / a;
+  }
+  return pn + clamp(t, live_min_t, 1.0) * dv;
+}
+
+// Texel of ring vertex k (build's border ring: top row left to right, right column down, bottom
+// row right to left, left column up; reversed when live_standard is 0).
+ivec2 live_ring_texel(int k) {
+  int w1 = live_size.x - 1, h1 = live_size.y - 1;
+  if (live_standard == 0) k = 2 * (w1 + h1) - 1 - k;
+  if (k < w1) return ivec2(k, 0);
+  k -= w1;
+  if (k < h1) return ivec2(w1, k);
+  k -= h1;
+  if (k < w1) return ivec2(w1 - k, h1);
+  return ivec2(0, h1 - (k - w1));
+}
+
+void main() {
+  int texels = live_size.x * live_size.y;
+  int v = gl_VertexID;
+  if (v < (live_type == 2 ? 6 * texels : texels)) {
+    int f = v / texels;
+    int i = v - f * texels;
+    vec3 eye = live_grid_point(f, ivec2(i % live_size.x, i / live_size.x));
+    world = (live_eye_to_world[f] * vec4(eye, 1.0)).xyz;
+  } else if (live_type == 0) {
+    world = live_apex;
+  } else {
+    int k = v - texels;
+    if (k == 2 * (live_size.x - 1) + 2 * (live_size.y - 1)) {
+      world = live_cap;
+    } else {
+      vec3 eye = live_segment(live_ndc(live_ring_texel(k)), 0.0);
+      world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
+    }
+  }
+  gl_Position = view_projection * vec4(world, 1.0);
 }
 #endif
 

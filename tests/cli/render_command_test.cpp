@@ -111,6 +111,25 @@ TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
   ASSERT_EQ(composite.exit_code, 0) << composite.err;
 }
 
+TEST(RenderCommand, LiveMakesTheVolumeOnTheGpuAndDrawsBuildsAirlight) {
+  REQUIRE_GL_CONTEXT();
+  test::TempDir tmp;
+  const std::string dir = tmp.path();
+  write_scene(dir, {6, 3, 6}, {0, 1, 0});
+  const std::string args = common_args(dir);
+  test::CommandResult vol = test::run_lightvol("render '" + dir + "/volume.ply' " + args +
+                                               " --out '" + dir + "/volume.exr'");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  test::CommandResult live = test::run_lightvol(
+      "render " + args + " --method live --shadow-map '" + dir + "/shadow.exr' --out '" + dir +
+      "/live.exr' --compare '" + dir + "/volume.exr' --frames 2");
+  ASSERT_EQ(live.exit_code, 0) << live.err;
+  // The same vertices to float rounding, drawn by the same passes (tests/render/live_volume_test).
+  EXPECT_LT(number_after(live.out, "relative L2 "), 1e-4) << live.out;
+  EXPECT_NE(live.out.find("method live"), std::string::npos) << live.out;
+  EXPECT_GT(number_after(live.out, "time per frame: "), 0) << live.out;
+}
+
 TEST(RenderCommand, RejectsBadInputNamingTheFile) {
   test::TempDir tmp;
   write_scene(tmp.path(), {6, 3, 6}, {0, 1, 0});
@@ -133,6 +152,17 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
   EXPECT_EQ(
       r.err,
       "lightvol: render: --method raymarch needs --shadow-map DEPTH (the light's shadow map(s))\n");
+  r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr' --method live");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(
+      r.err,
+      "lightvol: render: --method live needs --shadow-map DEPTH (the light's shadow map(s))\n");
+  r = test::run_lightvol("render '" + dir + "/volume.ply' " + common_args(dir) + " --out '" + dir +
+                         "/x.exr' --method live --shadow-map '" + dir + "/shadow.exr'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            "lightvol: render: --method live makes the volume from --shadow-map on the GPU; it "
+            "takes no MESH\n");
   r = test::run_lightvol("render '" + dir + "/volume.ply' " + common_args(dir) + " --out '" + dir +
                          "/x.exr' --method reference --compare '" + dir + "/shadow.exr'");
   EXPECT_EQ(r.exit_code, 2);

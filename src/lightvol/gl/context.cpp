@@ -232,7 +232,8 @@ Result<GLuint> compile_shader(GLenum stage, const std::string& source, const std
 }  // namespace
 
 Result<Program> Program::compile(const std::string& vertex_source,
-                                 const std::string& fragment_source, const std::string& name) {
+                                 const std::string& fragment_source, const std::string& name,
+                                 const std::vector<std::string>& feedback) {
   Result<GLuint> vs = compile_shader(GL_VERTEX_SHADER, vertex_source, name);
   if (!vs) return vs.error();
   Result<GLuint> fs = compile_shader(GL_FRAGMENT_SHADER, fragment_source, name);
@@ -245,6 +246,12 @@ Result<Program> Program::compile(const std::string& vertex_source,
   const GLuint id = program.handle_.id();
   glAttachShader(id, *vs);
   glAttachShader(id, *fs);
+  if (!feedback.empty()) {
+    std::vector<const char*> names;
+    for (const std::string& n : feedback) names.push_back(n.c_str());
+    glTransformFeedbackVaryings(id, static_cast<GLsizei>(names.size()), names.data(),
+                                GL_INTERLEAVED_ATTRIBS);
+  }
   glLinkProgram(id);
   glDeleteShader(*vs);
   glDeleteShader(*fs);

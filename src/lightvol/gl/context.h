@@ -30,82 +30,90 @@
 namespace lightvol::gl {
 
 // X-macro list of the OpenGL entry points lightvol uses. Add a line to use another one.
-#define LIGHTVOL_GL_FUNCTIONS(X)                                 \
-  X(PFNGLGETSTRINGPROC, glGetString)                             \
-  X(PFNGLGETERRORPROC, glGetError)                               \
-  X(PFNGLGETINTEGERVPROC, glGetIntegerv)                         \
-  X(PFNGLVIEWPORTPROC, glViewport)                               \
-  X(PFNGLCLEARCOLORPROC, glClearColor)                           \
-  X(PFNGLCLEARDEPTHPROC, glClearDepth)                           \
-  X(PFNGLCLEARPROC, glClear)                                     \
-  X(PFNGLENABLEPROC, glEnable)                                   \
-  X(PFNGLDISABLEPROC, glDisable)                                 \
-  X(PFNGLBLENDFUNCPROC, glBlendFunc)                             \
-  X(PFNGLBLENDEQUATIONPROC, glBlendEquation)                     \
-  X(PFNGLDEPTHFUNCPROC, glDepthFunc)                             \
-  X(PFNGLDEPTHMASKPROC, glDepthMask)                             \
-  X(PFNGLCULLFACEPROC, glCullFace)                               \
-  X(PFNGLFRONTFACEPROC, glFrontFace)                             \
-  X(PFNGLCOLORMASKPROC, glColorMask)                             \
-  X(PFNGLPOLYGONOFFSETPROC, glPolygonOffset)                     \
-  X(PFNGLDRAWARRAYSPROC, glDrawArrays)                           \
-  X(PFNGLDRAWELEMENTSPROC, glDrawElements)                       \
-  X(PFNGLFINISHPROC, glFinish)                                   \
-  X(PFNGLFLUSHPROC, glFlush)                                     \
-  X(PFNGLREADBUFFERPROC, glReadBuffer)                           \
-  X(PFNGLREADPIXELSPROC, glReadPixels)                           \
-  X(PFNGLPIXELSTOREIPROC, glPixelStorei)                         \
-  X(PFNGLCREATESHADERPROC, glCreateShader)                       \
-  X(PFNGLSHADERSOURCEPROC, glShaderSource)                       \
-  X(PFNGLCOMPILESHADERPROC, glCompileShader)                     \
-  X(PFNGLGETSHADERIVPROC, glGetShaderiv)                         \
-  X(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog)               \
-  X(PFNGLDELETESHADERPROC, glDeleteShader)                       \
-  X(PFNGLCREATEPROGRAMPROC, glCreateProgram)                     \
-  X(PFNGLATTACHSHADERPROC, glAttachShader)                       \
-  X(PFNGLLINKPROGRAMPROC, glLinkProgram)                         \
-  X(PFNGLGETPROGRAMIVPROC, glGetProgramiv)                       \
-  X(PFNGLGETPROGRAMINFOLOGPROC, glGetProgramInfoLog)             \
-  X(PFNGLDELETEPROGRAMPROC, glDeleteProgram)                     \
-  X(PFNGLUSEPROGRAMPROC, glUseProgram)                           \
-  X(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)           \
-  X(PFNGLUNIFORM1IPROC, glUniform1i)                             \
-  X(PFNGLUNIFORM1FPROC, glUniform1f)                             \
-  X(PFNGLUNIFORM2FPROC, glUniform2f)                             \
-  X(PFNGLUNIFORM2IPROC, glUniform2i)                             \
-  X(PFNGLUNIFORM3FPROC, glUniform3f)                             \
-  X(PFNGLUNIFORM4FPROC, glUniform4f)                             \
-  X(PFNGLUNIFORM1FVPROC, glUniform1fv)                           \
-  X(PFNGLUNIFORMMATRIX3FVPROC, glUniformMatrix3fv)               \
-  X(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)               \
-  X(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays)                 \
-  X(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)                 \
-  X(PFNGLDELETEVERTEXARRAYSPROC, glDeleteVertexArrays)           \
-  X(PFNGLGENBUFFERSPROC, glGenBuffers)                           \
-  X(PFNGLBINDBUFFERPROC, glBindBuffer)                           \
-  X(PFNGLBUFFERDATAPROC, glBufferData)                           \
-  X(PFNGLDELETEBUFFERSPROC, glDeleteBuffers)                     \
-  X(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)         \
-  X(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray) \
-  X(PFNGLGENTEXTURESPROC, glGenTextures)                         \
-  X(PFNGLBINDTEXTUREPROC, glBindTexture)                         \
-  X(PFNGLACTIVETEXTUREPROC, glActiveTexture)                     \
-  X(PFNGLTEXIMAGE2DPROC, glTexImage2D)                           \
-  X(PFNGLTEXIMAGE3DPROC, glTexImage3D)                           \
-  X(PFNGLTEXSUBIMAGE2DPROC, glTexSubImage2D)                     \
-  X(PFNGLTEXPARAMETERIPROC, glTexParameteri)                     \
-  X(PFNGLDELETETEXTURESPROC, glDeleteTextures)                   \
-  X(PFNGLGENFRAMEBUFFERSPROC, glGenFramebuffers)                 \
-  X(PFNGLBINDFRAMEBUFFERPROC, glBindFramebuffer)                 \
-  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, glFramebufferTexture2D)       \
-  X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, glCheckFramebufferStatus)   \
-  X(PFNGLDELETEFRAMEBUFFERSPROC, glDeleteFramebuffers)           \
-  X(PFNGLDRAWBUFFERSPROC, glDrawBuffers)                         \
-  X(PFNGLGENQUERIESPROC, glGenQueries)                           \
-  X(PFNGLDELETEQUERIESPROC, glDeleteQueries)                     \
-  X(PFNGLBEGINQUERYPROC, glBeginQuery)                           \
-  X(PFNGLENDQUERYPROC, glEndQuery)                               \
-  X(PFNGLGETQUERYOBJECTUI64VPROC, glGetQueryObjectui64v)
+#define LIGHTVOL_GL_FUNCTIONS(X)                                     \
+  X(PFNGLGETSTRINGPROC, glGetString)                                 \
+  X(PFNGLGETERRORPROC, glGetError)                                   \
+  X(PFNGLGETINTEGERVPROC, glGetIntegerv)                             \
+  X(PFNGLVIEWPORTPROC, glViewport)                                   \
+  X(PFNGLCLEARCOLORPROC, glClearColor)                               \
+  X(PFNGLCLEARDEPTHPROC, glClearDepth)                               \
+  X(PFNGLCLEARPROC, glClear)                                         \
+  X(PFNGLENABLEPROC, glEnable)                                       \
+  X(PFNGLDISABLEPROC, glDisable)                                     \
+  X(PFNGLBLENDFUNCPROC, glBlendFunc)                                 \
+  X(PFNGLBLENDEQUATIONPROC, glBlendEquation)                         \
+  X(PFNGLDEPTHFUNCPROC, glDepthFunc)                                 \
+  X(PFNGLDEPTHMASKPROC, glDepthMask)                                 \
+  X(PFNGLCULLFACEPROC, glCullFace)                                   \
+  X(PFNGLFRONTFACEPROC, glFrontFace)                                 \
+  X(PFNGLCOLORMASKPROC, glColorMask)                                 \
+  X(PFNGLPOLYGONOFFSETPROC, glPolygonOffset)                         \
+  X(PFNGLDRAWARRAYSPROC, glDrawArrays)                               \
+  X(PFNGLDRAWELEMENTSPROC, glDrawElements)                           \
+  X(PFNGLFINISHPROC, glFinish)                                       \
+  X(PFNGLFLUSHPROC, glFlush)                                         \
+  X(PFNGLREADBUFFERPROC, glReadBuffer)                               \
+  X(PFNGLREADPIXELSPROC, glReadPixels)                               \
+  X(PFNGLPIXELSTOREIPROC, glPixelStorei)                             \
+  X(PFNGLCREATESHADERPROC, glCreateShader)                           \
+  X(PFNGLSHADERSOURCEPROC, glShaderSource)                           \
+  X(PFNGLCOMPILESHADERPROC, glCompileShader)                         \
+  X(PFNGLGETSHADERIVPROC, glGetShaderiv)                             \
+  X(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog)                   \
+  X(PFNGLDELETESHADERPROC, glDeleteShader)                           \
+  X(PFNGLCREATEPROGRAMPROC, glCreateProgram)                         \
+  X(PFNGLATTACHSHADERPROC, glAttachShader)                           \
+  X(PFNGLLINKPROGRAMPROC, glLinkProgram)                             \
+  X(PFNGLGETPROGRAMIVPROC, glGetProgramiv)                           \
+  X(PFNGLGETPROGRAMINFOLOGPROC, glGetProgramInfoLog)                 \
+  X(PFNGLDELETEPROGRAMPROC, glDeleteProgram)                         \
+  X(PFNGLUSEPROGRAMPROC, glUseProgram)                               \
+  X(PFNGLGETUNIFORMLOCATIONPROC, glGetUniformLocation)               \
+  X(PFNGLUNIFORM1IPROC, glUniform1i)                                 \
+  X(PFNGLUNIFORM1FPROC, glUniform1f)                                 \
+  X(PFNGLUNIFORM2FPROC, glUniform2f)                                 \
+  X(PFNGLUNIFORM2IPROC, glUniform2i)                                 \
+  X(PFNGLUNIFORM3FPROC, glUniform3f)                                 \
+  X(PFNGLUNIFORM4FPROC, glUniform4f)                                 \
+  X(PFNGLUNIFORM1FVPROC, glUniform1fv)                               \
+  X(PFNGLUNIFORMMATRIX3FVPROC, glUniformMatrix3fv)                   \
+  X(PFNGLUNIFORMMATRIX4FVPROC, glUniformMatrix4fv)                   \
+  X(PFNGLGENVERTEXARRAYSPROC, glGenVertexArrays)                     \
+  X(PFNGLBINDVERTEXARRAYPROC, glBindVertexArray)                     \
+  X(PFNGLDELETEVERTEXARRAYSPROC, glDeleteVertexArrays)               \
+  X(PFNGLGENBUFFERSPROC, glGenBuffers)                               \
+  X(PFNGLBINDBUFFERPROC, glBindBuffer)                               \
+  X(PFNGLBUFFERDATAPROC, glBufferData)                               \
+  X(PFNGLDELETEBUFFERSPROC, glDeleteBuffers)                         \
+  X(PFNGLVERTEXATTRIBPOINTERPROC, glVertexAttribPointer)             \
+  X(PFNGLENABLEVERTEXATTRIBARRAYPROC, glEnableVertexAttribArray)     \
+  X(PFNGLGENTEXTURESPROC, glGenTextures)                             \
+  X(PFNGLBINDTEXTUREPROC, glBindTexture)                             \
+  X(PFNGLACTIVETEXTUREPROC, glActiveTexture)                         \
+  X(PFNGLTEXIMAGE2DPROC, glTexImage2D)                               \
+  X(PFNGLTEXIMAGE3DPROC, glTexImage3D)                               \
+  X(PFNGLTEXSUBIMAGE2DPROC, glTexSubImage2D)                         \
+  X(PFNGLTEXPARAMETERIPROC, glTexParameteri)                         \
+  X(PFNGLDELETETEXTURESPROC, glDeleteTextures)                       \
+  X(PFNGLGENFRAMEBUFFERSPROC, glGenFramebuffers)                     \
+  X(PFNGLBINDFRAMEBUFFERPROC, glBindFramebuffer)                     \
+  X(PFNGLFRAMEBUFFERTEXTURE2DPROC, glFramebufferTexture2D)           \
+  X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, glCheckFramebufferStatus)       \
+  X(PFNGLDELETEFRAMEBUFFERSPROC, glDeleteFramebuffers)               \
+  X(PFNGLDRAWBUFFERSPROC, glDrawBuffers)                             \
+  X(PFNGLGENQUERIESPROC, glGenQueries)                               \
+  X(PFNGLDELETEQUERIESPROC, glDeleteQueries)                         \
+  X(PFNGLBEGINQUERYPROC, glBeginQuery)                               \
+  X(PFNGLENDQUERYPROC, glEndQuery)                                   \
+  X(PFNGLGETQUERYOBJECTUI64VPROC, glGetQueryObjectui64v)             \
+  X(PFNGLGETTEXLEVELPARAMETERIVPROC, glGetTexLevelParameteriv)       \
+  X(PFNGLGETTEXPARAMETERIVPROC, glGetTexParameteriv)                 \
+  X(PFNGLISTEXTUREPROC, glIsTexture)                                 \
+  X(PFNGLBINDBUFFERBASEPROC, glBindBufferBase)                       \
+  X(PFNGLGETBUFFERSUBDATAPROC, glGetBufferSubData)                   \
+  X(PFNGLTRANSFORMFEEDBACKVARYINGSPROC, glTransformFeedbackVaryings) \
+  X(PFNGLBEGINTRANSFORMFEEDBACKPROC, glBeginTransformFeedback)       \
+  X(PFNGLENDTRANSFORMFEEDBACKPROC, glEndTransformFeedback)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
@@ -180,8 +188,10 @@ class Program {
  public:
   // Compiles and links GLSL sources (each starts with its own "#version 450 core"). `name`
   // prefixes the Error, which carries the driver's info log.
+  // `feedback` names vertex outputs to capture by transform feedback (interleaved, in order).
   static Result<Program> compile(const std::string& vertex_source,
-                                 const std::string& fragment_source, const std::string& name);
+                                 const std::string& fragment_source, const std::string& name,
+                                 const std::vector<std::string>& feedback = {});
   GLuint id() const { return handle_.id(); }
   void use() const { glUseProgram(handle_.id()); }
   // Uniform location by name (-1 when the linker dropped it; setting -1 is a no-op in GL).

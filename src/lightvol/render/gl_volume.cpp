@@ -7,6 +7,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/render/detail/airlight_glsl.h>
 #include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_volume.h>
 
 namespace lightvol {
 
@@ -142,6 +143,9 @@ struct GlVolumeRenderer::State {
   RenderScene scene;
   GlVolumeOptions options;
   Program volume, resolve;
+  Program live_program;              // compiled by the first set_volume(LiveVolume)
+  const LiveVolume* live = nullptr;  // drawn instead of the mesh when set
+  LiveDraw live_draw = LiveDraw::two_pass;
   Framebuffer accumulate, output;
   TextureHandle surface, table;
   VertexArrayHandle vao, empty_vao;
@@ -235,11 +239,42 @@ void GlVolumeRenderer::set_volume(const Mesh& volume) {
                volume.indices.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   s.index_count = static_cast<GLsizei>(volume.indices.size());
+  s.live = nullptr;
+}
+
+Status GlVolumeRenderer::set_volume(const LiveVolume& live, LiveDraw draw) {
+  State& s = *state_;
+  if (s.live_program.id() == 0) {
+    Result<Program> program =
+        Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
+                         stage_source("LIGHTVOL_VOLUME_FRAGMENT"), "live volume");
+    if (!program) return program.error();
+    s.live_program = std::move(*program);
+    const Program& p = s.live_program;
+    p.use();
+    set_scene_uniforms(p, s.scene);
+    glUniform1i(p.uniform("baseline"), s.options.baseline ? 1 : 0);
+    glUniform1i(p.uniform("f_table"), 1);
+    glUniform1i(p.uniform("surface"), 0);
+    glUniform1i(p.uniform("panels"), s.scene.medium.profile.enabled()
+                                         ? std::max(s.options.panels, 8)
+                                         : s.options.panels);
+    glUniform1f(p.uniform("facing_sign"), s.facing_sign);
+    glUniformMatrix4fv(p.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
+    glUseProgram(0);
+    if (std::string e = pending_error(); !e.empty())
+      return Error{"OpenGL: setting up the live volume's program: " + e};
+  }
+  s.live = &live;
+  s.live_draw = draw;
+  return {};
 }
 
 Image GlVolumeRenderer::render(double* seconds) {
   State& s = *state_;
   const auto start = std::chrono::steady_clock::now();
+  const bool in_vertex_stage = s.live && s.live_draw == LiveDraw::vertex_stage;
+  if (s.live && !in_vertex_stage) s.live->generate();  // the live volume's vertices, once each
   // Pass 1: every fragment of the volume, additive, no depth test, no clipping in depth.
   s.accumulate.bind();
   glClearColor(0, 0, 0, 0);
@@ -250,13 +285,24 @@ Image GlVolumeRenderer::render(double* seconds) {
   glEnable(GL_BLEND);
   glBlendEquation(GL_FUNC_ADD);
   glBlendFunc(GL_ONE, GL_ONE);
-  s.volume.use();
+  // A live volume drawn in the vertex stage makes its vertices here, from its shadow maps (texture
+  // units 2 to 7); a mesh's, or a generated live volume's, come from their buffers.
+  const Program& program = in_vertex_stage ? s.live_program : s.volume;
+  program.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, s.table.id());
-  glBindVertexArray(s.vao.id());
-  glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  if (in_vertex_stage) {
+    s.live->bind(program, 2);
+    glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
+  } else if (s.live) {
+    glBindVertexArray(s.live->mesh_vertex_array());
+    glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
+  } else {
+    glBindVertexArray(s.vao.id());
+    glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  }
   glDisable(GL_BLEND);
   glDisable(GL_DEPTH_CLAMP);
   // Pass 2: per-pixel constants and the baseline.

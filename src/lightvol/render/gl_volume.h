@@ -33,6 +33,14 @@
 
 namespace lightvol {
 
+class LiveVolume;
+
+// How a live volume is drawn: its vertices first made once each into a vertex buffer by transform
+// feedback and then drawn from it as a mesh is (two passes: the default, the faster on llvmpipe,
+// docs/performance.md), or made by the volume pass's own vertex stage for every index drawn (one
+// pass: the paper's displaced grid).
+enum class LiveDraw { two_pass, vertex_stage };
+
 struct GlVolumeOptions {
   bool baseline = true;  // integrate fragments from the closest point to the light (see above)
   int panels = 2;  // Gauss–Legendre panels (8 nodes each) per fragment for quadrature phases
@@ -49,6 +57,11 @@ class GlVolumeRenderer {
 
   // Uploads the volume (world space, closed, oriented outward).
   void set_volume(const Mesh& volume);
+  // Draws `live` from now on (render/live_volume.h): each render() makes its vertices from its
+  // shadow maps as they then are, as `draw` says, and draws them with the volume pass. `live`
+  // must outlive its use here (until the next set_volume); its light should be the scene's.
+  // Errors: the live vertex stage does not compile (a driver problem).
+  Status set_volume(const LiveVolume& live, LiveDraw draw = LiveDraw::two_pass);
 
   // Draws the volume and the resolve pass, waits for the GPU, and returns the airlight image
   // (first row = top). `seconds`, when given, receives the wall-clock time of the GPU work

@@ -158,47 +158,18 @@ OmniAdjacency omni_adjacency(const Light& light) {
   return adjacency;
 }
 
-// Long (over 80 lines) on purpose: the six faces' grids and their seams are assembled into one
-// vertex and index buffer in one sequence of steps sharing the offsets.
-Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
-                               const VolumeOptions& options) {
-  LV_CHECK(light.type == LightType::omni);
-  if (Status s = validate_cube_faces(cube); !s) return s.error();
-  const int w = cube.size();
-  const VolumeCounts counts = static_volume_counts(LightType::omni, w, w);
-  if (counts.vertices >= std::numeric_limits<std::uint32_t>::max())
-    return Error{cube.sources[0] + ": faces of " + std::to_string(w) + "x" + std::to_string(w) +
-                 " need more vertices than 32-bit indices hold"};
+namespace {
 
-  std::vector<Unprojector> faces;
-  for (int f = 0; f < kOmniFaces; ++f) faces.emplace_back(light, w, w, f, options.space);
+// The omni volume's triangles into `idx` (12W² − 4 of them): the six face grids, the seams, the
+// corners (omni_volume.h's order). `faces` are the six faces' Unprojectors (their windings).
+void omni_triangles(const Light& light, const std::vector<Unprojector>& faces, int w,
+                    std::uint32_t* idx) {
   const std::size_t face_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(w);
   const auto vertex = [&](int face, int col, int row) {
     return static_cast<std::uint32_t>(face * face_vertices + static_cast<std::size_t>(row) * w +
                                       col);
   };
-
-  Mesh mesh;
-  mesh.positions.resize(3 * counts.vertices);
-  mesh.indices.resize(3 * counts.triangles);
-
-  // Grid vertices: rows of all six faces in parallel.
-  tbb::parallel_for(tbb::blocked_range<int>(0, kOmniFaces * w),
-                    [&](const tbb::blocked_range<int>& rows) {
-                      for (int fr = rows.begin(); fr != rows.end(); ++fr) {
-                        const int f = fr / w, r = fr % w;
-                        const DepthImage& depth = cube.faces[f];
-                        for (int c = 0; c < w; ++c) {
-                          Vec3d p;
-                          const bool reached = faces[f].point(c, r, depth.at(c, r), &p);
-                          LV_CHECK(reached);  // a perspective ray reaches every depth
-                          put(mesh.positions, vertex(f, c, r), p);
-                        }
-                      }
-                    });
-
   // Grid triangles: two per texel quad, wound to face away from the light.
-  std::uint32_t* idx = mesh.indices.data();
   const std::uint32_t uw = static_cast<std::uint32_t>(w);
   const std::size_t quads_per_face = static_cast<std::size_t>(w - 1) * (w - 1);
   tbb::parallel_for(
@@ -246,7 +217,62 @@ Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
       v[k] = vertex(corner.face[k], corner.last_col[k] ? w - 1 : 0, corner.last_row[k] ? w - 1 : 0);
     emit(v[0], v[1], v[2], false);
   }
-  LV_CHECK_EQ(static_cast<std::size_t>(out - idx), mesh.indices.size());
+  LV_CHECK_EQ(static_cast<std::size_t>(out - idx),
+              3 * static_volume_counts(LightType::omni, w, w).triangles);
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> omni_volume_indices(const Light& light, int width) {
+  LV_CHECK(light.type == LightType::omni);
+  LV_CHECK(width >= 2);
+  std::vector<Unprojector> faces;
+  for (int f = 0; f < kOmniFaces; ++f) faces.emplace_back(light, width, width, f, Space::world);
+  std::vector<std::uint32_t> indices(3 *
+                                     static_volume_counts(LightType::omni, width, width).triangles);
+  omni_triangles(light, faces, width, indices.data());
+  return indices;
+}
+
+Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
+                               const VolumeOptions& options) {
+  LV_CHECK(light.type == LightType::omni);
+  if (Status s = validate_cube_faces(cube); !s) return s.error();
+  const int w = cube.size();
+  const VolumeCounts counts = static_volume_counts(LightType::omni, w, w);
+  if (counts.vertices >= std::numeric_limits<std::uint32_t>::max())
+    return Error{cube.sources[0] + ": faces of " + std::to_string(w) + "x" + std::to_string(w) +
+                 " need more vertices than 32-bit indices hold"};
+
+  std::vector<Unprojector> faces;
+  for (int f = 0; f < kOmniFaces; ++f) faces.emplace_back(light, w, w, f, options.space);
+  const std::size_t face_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(w);
+  const auto vertex = [&](int face, int col, int row) {
+    return static_cast<std::uint32_t>(face * face_vertices + static_cast<std::size_t>(row) * w +
+                                      col);
+  };
+
+  Mesh mesh;
+  mesh.positions.resize(3 * counts.vertices);
+  mesh.indices.resize(3 * counts.triangles);
+
+  // Grid vertices: rows of all six faces in parallel.
+  tbb::parallel_for(tbb::blocked_range<int>(0, kOmniFaces * w),
+                    [&](const tbb::blocked_range<int>& rows) {
+                      for (int fr = rows.begin(); fr != rows.end(); ++fr) {
+                        const int f = fr / w, r = fr % w;
+                        const DepthImage& depth = cube.faces[f];
+                        for (int c = 0; c < w; ++c) {
+                          Vec3d p;
+                          const bool reached = faces[f].point(c, r, depth.at(c, r), &p);
+                          LV_CHECK(reached);  // a perspective ray reaches every depth
+                          put(mesh.positions, vertex(f, c, r), p);
+                        }
+                      }
+                    });
+
+  // Grid triangles, seams and corners.
+  omni_triangles(light, faces, w, mesh.indices.data());
   return mesh;
 }
 

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <vector>
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
@@ -79,5 +81,9 @@ OmniAdjacency omni_adjacency(const Light& light);
 // cube.sources.
 Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
                                const VolumeOptions& options);
+
+// The triangles of build_omni_volume's volume of six W×W faces of `light`, in its order: they
+// depend on W and the light's face frames only, never on the depths (for the GPU's live volume).
+std::vector<std::uint32_t> omni_volume_indices(const Light& light, int width);
 
 }  // namespace lightvol

@@ -341,6 +341,24 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   return mesh;
 }
 
+std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, int height) {
+  LV_CHECK(light.type != LightType::omni);
+  LV_CHECK(width >= 2 && height >= 2);
+  const Unprojector unproject(light, width, height, 0, Space::world);
+  const VolumeCounts counts = static_volume_counts(light.type, width, height);
+  LV_CHECK_LT(counts.vertices, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});
+  const bool standard = unproject.standard_winding();
+  std::vector<std::uint32_t> indices(6 * static_cast<std::size_t>(width - 1) *
+                                     static_cast<std::size_t>(height - 1));
+  grid_quad_rows(0, height - 1, static_cast<std::uint32_t>(width), standard, indices.data());
+  const ClosingPart closing =
+      make_closing(light.type, unproject, width, height, closing_ring(width, height, standard),
+                   static_cast<std::uint32_t>(width) * static_cast<std::uint32_t>(height));
+  indices.insert(indices.end(), closing.indices.begin(), closing.indices.end());
+  LV_CHECK_EQ(indices.size(), 3 * counts.triangles);
+  return indices;
+}
+
 Status check_representable(const Mesh& mesh, const Light& light, Space space,
                            const std::string& light_source) {
   const GuardLight guard = guard_light(light, space);

@@ -32,6 +32,12 @@ VolumeCounts static_volume_counts(LightType type, int width, int height);
 // right column down, bottom row right to left, left column up. Reversed otherwise.
 std::vector<std::uint32_t> border_loop(int width, int height, bool standard);
 
+// The triangles of build_static_volume's volume of a W×H map of `light` (spot or directional), as
+// it numbers them: they depend on the light only through its type and winding, never on the
+// depths. For drawing a volume whose vertices are made elsewhere (the GPU's live volume,
+// render/live_volume.h) with build's triangles.
+std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, int height);
+
 // Builds the static volume of a spot or directional light from its depth image:
 // grid vertices at each texel centre's ray and depth (Unprojector), triangulated quad by quad;
 // spot: a fan from the border to the light position; directional: the border extruded to the
