@@ -2,6 +2,7 @@
 // the Sponza atrium): shadow map → static and adaptive volumes → check → render, with pictures
 // and a short printed summary.
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -105,13 +106,13 @@ Result<DemoScene> load_demo_scene(const std::string& data, int size) {
   Result<Mesh> mesh = load_scene(data + "/sponza_crop.ply");
   if (!mesh) return Error{mesh.error().message + " (is --data the bundled data/ folder?)"};
   s.mesh = std::move(*mesh);
-  Result<Light> light = load_light(data + "/sponza_spot.json");
+  Result<Light> light = load_light(data + "/sponza_demo_spot.json");
   if (!light) return light.error();
   s.light = *light;
   Result<Camera> camera = load_camera(data + "/sponza_camera.json");
   if (!camera) return camera.error();
   s.camera = *camera;
-  Result<Medium> medium = load_medium(data + "/sponza_medium.json");
+  Result<Medium> medium = load_medium(data + "/sponza_demo_medium.json");
   if (!medium) return medium.error();
   s.medium = *medium;
   // Smaller shadow maps (tests) get a proportionally smaller camera image.
@@ -194,7 +195,7 @@ Status write_viewer_inputs(const std::string& data, const std::string& dir, cons
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
   };
-  const std::string medium_text = slurp(data + "/sponza_medium.json");
+  const std::string medium_text = slurp(data + "/sponza_demo_medium.json");
   nlohmann::json camera_json =
       nlohmann::json::parse(slurp(data + "/sponza_camera.json"), nullptr, false);
   if (camera_json.is_discarded()) return Error{data + "/sponza_camera.json: not JSON"};
@@ -212,6 +213,14 @@ Status write_viewer_inputs(const std::string& data, const std::string& dir, cons
 }
 
 #ifdef LIGHTVOL_HAS_SHADOWMAP
+// demo.png's colours: a warm spot light (about 3,000 K) and a cool ambient light (the sky); its
+// ambient radiance; and the exposure, the tone-mapped value (x/(1+x) of it) of the picture's
+// 99.5th percentile.
+constexpr std::array<double, 3> kLightColour = {1.0, 0.72, 0.42};
+constexpr std::array<double, 3> kAmbientColour = {0.5, 0.62, 0.9};
+constexpr double kDemoAmbient = 0.0002;
+constexpr double kDemoExposure = 1.2;
+
 // The airlight of each volume and of ray marching, and the picture: lit surfaces plus the static
 // volume's airlight. Every PNG uses the static volume's exposure, so that they compare by eye.
 Status render_pictures(const RenderScene& scene, const std::vector<Volume>& volumes,
@@ -258,10 +267,29 @@ Status render_pictures(const RenderScene& scene, const std::vector<Volume>& volu
   summary.add("render raymarch 128x2x2", "airlight_raymarch.png", size, text);
 
   progress.begin("composite");
+  // The picture: the surfaces the spot lights and the static volume's airlight in the light's
+  // warm colour, the ambient light in a cool one, exposed so that the shafts keep their gradient.
   const MapSize map{shadow.width(), shadow.height()};
-  const Image picture =
-      lit_surfaces(scene, shadow_pass.window[0], map.width, map.height, images[0]);
-  if (Status s = write_image(out("demo.png"), picture, percentile_exposure(picture, 1.5)); !s)
+  SurfaceShading direct;
+  direct.ambient = 0;
+  SurfaceShading ambient;
+  ambient.albedo = 0;
+  ambient.ambient = kDemoAmbient;
+  Image dark = images[0];
+  std::fill(dark.values.begin(), dark.values.end(), 0.0);
+  const Image lit =
+      lit_surfaces(scene, shadow_pass.window[0], map.width, map.height, images[0], direct);
+  const Image sky =
+      lit_surfaces(scene, shadow_pass.window[0], map.width, map.height, dark, ambient);
+  Image picture = lit;
+  for (std::size_t i = 0; i < picture.values.size(); ++i) picture.values[i] += sky.values[i];
+  std::array<Image, 3> rgb{lit, lit, lit};
+  for (std::size_t k = 0; k < 3; ++k)
+    for (std::size_t i = 0; i < lit.values.size(); ++i)
+      rgb[k].values[i] = kLightColour[k] * lit.values[i] + kAmbientColour[k] * sky.values[i];
+  if (Status s = write_rgb_image(out("demo.png"), rgb[0], rgb[1], rgb[2],
+                                 percentile_exposure(picture, kDemoExposure));
+      !s)
     return s;
   summary.add("picture", "demo.png", size, "lit surfaces + static volume's airlight");
   return {};
@@ -290,7 +318,7 @@ int run_demo(const DemoOptions& o) {
   const std::unique_ptr<DepthPasses> passes =
       open_depth_passes(scene->mesh, scene_path, &why_not_gl);
   const bool gl = why_not_gl.empty();
-  const Result<MapSize> size = shadow_map_size(light, o.size, data + "/sponza_spot.json");
+  const Result<MapSize> size = shadow_map_size(light, o.size, data + "/sponza_demo_spot.json");
   if (!size) return fail(size.error().message);
   progress.begin("shadow map");
   Result<RenderedPasses> shadow_pass = depth_pass(*passes, light, *size, out("shadow_map"));

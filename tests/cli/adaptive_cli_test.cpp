@@ -2,7 +2,6 @@
 // are the counts build writes, the bound is met, bad flag combinations are one-line errors.
 #include <algorithm>
 #include <fstream>
-#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -15,12 +14,8 @@
 namespace lightvol {
 namespace {
 
-std::string q(const std::string& s) { return "'" + s + "'"; }
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
+using test::q;
+using test::slurp;
 
 // A 65×49 map (floor, a box, a one-texel bar) and a spot and a directional light, linear depth.
 struct Workspace {

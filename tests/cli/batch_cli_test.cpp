@@ -21,14 +21,10 @@
 
 namespace lightvol {
 namespace {
+
+using test::q;
+using test::slurp;
 namespace fs = std::filesystem;
-
-std::string q(const std::string& s) { return "'" + s + "'"; }
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <thread>
 
@@ -21,12 +20,8 @@
 namespace lightvol {
 namespace {
 
-std::string q(const std::string& s) { return "'" + s + "'"; }
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
+using test::q;
+using test::slurp;
 
 // A user's working directory: a 9×7 spot map with an occluder and its light.
 struct Workspace {

@@ -1,13 +1,17 @@
 // lightvol build with an omni light: the three input forms give byte-identical volumes that pass
 // check --light, static and adaptive; stats splits the counts by face and seams; a missing face is
 // exit 2 naming the file and the face, with nothing written.
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/io/mesh_reader.h>
 
 #include "support/test_support.h"
 
@@ -15,17 +19,10 @@ namespace lightvol {
 namespace {
 
 using test::make_depth;
+using test::q;
 using test::run_lightvol;
+using test::slurp;
 using test::TempDir;
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string q(const std::string& path) { return "'" + path + "'"; }
 
 // Window depths: a box room around the light with one face partly open (depth 1: nothing hit).
 CubeFaces room(int w) {
@@ -99,15 +96,45 @@ TEST_F(OmniBuildCli, AdaptiveBuildPassesCheckWithTheLight) {
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
 }
 
-// Draco at its default 16 bits, compressed GLB and DRC: build verifies the decoded volume with the
-// light, and check --light agrees.
+// Draco at its default 16 bits, compressed GLB and DRC: the files are Draco (the DRC's "DRACO"
+// magic; the GLB's primitive compressed with KHR_draco_mesh_compression, which it requires), they
+// decode to closed volumes with the triangle and vertex counts of the same volume written as PLY,
+// on a 16-bit quantization grid, and build verifies the decoded volume with the light, and check
+// --light agrees.
 TEST_F(OmniBuildCli, DracoBuildPassesCheckWithTheLight) {
+  const std::string adaptive = " --light " + q(light_) + " --quiet --adaptive --max-error 0.05";
+  const test::CommandResult plain = run_lightvol("build " + q(dir_.file("strip.exr")) + adaptive +
+                                                 " --out " + q(dir_.file("v.ply")));
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  Result<Mesh> exact = read_mesh(dir_.file("v.ply"));
+  ASSERT_TRUE(exact.ok()) << exact.error().message;
+  ASSERT_TRUE(test::is_closed_and_oriented(*exact));
   for (const std::string out : {"v.drc", "v.glb"}) {
+    SCOPED_TRACE(out);
     const test::CommandResult r =
-        run_lightvol("build " + q(dir_.file("strip.exr")) + " --light " + q(light_) +
-                     " --quiet --adaptive --max-error 0.05 --out " + q(dir_.file(out)) +
-                     (out == "v.glb" ? " --draco" : ""));
+        run_lightvol("build " + q(dir_.file("strip.exr")) + adaptive + " --out " +
+                     q(dir_.file(out)) + (out == "v.glb" ? " --draco" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string bytes = slurp(dir_.file(out));
+    if (out == "v.drc") {
+      EXPECT_EQ(bytes.substr(0, 5), "DRACO");
+    } else {
+      ASSERT_GT(bytes.size(), 20u);
+      EXPECT_EQ(bytes.substr(0, 4), "glTF");
+      std::uint32_t json_length = 0;
+      std::memcpy(&json_length, bytes.data() + 12, 4);
+      const auto json = nlohmann::json::parse(bytes.substr(20, json_length));
+      EXPECT_EQ(json["extensionsRequired"], nlohmann::json::array({"KHR_draco_mesh_compression"}));
+      EXPECT_TRUE(
+          json["meshes"][0]["primitives"][0]["extensions"].contains("KHR_draco_mesh_compression"));
+    }
+    double step = 0;
+    Result<Mesh> decoded = read_mesh(dir_.file(out), &step);
+    ASSERT_TRUE(decoded.ok()) << decoded.error().message;
+    EXPECT_TRUE(test::is_closed_and_oriented(*decoded));
+    EXPECT_EQ(decoded->num_triangles(), exact->num_triangles());
+    EXPECT_EQ(decoded->num_vertices(), exact->num_vertices());
+    EXPECT_GT(step, 0);  // quantized: decoded by Draco
     const test::CommandResult check =
         run_lightvol("check " + q(dir_.file(out)) + " --light " + q(light_));
     EXPECT_EQ(check.exit_code, 0) << check.out << check.err;

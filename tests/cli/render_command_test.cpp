@@ -1,15 +1,19 @@
 // `lightvol render` end to end on the analytic floor-and-box scene written to files: the volume
-// method against the reference through --compare, PNG and EXR outputs, the alternatives, and bad
-// input rejected with a message naming the file.
+// method against the reference through --compare, PNG and EXR outputs, the alternatives (the radial
+// blur as the library renders it, --composite's surfaces in closed form), and bad input rejected
+// with a message naming the file.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include <lightvol/export/export.h>
+#include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -103,12 +107,61 @@ TEST(RenderCommand, VolumeMatchesReferenceThroughCompare) {
                          "/raymarch.png' --compare '" + dir + "/reference.exr'");
   ASSERT_EQ(march.exit_code, 0) << march.err;
   EXPECT_LT(number_after(march.out, "relative L2 "), 0.03) << march.out;
-  test::CommandResult radial =
-      test::run_lightvol("render " + args + " --method radial --out '" + dir + "/radial.png'");
+  // The radial blur: the image the library's GlMarcher renders for the same files and --samples.
+  test::CommandResult radial = test::run_lightvol(
+      "render " + args + " --method radial --samples 48 --out '" + dir + "/radial.exr'");
   ASSERT_EQ(radial.exit_code, 0) << radial.err;
-  test::CommandResult composite = test::run_lightvol(
-      "render '" + dir + "/volume.ply' " + args + " --composite --out '" + dir + "/composite.png'");
+  Result<Image> radial_image = read_image(dir + "/radial.exr");
+  ASSERT_TRUE(radial_image) << radial_image.error().message;
+  Result<Camera> camera = load_camera(dir + "/camera.json");
+  Result<DepthImage> camera_depth = read_depth_image(dir + "/camdepth.exr");
+  Result<Medium> medium = load_medium(dir + "/medium.json");
+  ASSERT_TRUE(camera && camera_depth && medium);
+  Result<std::vector<double>> surface =
+      surface_distances(*camera, camera_depth->values, kW, kH, "camdepth.exr");
+  ASSERT_TRUE(surface) << surface.error().message;
+  const RenderScene scene{*camera, *surface, test::light_from_json(test::spot_json("linear")),
+                          *medium};
+  MarchOptions radial_options;
+  radial_options.method = MarchMethod::radial;
+  radial_options.samples = 48;
+  Result<std::unique_ptr<GlMarcher>> marcher = GlMarcher::create(scene, {}, {}, radial_options);
+  ASSERT_TRUE(marcher) << marcher.error().message;
+  const Image radial_expected = (*marcher)->render();
+  double radial_peak = 0;
+  for (const double v : radial_expected.values) radial_peak = std::max(radial_peak, v);
+  EXPECT_GT(radial_peak, 0);
+  ASSERT_EQ(radial_image->values.size(), radial_expected.values.size());
+  for (std::size_t i = 0; i < radial_expected.values.size(); ++i)
+    ASSERT_NEAR(radial_image->values[i], radial_expected.values[i], 1e-6 * radial_peak) << i;
+
+  // --composite adds surfaces of radiance --background (0.1) seen through the medium: exactly
+  // 0.1·e^(−σt·s) at the surface distance s (none where the ray hits nothing) on top of the
+  // reference's airlight.
+  test::CommandResult composite =
+      test::run_lightvol("render '" + dir + "/volume.ply' " + args +
+                         " --method reference --composite --out '" + dir + "/composite.exr'");
   ASSERT_EQ(composite.exit_code, 0) << composite.err;
+  Result<Image> with_surfaces = read_image(dir + "/composite.exr");
+  Result<Image> airlight = read_image(dir + "/reference.exr");
+  ASSERT_TRUE(with_surfaces && airlight);
+  ASSERT_EQ(with_surfaces->values.size(), static_cast<std::size_t>(kW) * kH);
+  const double sigma_t = 0.06 + 0.02;
+  int surfaces = 0;
+  for (int row = 0; row < kH; ++row)
+    for (int col = 0; col < kW; ++col) {
+      const Ray ray = pixel_ray(*camera, col, row);
+      const double t = test::cast_scene(ray.origin, ray.direction);
+      const double z = -camera->view.view.transform_point(ray.origin + t * ray.direction).z;
+      const bool hit = std::isfinite(t) && z < 100;  // the far plane: nothing hit
+      surfaces += hit ? 1 : 0;
+      const std::size_t i = static_cast<std::size_t>(row) * kW + col;
+      EXPECT_NEAR(with_surfaces->values[i] - airlight->values[i],
+                  hit ? 0.1 * std::exp(-sigma_t * t) : 0.0, 1e-6)
+          << "pixel " << col << ", " << row;
+    }
+  EXPECT_GT(surfaces, kW * kH / 2);
+  EXPECT_LT(surfaces, kW * kH);  // some sky
 }
 
 TEST(RenderCommand, LiveMakesTheVolumeOnTheGpuAndDrawsBuildsAirlight) {

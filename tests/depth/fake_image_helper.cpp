@@ -1,12 +1,16 @@
 // A lightvol-image that misbehaves on request: it serves images as the real one does, except that
 // a read of a path containing "crash" ends it with SIGSEGV and one containing "hang" never
 // answers. For the tests of how a failing decoder is reported (image_helper_test.cpp).
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <ctime>
 #include <string>
 
 #include <lightvol/core/detail/image_helper.h>
@@ -15,19 +19,33 @@
 
 namespace {
 
+// Peeks at the first `size` bytes of the channel (leaving them for the real server): false at the
+// end of the channel (also part way through) or on an error. A peek on a stream socket returns what
+// has arrived so far, even with MSG_WAITALL, and the request may come in more than one write: the
+// first peek blocks until the request starts, then the peek repeats (a millisecond apart) until all
+// of it is there.
+bool peek(char* out, std::size_t size) {
+  for (;;) {
+    const ssize_t got = ::recv(lightvol::kProgramChannel, out, size, MSG_PEEK);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return false;
+    if (static_cast<std::size_t>(got) == size) return true;
+    pollfd channel{lightvol::kProgramChannel, POLLIN, 0};
+    if (::poll(&channel, 1, 0) > 0 && (channel.revents & POLLHUP) != 0) return false;  // no more
+    const timespec millisecond{0, 1000000};
+    ::nanosleep(&millisecond, nullptr);
+  }
+}
+
 // The path of the next request, peeked at (left in the channel for the real server).
 std::string peek_path() {
   char head[1 + 8];
-  if (::recv(lightvol::kProgramChannel, head, sizeof head, MSG_PEEK | MSG_WAITALL) !=
-      static_cast<ssize_t>(sizeof head))
-    return {};
+  if (!peek(head, sizeof head)) return {};
   std::uint64_t length = 0;
   std::memcpy(&length, head + 1, sizeof length);
   if (length > 4096) return {};
   std::string all(sizeof head + length, '\0');
-  if (::recv(lightvol::kProgramChannel, all.data(), all.size(), MSG_PEEK | MSG_WAITALL) !=
-      static_cast<ssize_t>(all.size()))
-    return {};
+  if (!peek(all.data(), all.size())) return {};
   return all.substr(sizeof head);
 }
 

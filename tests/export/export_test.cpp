@@ -2,10 +2,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <numbers>
-#include <sstream>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
@@ -22,6 +20,8 @@
 
 namespace lightvol {
 namespace {
+
+using test::slurp;
 
 using TriMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
@@ -58,11 +58,6 @@ Mesh from_draco_mesh(const draco::Mesh& dm) {
   for (draco::FaceIndex f(0); f < dm.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) m.indices.push_back(dm.face(f)[k].value());
   return m;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
 }
 
 // Same triangles over the same positions, whatever the vertex order: compare the sorted lists

@@ -4,18 +4,13 @@
 
 #include <lightvol/gl/context.h>
 
+#include "support/gl_test_context.h"
+
 namespace lightvol::gl {
 namespace {
 
-// A context per test binary: EGL contexts are cheap to keep, slow-ish to make.
-Context* shared_context() {
-  static Result<std::unique_ptr<Context>> ctx = Context::create();
-  return ctx ? ctx->get() : nullptr;
-}
-
-#define REQUIRE_GL()               \
-  if (shared_context() == nullptr) \
-  GTEST_SKIP() << "no EGL/OpenGL 4.5 context: " << Context::create().error().message
+// The shared context of tests/support/gl_test_context.h.
+Context* shared_context() { return test::gl_test_context()->get(); }
 
 const char* kTriangleVs = R"(#version 450 core
 void main() {
@@ -24,7 +19,7 @@ void main() {
 })";
 
 TEST(GlContext, ReportsAFourFiveCoreContext) {
-  REQUIRE_GL();
+  REQUIRE_GL_CONTEXT();
   EXPECT_FALSE(shared_context()->renderer().empty());
   EXPECT_EQ(shared_context()->version().rfind("4.5", 0), 0u) << shared_context()->version();
   GLint major = 0, minor = 0;
@@ -34,7 +29,7 @@ TEST(GlContext, ReportsAFourFiveCoreContext) {
 }
 
 TEST(GlContext, AdditiveFloatBlendingTakesNegativeValues) {
-  REQUIRE_GL();
+  REQUIRE_GL_CONTEXT();
   Result<Program> program = Program::compile(kTriangleVs, R"(#version 450 core
 uniform float value;
 layout(location = 0) out float result;
@@ -69,7 +64,7 @@ void main() { result = value * (gl_FragCoord.y < 2.0 ? 1.0 : 2.0); })",
 }
 
 TEST(GlContext, CompileErrorsCarryTheLog) {
-  REQUIRE_GL();
+  REQUIRE_GL_CONTEXT();
   Result<Program> program =
       Program::compile(kTriangleVs, "#version 450 core\nvoid main() { nope; }", "broken");
   ASSERT_FALSE(program);

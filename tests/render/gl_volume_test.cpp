@@ -2,6 +2,7 @@
 // lights, camera outside and inside the volume, lit floor and box surfaces in view, all phases.
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -132,7 +133,12 @@ TEST(GlVolume, BaselineAtTheClosestPointDoesNotLoseAccuracy) {
     const ImageDifference without = volume_vs_reference(c, from_eye);
     std::printf("  %-30s relative L2 with baseline %.2e, from the eye %.2e\n", c.name,
                 with.relative_l2, without.relative_l2);
-    EXPECT_LE(with.relative_l2, 1.5 * without.relative_l2 + 1e-6) << c.name;
+    // Measured (llvmpipe): never more than 4% worse (5.16e-06 against 4.98e-06, spot outside hg),
+    // 17× and 6× better on the soft spot; the bounds leave a margin of 10% and half of that.
+    EXPECT_LE(with.relative_l2, 1.1 * without.relative_l2 + 1e-8) << c.name;
+    if (std::string(c.name).rfind("soft spot", 0) == 0) {
+      EXPECT_LT(3 * with.relative_l2, without.relative_l2) << c.name;
+    }
   }
 }
 

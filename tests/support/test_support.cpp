@@ -137,6 +137,17 @@ CommandResult run_lightvol(const std::string& args) {
 #endif
 }
 
+std::string q(const std::string& text) {
+  std::string quoted = "'";
+  for (const char ch : text) quoted += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return quoted + "'";
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
 std::string fuzz_regression_file(const std::string& target, const std::string& name) {
   const std::string path =
       std::string(LIGHTVOL_SOURCE_DIR) + "/tests/fuzz/corpus/" + target + "/" + name;

@@ -56,6 +56,11 @@ struct CommandResult {
 };
 CommandResult run_lightvol(const std::string& args);
 
+// `text` quoted for the shell (single quotes; a quote inside becomes '\'').
+std::string q(const std::string& text);
+// The whole file at `path`, byte for byte ("" if it cannot be read).
+std::string slurp(const std::string& path);
+
 // The file a fuzz target read from regression input tests/fuzz/corpus/TARGET/NAME: the input
 // without its first byte, which the depth_image and mesh targets spend on choosing the extension.
 std::string fuzz_regression_file(const std::string& target, const std::string& name);

@@ -171,9 +171,10 @@ TEST(OmniAdaptive, CoarsensFlatWallsAndKeepsDetail) {
   Result<Mesh> mesh = build_adaptive_omni_volume(light, cube, {}, options);
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   EXPECT_TRUE(is_closed_and_oriented(*mesh));
-  // Far fewer triangles than the static 12W² − 4, but more than a bare cube (the pillar, the ball).
-  EXPECT_LT(mesh->num_triangles(), (12u * w * w - 4) / 3);
-  EXPECT_GT(mesh->num_triangles(), 500u);
+  // Far fewer triangles than the static 12W² − 4 = 49,148: exactly the 818 this scene gives (the
+  // build is deterministic, whatever the thread count); a change to the tessellation that moves it
+  // must say why here.
+  EXPECT_EQ(mesh->num_triangles(), 818u);
 }
 
 TEST(OmniAdaptive, LaplacianRefinementAndLightSpaceAreClosedToo) {

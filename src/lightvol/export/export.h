@@ -1,4 +1,5 @@
-// Writing light volumes: PLY, OBJ, OFF, STL (OpenMesh writers), DRC (Draco), GLB (glTF 2.0).
+// Writing light volumes: PLY (lightvol's own writer, which also streams), OBJ, OFF, STL (OpenMesh's
+// writers), DRC (Draco), GLB (glTF 2.0).
 #pragma once
 
 #include <string>

@@ -15,6 +15,12 @@ namespace lightvol {
 // values show as black. Errors name the file.
 Status write_image(const std::string& path, const Image& image, double exposure = 0);
 
+// Writes a colour picture from three images of one size (red, green, blue) as write_image writes
+// one: float formats keep the linear values; 8-bit formats scale each by `exposure`, tone-map it
+// x/(1+x) and store it as sRGB (so a bright colour goes toward white, as on film).
+Status write_rgb_image(const std::string& path, const Image& red, const Image& green,
+                       const Image& blue, double exposure);
+
 // Reads the first channel of an image as linear floats (8-bit images are not airlight: rejected).
 Result<Image> read_image(const std::string& path);
 
