@@ -148,6 +148,10 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
     if (extra != "--")
       return bad("key 'args': " + extra + ": not a flag of build (see 'lightvol build --help')");
   if (o.json) return bad("key 'args': --json: not in a batch (each job's result is a line)");
+  if (o.report_path == "-")
+    return bad(
+        "key 'args': --report -: a job's report is a file (batch reads it back to skip "
+        "the job when nothing changed)");
   o.quiet = true;
   for (std::string& p : o.depth_paths) p = resolve(base, p);
   o.light_path = resolve(base, o.light_path);
@@ -487,8 +491,10 @@ void add_batch_command(CLI::App& app, Runner* run) {
       ->check(CLI::Range(1, kMaxParallelJobs));
   cmd->add_option("--shard", o->shard,
                   "Run the K-th of N slices, K/N (0 <= K < N): the jobs i with i mod N = K");
-  cmd->add_option("--results", o->results_path,
-                  "Write the result lines to this file (atomically, at the end) instead of stdout");
+  cmd->add_option(
+      "--results", o->results_path,
+      "Write the result lines to this file (atomically, at the end) instead of stdout (- for "
+      "stdout, at the end)");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress, failures or summary on stderr");
   cmd->callback([o, run, cmd] {
     o->shard_given = cmd->count("--shard") > 0;

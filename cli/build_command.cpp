@@ -15,6 +15,7 @@
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/path.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
@@ -35,6 +36,8 @@ std::string conflicting_flags(const BuildCommandOptions& o, MeshFormat format) {
     return "--medium: applies to .glb output only (the file records it beside the light)";
   if (o.ascii && format != MeshFormat::ply && format != MeshFormat::stl)
     return "--ascii: applies to .ply and .stl output only";
+  if (o.json && !o.report_path.empty() && named_descriptor(o.report_path) == 1)
+    return "--report " + o.report_path + ": --json prints the report on standard output already";
   if (o.refine == "error" && o.adaptive && o.max_error < 0)
     return "--adaptive: needs --max-error E (world units along the texel rays)";
   if (o.refine == "error" && !o.adaptive && o.max_error >= 0)
@@ -246,10 +249,13 @@ int run_build(const BuildCommandOptions& o) {
   if (o.json) {
     std::printf("%s\n", r.report.dump(2).c_str());
   } else if (!o.quiet) {
-    std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
-                o.out_path.c_str(), thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
-                r.report["volume"].get<double>(), progress.log().total_seconds(),
-                human_bytes(peak_memory_bytes()).c_str());
+    // After a report on standard output (--report -), the summary goes to stderr: stdout stays
+    // one JSON document.
+    std::FILE* summary = named_descriptor(o.report_path) == 1 ? stderr : stdout;
+    std::fprintf(summary, "wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
+                 o.out_path.c_str(), thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
+                 r.report["volume"].get<double>(), progress.log().total_seconds(),
+                 human_bytes(peak_memory_bytes()).c_str());
   }
   return 0;
 }
@@ -275,8 +281,10 @@ void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
   cmd.add_option("--medium", o.medium_path,
                  "Medium JSON to record in a .glb beside the light (its intensity becomes the glTF "
                  "light's)");
-  cmd.add_option("--report", o.report_path,
-                 "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
+  cmd.add_option(
+      "--report", o.report_path,
+      "Write a JSON report: counts, bounds, volume, time and peak memory per stage (- for "
+      "standard output)");
   cmd.add_flag("--json", o.json, "Print the report as JSON on stdout");
   cmd.add_flag(
       "--adaptive", o.adaptive,

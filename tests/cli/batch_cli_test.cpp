@@ -326,6 +326,26 @@ TEST(BatchCli, ResultsFileInsteadOfStdout) {
   EXPECT_EQ(nlohmann::json::parse(lines[1])["status"], "failed");
 }
 
+// Before: --results /dev/stdout with stdout redirected to a file renamed a temporary over the
+// /dev/stdout symlink (not run on that code: it harms the machine).
+TEST(BatchCli, ResultsOnStandardOutput) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  for (const std::string results : {"/dev/stdout", "-"}) {
+    const test::CommandResult r = b.run("--results " + results);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::string> lines = lines_of(r.out);
+    ASSERT_EQ(lines.size(), 1u) << r.out;
+    EXPECT_EQ(nlohmann::json::parse(lines[0])["out"], "a.ply");
+    EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
+  }
+  b.write_jobs({R"({"inputs": ["a.exr"], "light": "spot.json", "out": "c.ply", "args": )"
+                R"(["--report", "-"]})"});
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("--report -: a job's report is a file"), std::string::npos) << r.out;
+}
+
 // SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
 // appeared is whole, with its report; a rerun skips those and builds the rest.
 TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {

@@ -137,6 +137,30 @@ TEST(BuildCli, AFailingReportLeavesTheOldVolume) {
   EXPECT_EQ(w.dir.entries(), before);  // no temporary left either
 }
 
+// Before: with stdout redirected to a file (as run_lightvol does), /dev/stdout led to a regular
+// file, so the temporary was made in /dev and renamed over the /dev/stdout symlink: the machine
+// lost /dev/stdout and the file got nothing. (Not run on that code: it harms the machine;
+// AtomicFile.DescriptorPathsAreWrittenThroughAtTheirOffset shows the same with a link of its own.)
+TEST(BuildCli, ReportOnStandardOutput) {
+  Workspace w;
+  for (const std::string report : {"/dev/stdout", "-"}) {
+    const std::string out = w.dir.file("v.ply");
+    const test::CommandResult r = w.build("--out " + q(out) + " --report " + report);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);  // only the report: the summary is
+    EXPECT_EQ(j["triangles"], 124);                         // on stderr
+    EXPECT_NE(r.err.find("wrote " + out + ": 124 triangles"), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::is_symlink("/dev/stdout"));
+    EXPECT_TRUE(std::filesystem::is_regular_file(out));
+  }
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report - --json"),
+                     "--report -: --json prints the report on standard output already");
+  EXPECT_EQ(std::count_if(
+                std::filesystem::directory_iterator("/dev"), {},
+                [](const auto& e) { return e.path().filename().string().rfind(".lv-", 0) == 0; }),
+            0);
+}
+
 // Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
 TEST(BuildCli, InterruptedWriteLeavesNothing) {
   Workspace w;
