@@ -192,7 +192,7 @@ Result<std::string> content_hash(const BuildCommandOptions& o) {
     XXH3_128bits_update(state.get(), bytes.data(), bytes.size());
   };
   add(std::string("lightvol ") + kVersion);
-  add(output_options_json(o).dump());
+  add(json_text(output_options_json(o)));
   std::vector<char> chunk(1 << 20);
   for (const auto& [key, path] : input_files(o)) {
     std::ifstream in(path, std::ios::binary);
@@ -335,7 +335,7 @@ std::string result_line(const Job& job, const Outcome& o) {
         {"check", b.check_seconds},
         {"write", b.write_seconds}}},
       {"error", o.error.empty() ? ordered_json(nullptr) : ordered_json(with_flags(o.error))}};
-  return line.dump();
+  return json_text(line);
 }
 
 // A job file's path as messages name it.

@@ -193,7 +193,7 @@ Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const std::st
   progress.end();
   nlohmann::json report = report_of();
   if (!o.report_path.empty()) {
-    if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
+    if (Status s = write_bytes_atomically(o.report_path, json_text(report, 2) + "\n"); !s)
       return s.error();
   }
   if (Status s = outputs.commit(); !s) return s.error();
@@ -247,7 +247,7 @@ int run_build(const BuildCommandOptions& o) {
   if (r.exit_code == 1) return invalid(r.error);
   if (r.exit_code != 0) return fail(r.error);
   if (o.json) {
-    std::printf("%s\n", r.report.dump(2).c_str());
+    std::printf("%s\n", json_text(r.report, 2).c_str());
   } else if (!o.quiet) {
     // After a report on standard output (--report -), the summary goes to stderr: stdout stays
     // one JSON document.

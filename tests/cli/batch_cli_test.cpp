@@ -346,6 +346,41 @@ TEST(BatchCli, ResultsOnStandardOutput) {
   EXPECT_NE(r.out.find("--report -: a job's report is a file"), std::string::npos) << r.out;
 }
 
+// Before: a job in a Latin-1 folder aborted the whole batch (exit 134) as its report or result
+// line was made; so did a helper's refusal quoting such a path, and a light whose long non-ASCII
+// value was cut inside a character.
+TEST(BatchCli, NonUtf8TextNeverAbortsABatch) {
+  Batch b;
+  const std::string folder = b.dir.file("caf\xe9");
+  ASSERT_TRUE(fs::create_directory(folder));
+  for (const char* name : {"a.exr", "spot.json"})
+    fs::copy_file(b.dir.file(name), folder + "/" + name);
+  std::ofstream(folder + "/bad.exr") << "not an image";
+  std::string e60;
+  for (int i = 0; i < 60; ++i) e60 += "\xc3\xa9";
+  std::ofstream(folder + "/long.json") << R"({"type": ")" + e60 + R"("})";
+  std::ofstream(folder + "/jobs.jsonl") << job("ok", "a.exr", "a.ply") << "\n"
+                                        << job("bad", "bad.exr", "b.ply") << "\n"
+                                        << job("long", "a.exr", "c.ply", "", "long.json") << "\n";
+  const test::CommandResult r = test::run_lightvol("batch " + q(folder + "/jobs.jsonl") + " -q");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  const std::string shown = b.dir.path() + "/caf\xef\xbf\xbd/";
+  EXPECT_EQ(without_seconds(lines[0]), ok_line(1, "ok", "a.ply"));
+  const nlohmann::json bad = nlohmann::json::parse(lines[1]);
+  EXPECT_EQ(bad["status"], "failed");
+  EXPECT_EQ(
+      bad["error"].get<std::string>().rfind(shown + "jobs.jsonl:2: " + shown + "bad.exr: ", 0), 0u)
+      << lines[1];
+  const nlohmann::json long_light = nlohmann::json::parse(lines[2]);
+  EXPECT_EQ(long_light["status"], "failed");
+  EXPECT_NE(long_light["error"].get<std::string>().find("got \"\xc3\xa9"), std::string::npos)
+      << lines[2];
+  EXPECT_EQ(nlohmann::json::parse(slurp(folder + "/a.ply.report.json"))["output"], shown + "a.ply");
+  EXPECT_FALSE(has_temporaries(folder));
+}
+
 // SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
 // appeared is whole, with its report; a rerun skips those and builds the rest.
 TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {

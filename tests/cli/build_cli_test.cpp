@@ -161,6 +161,58 @@ TEST(BuildCli, ReportOnStandardOutput) {
             0);
 }
 
+bool has_temporaries(const std::string& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().rfind(".lv-", 0) == 0) return true;
+  return false;
+}
+
+// Before: the JSON library threw on the Latin-1 bytes of the names and the process aborted (exit
+// 134): --report left .lv-* temporaries, --json committed the volume first. A byte that is not
+// UTF-8 now reaches the JSON as U+FFFD.
+TEST(BuildCli, Latin1NamesReachReportsAsReplacementCharacters) {
+  Workspace w;
+  const std::string folder = w.dir.file("caf\xe9");
+  ASSERT_TRUE(std::filesystem::create_directory(folder));
+  const std::string depth = folder + "/d\xe9pth.exr", light = folder + "/l.json";
+  std::filesystem::copy_file(w.depth, depth);
+  std::filesystem::copy_file(w.light, light);
+  const std::string out = folder + "/v.ply", report = folder + "/r.json";
+  const std::string shown = w.dir.path() + "/caf\xef\xbf\xbd/d\xef\xbf\xbdpth.exr";
+
+  test::CommandResult r = test::run_lightvol("build " + q(depth) + " --light " + q(light) +
+                                             " --out " + q(out) + " --report " + q(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(report))["inputs"][0], shown);
+  EXPECT_FALSE(has_temporaries(folder));
+
+  r = test::run_lightvol("build " + q(depth) + " --light " + q(light) + " --out " + q(out) +
+                         " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["inputs"][0], shown);
+
+  r = test::run_lightvol("check " + q(out) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["mesh"], w.dir.path() + "/caf\xef\xbf\xbd/v.ply");
+  EXPECT_FALSE(has_temporaries(folder));
+}
+
+// Before: the quoted value was cut at 81 bytes, inside a two-byte character, and the JSON library
+// threw on it: exit 134. Quotes are cut on character boundaries.
+TEST(BuildCli, LongNonAsciiValuesAreQuotedWholeCharacters) {
+  Workspace w;
+  std::string e60;
+  for (int i = 0; i < 60; ++i) e60 += "\xc3\xa9";  // é
+  const std::string light = w.dir.write(
+      "l.json", R"({"type": ")" + e60 + R"(", "position": [0, 4, 0], "direction": [0, -1, 0]})");
+  std::string e37;
+  for (int i = 0; i < 37; ++i) e37 += "\xc3\xa9";
+  expect_input_error(
+      test::run_lightvol("build " + q(w.depth) + " --light " + q(light) + " --out " +
+                         q(w.dir.file("v.ply"))),
+      "key 'type': expected \"spot\", \"directional\" or \"omni\", got \"" + e37 + "...\"");
+}
+
 // Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
 TEST(BuildCli, InterruptedWriteLeavesNothing) {
   Workspace w;
