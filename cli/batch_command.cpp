@@ -24,6 +24,7 @@
 
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/path.h>
 #include <lightvol/depth/cube_faces.h>
 
 #include "build_job.h"
@@ -125,6 +126,17 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
       return bad(std::string("key '") + key + "': expected a path");
   job.out = j["out"].get<std::string>();
   if (!strings("args", false, &args)) return bad("key 'args': expected an array of strings");
+  // A NUL ends a path early ("v\u0000.ply" is "v"), a line break splits messages: no path or
+  // flag may hold a control character.
+  const std::pair<const char*, std::vector<std::string>> fields[] = {
+      {"inputs", inputs},
+      {"light", {j["light"].get<std::string>()}},
+      {"out", {j["out"].get<std::string>()}},
+      {"args", args}};
+  for (const auto& [key, values] : fields)
+    for (const std::string& value : values)
+      if (const std::string at = control_character_in(value); !at.empty())
+        return bad(std::string("key '") + key + "': " + at + "; paths and flags may not hold one");
 
   // build's command line: the flags first, then "--" and the inputs (a path may start with '-').
   std::vector<std::string> argv = {"--light", j["light"].get<std::string>(), "--out",

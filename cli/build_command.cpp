@@ -336,6 +336,15 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
     r.error = std::move(message);
     return r;
   };
+  // A NUL would end a path early, a line break split a message: no path may hold either.
+  std::vector<std::pair<std::string, std::string>> paths = {{"--light", o.light_path},
+                                                            {"--out", o.out_path},
+                                                            {"--report", o.report_path},
+                                                            {"--medium", o.medium_path}};
+  for (const std::string& p : o.depth_paths) paths.emplace_back("depth input", p);
+  for (const auto& [flag, path] : paths)
+    if (const std::string where = control_character_in(path); !where.empty())
+      return failed(2, flag + ": " + where + " in the path; paths may not hold one");
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
   if (!format) return failed(2, format.error().message);
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())

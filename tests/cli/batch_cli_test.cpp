@@ -381,6 +381,35 @@ TEST(BatchCli, NonUtf8TextNeverAbortsABatch) {
   EXPECT_FALSE(has_temporaries(folder));
 }
 
+// Before: "v\u0000.ply" wrote the volume and its report both to "v" (the report over the volume)
+// and the job said ok.
+TEST(BatchCli, ControlCharactersInPathsAreRefusedNamingLineAndKey) {
+  Batch b;
+  b.write_jobs({R"({"inputs": ["a.exr"], "light": "spot.json", "out": "v\u0000.ply"})",
+                R"({"inputs": ["a\n.exr"], "light": "spot.json", "out": "w.ply"})",
+                R"({"inputs": ["a.exr"], "light": "spot.json", "out": "x.ply", )"
+                R"("args": ["--report", "r\u001b.json"]})"});
+  const int before = b.dir.entries();
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  const std::string where = b.jobs + ":";
+  EXPECT_EQ(nlohmann::json::parse(lines[0])["error"],
+            where +
+                "1: key 'out': control character \\x00 at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["error"],
+            where +
+                "2: key 'inputs': control character \\x0a at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(nlohmann::json::parse(lines[2])["error"],
+            where +
+                "3: key 'args': control character \\x1b at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(b.dir.entries(), before);
+}
+
 // SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
 // appeared is whole, with its report; a rerun skips those and builds the rest.
 TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {

@@ -213,6 +213,20 @@ TEST(BuildCli, LongNonAsciiValuesAreQuotedWholeCharacters) {
       "key 'type': expected \"spot\", \"directional\" or \"omni\", got \"" + e37 + "...\"");
 }
 
+// Before: a line break in a path was taken as it is (a file "v\n.ply", messages split in two).
+TEST(BuildCli, ControlCharactersInPathsAreRefused) {
+  Workspace w;
+  const int before = w.dir.entries();
+  expect_input_error(w.build("--out " + q(w.dir.file("v\n.ply"))),
+                     "--out: control character \\x0a at byte " +
+                         std::to_string(w.dir.path().size() + 2) +
+                         " in the path; paths may not hold one");
+  expect_input_error(
+      w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(w.dir.file("r\t.json"))),
+      "--report: control character \\x09");
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
 // Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
 TEST(BuildCli, InterruptedWriteLeavesNothing) {
   Workspace w;

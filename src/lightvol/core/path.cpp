@@ -82,6 +82,17 @@ Result<std::string> follow_links(const std::string& path) {
   return Error{path + ": too many levels of symbolic links"};
 }
 
+std::string control_character_in(const std::string& path) {
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(path[i]);
+    if (byte >= 32 && byte != 127) continue;
+    static constexpr char kHex[] = "0123456789abcdef";
+    return std::string("control character \\x") + kHex[byte >> 4] + kHex[byte & 15] + " at byte " +
+           std::to_string(i);
+  }
+  return {};
+}
+
 std::string file_identity(const std::string& path) {
   struct stat st {};
   bool found = false;

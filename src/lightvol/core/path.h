@@ -27,4 +27,9 @@ Result<std::string> follow_links(const std::string& path);
 // otherwise "path P", P the normalized absolute path of the file a write would create there.
 std::string file_identity(const std::string& path);
 
+// Where `path` holds a control character (a byte below 32, or 127: NUL, a line break, an escape),
+// which no path lightvol reads or writes may hold, as "control character \xNN at byte K" (K from
+// 0); "" when it holds none.
+std::string control_character_in(const std::string& path);
+
 }  // namespace lightvol
