@@ -355,6 +355,39 @@ std::string job_where(const std::string& jobs_path, int line) {
   return jobs_path + ":" + std::to_string(line);
 }
 
+// No output of the run may be one of its inputs (compared by core/path.h file_identity: the same
+// inode, or the same new path): a job whose out or report is read by any job, or is the jobs file,
+// fails; --results naming an input, the jobs file or a job's output stops the batch, returning its
+// message ("" when nothing clashes). `written`: each job output's identity and its job's line.
+std::string check_outputs(const BatchOptions& opts, std::vector<Job>& all,
+                          const std::unordered_map<std::string, int>& written) {
+  std::unordered_map<std::string, std::string> read;  // identity: what reads it
+  read.emplace(file_identity(opts.jobs_path), "the jobs file");
+  for (const Job& job : all)
+    if (job.error.empty())
+      for (const auto& [key, path] : input_files(job.options))
+        read.emplace(file_identity(path), path + ", an input of line " + std::to_string(job.line) +
+                                              " (key '" + key + "')");
+  for (Job& job : all) {
+    if (!job.error.empty()) continue;
+    for (const std::string* out : {&job.options.out_path, &job.options.report_path})
+      if (const auto input = read.find(file_identity(*out)); input != read.end()) {
+        job.error = job_where(opts.jobs_path, job.line) + ": " + *out + ": is also " +
+                    input->second + "; an output may not replace an input";
+        break;
+      }
+  }
+  if (opts.results_path.empty()) return {};
+  const std::string results = file_identity(opts.results_path);
+  if (const auto input = read.find(results); input != read.end())
+    return "--results " + opts.results_path + ": is also " + input->second +
+           "; an output may not replace an input";
+  if (const auto output = written.find(results); output != written.end())
+    return "--results " + opts.results_path + ": is also an output of line " +
+           std::to_string(output->second) + "; give the results their own file";
+  return {};
+}
+
 int run_batch(const BatchOptions& opts) {
   Result<Shard> shard = !opts.shard_given ? Result<Shard>(Shard{}) : parse_shard(opts.shard);
   if (!shard) return fail(shard.error().message);
@@ -380,7 +413,7 @@ int run_batch(const BatchOptions& opts) {
       const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
       std::string identity[2];
       for (int k = 0; k < 2 && job.error.empty(); ++k) {
-        identity[k] = fs::weakly_canonical(fs::absolute(*paths[k], ec), ec).string();
+        identity[k] = file_identity(*paths[k]);
         if (const auto earlier = written.find(identity[k]); earlier != written.end())
           job.error = job_where(opts.jobs_path, line) + ": " + *paths[k] +
                       ": also an output of line " + std::to_string(earlier->second) +
@@ -392,6 +425,8 @@ int run_batch(const BatchOptions& opts) {
     all.push_back(std::move(job));
   }
   if (in.bad()) return fail(opts.jobs_path + ": cannot read the jobs file");
+  if (const std::string clash = check_outputs(opts, all, written); !clash.empty())
+    return fail(clash);
 
   std::vector<const Job*> mine;  // this shard's: job i belongs to shard i mod N
   for (const Job& job : all)

@@ -16,6 +16,7 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/path.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
@@ -345,6 +346,23 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   for (const auto& [flag, path] : paths)
     if (const std::string where = control_character_in(path); !where.empty())
       return failed(2, flag + ": " + where + " in the path; paths may not hold one");
+  // No output may replace an input (compared by identity: the same inode, or the same new path).
+  std::vector<std::pair<std::string, std::string>> inputs = {{"--light", o.light_path},
+                                                             {"--medium", o.medium_path}};
+  for (const std::string& p : o.depth_paths) {
+    if (p.find("{face}") == std::string::npos) inputs.emplace_back("depth input", p);
+    for (int face = 0; face < kOmniFaces && p.find("{face}") != std::string::npos; ++face)
+      inputs.emplace_back("depth input", expand_face_pattern(p, face));
+  }
+  for (const auto& [out_flag, out] :
+       {std::pair<std::string, std::string>{"--out", o.out_path}, {"--report", o.report_path}}) {
+    if (out.empty()) continue;
+    const std::string identity = file_identity(out);
+    for (const auto& [in_flag, in] : inputs)
+      if (!in.empty() && file_identity(in) == identity)
+        return failed(2, out_flag + " " + out + ": is also the " + in_flag + " " + in +
+                             "; an output may not replace an input");
+  }
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
   if (!format) return failed(2, format.error().message);
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())

@@ -410,6 +410,55 @@ TEST(BatchCli, ControlCharactersInPathsAreRefusedNamingLineAndKey) {
   EXPECT_EQ(b.dir.entries(), before);
 }
 
+// Before: --results naming a job's output replaced the volume with result lines (and a rerun
+// skipped the job), --results over the jobs file or a light destroyed it, and a job could write
+// its report over another job's light or its out over the jobs file.
+TEST(BatchCli, NoOutputReplacesAnInputOrAnotherOutput) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  const std::string jobs_text = slurp(b.jobs), light_text = slurp(b.dir.file("spot.json"));
+  const int before = b.dir.entries();
+  struct Case {
+    std::string results, message;
+  };
+  for (const Case& c :
+       {Case{"a.ply", ": is also an output of line 1; give the results their own file"},
+        Case{"a.ply.report.json", ": is also an output of line 1; give the results their own file"},
+        Case{"jobs.jsonl", ": is also the jobs file; an output may not replace an input"},
+        Case{"spot.json", ": is also " + b.dir.file("spot.json") +
+                              ", an input of line 1 (key 'light'); an output may not replace an "
+                              "input"}}) {
+    const test::CommandResult r = b.run("--results " + q(b.dir.file(c.results)));
+    EXPECT_EQ(r.exit_code, 2) << c.results;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "lightvol: --results " + b.dir.file(c.results) + c.message + "\n");
+    EXPECT_EQ(b.dir.entries(), before) << c.results;  // nothing ran, nothing was written
+  }
+  EXPECT_EQ(slurp(b.jobs), jobs_text);
+
+  // A job's report over another job's light; a jobs file named like a job's out.
+  b.write_jobs(
+      {job("a", "a.exr", "a.ply"), job("b", "b.exr", "b.ply", R"("--report", "spot.json")")});
+  test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 2u) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(lines[0])["status"], "ok");
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["error"],
+            b.jobs + ":2: " + b.dir.file("spot.json") + ": is also " + b.dir.file("spot.json") +
+                ", an input of line 1 (key 'light'); an output may not replace an input");
+  EXPECT_EQ(slurp(b.dir.file("spot.json")), light_text);
+
+  const std::string jobs_ply = b.dir.write("jobs.ply", job("c", "a.exr", "jobs.ply") + "\n");
+  r = test::run_lightvol("batch " + q(jobs_ply) + " -q");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(nlohmann::json::parse(r.out)["error"],
+            jobs_ply + ":1: " + jobs_ply +
+                ": is also the jobs file; an output may not replace an "
+                "input");
+  EXPECT_EQ(slurp(jobs_ply), job("c", "a.exr", "jobs.ply") + "\n");
+}
+
 // SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
 // appeared is whole, with its report; a rerun skips those and builds the rest.
 TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {

@@ -227,6 +227,22 @@ TEST(BuildCli, ControlCharactersInPathsAreRefused) {
   EXPECT_EQ(w.dir.entries(), before);
 }
 
+// Before: --report over the light (or the depth map) replaced the input with the report.
+TEST(BuildCli, NoOutputReplacesAnInput) {
+  Workspace w;
+  const std::string light_text = slurp(w.light);
+  const std::string link = w.dir.file("also_light.json");
+  ASSERT_EQ(::symlink(w.light.c_str(), link.c_str()), 0);
+  const int before = w.dir.entries();
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(link)),
+                     "--report " + link + ": is also the --light " + w.light +
+                         "; an output may not replace an input");
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(w.depth)),
+                     "--report " + w.depth + ": is also the depth input " + w.depth);
+  EXPECT_EQ(slurp(w.light), light_text);
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
 // Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
 TEST(BuildCli, InterruptedWriteLeavesNothing) {
   Workspace w;
