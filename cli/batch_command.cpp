@@ -24,6 +24,7 @@
 
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/path.h>
 #include <lightvol/depth/cube_faces.h>
 
 #include "build_job.h"
@@ -125,6 +126,17 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
       return bad(std::string("key '") + key + "': expected a path");
   job.out = j["out"].get<std::string>();
   if (!strings("args", false, &args)) return bad("key 'args': expected an array of strings");
+  // A NUL ends a path early ("v\u0000.ply" is "v"), a line break splits messages: no path or
+  // flag may hold a control character.
+  const std::pair<const char*, std::vector<std::string>> fields[] = {
+      {"inputs", inputs},
+      {"light", {j["light"].get<std::string>()}},
+      {"out", {j["out"].get<std::string>()}},
+      {"args", args}};
+  for (const auto& [key, values] : fields)
+    for (const std::string& value : values)
+      if (const std::string at = control_character_in(value); !at.empty())
+        return bad(std::string("key '") + key + "': " + at + "; paths and flags may not hold one");
 
   // build's command line: the flags first, then "--" and the inputs (a path may start with '-').
   std::vector<std::string> argv = {"--light", j["light"].get<std::string>(), "--out",
@@ -148,6 +160,10 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
     if (extra != "--")
       return bad("key 'args': " + extra + ": not a flag of build (see 'lightvol build --help')");
   if (o.json) return bad("key 'args': --json: not in a batch (each job's result is a line)");
+  if (o.report_path == "-")
+    return bad(
+        "key 'args': --report -: a job's report is a file (batch reads it back to skip "
+        "the job when nothing changed)");
   o.quiet = true;
   for (std::string& p : o.depth_paths) p = resolve(base, p);
   o.light_path = resolve(base, o.light_path);
@@ -188,7 +204,7 @@ Result<std::string> content_hash(const BuildCommandOptions& o) {
     XXH3_128bits_update(state.get(), bytes.data(), bytes.size());
   };
   add(std::string("lightvol ") + kVersion);
-  add(output_options_json(o).dump());
+  add(json_text(output_options_json(o)));
   std::vector<char> chunk(1 << 20);
   for (const auto& [key, path] : input_files(o)) {
     std::ifstream in(path, std::ios::binary);
@@ -331,12 +347,45 @@ std::string result_line(const Job& job, const Outcome& o) {
         {"check", b.check_seconds},
         {"write", b.write_seconds}}},
       {"error", o.error.empty() ? ordered_json(nullptr) : ordered_json(with_flags(o.error))}};
-  return line.dump();
+  return json_text(line);
 }
 
 // A job file's path as messages name it.
 std::string job_where(const std::string& jobs_path, int line) {
   return jobs_path + ":" + std::to_string(line);
+}
+
+// No output of the run may be one of its inputs (compared by core/path.h file_identity: the same
+// inode, or the same new path): a job whose out or report is read by any job, or is the jobs file,
+// fails; --results naming an input, the jobs file or a job's output stops the batch, returning its
+// message ("" when nothing clashes). `written`: each job output's identity and its job's line.
+std::string check_outputs(const BatchOptions& opts, std::vector<Job>& all,
+                          const std::unordered_map<std::string, int>& written) {
+  std::unordered_map<std::string, std::string> read;  // identity: what reads it
+  read.emplace(file_identity(opts.jobs_path), "the jobs file");
+  for (const Job& job : all)
+    if (job.error.empty())
+      for (const auto& [key, path] : input_files(job.options))
+        read.emplace(file_identity(path), path + ", an input of line " + std::to_string(job.line) +
+                                              " (key '" + key + "')");
+  for (Job& job : all) {
+    if (!job.error.empty()) continue;
+    for (const std::string* out : {&job.options.out_path, &job.options.report_path})
+      if (const auto input = read.find(file_identity(*out)); input != read.end()) {
+        job.error = job_where(opts.jobs_path, job.line) + ": " + *out + ": is also " +
+                    input->second + "; an output may not replace an input";
+        break;
+      }
+  }
+  if (opts.results_path.empty()) return {};
+  const std::string results = file_identity(opts.results_path);
+  if (const auto input = read.find(results); input != read.end())
+    return "--results " + opts.results_path + ": is also " + input->second +
+           "; an output may not replace an input";
+  if (const auto output = written.find(results); output != written.end())
+    return "--results " + opts.results_path + ": is also an output of line " +
+           std::to_string(output->second) + "; give the results their own file";
+  return {};
 }
 
 int run_batch(const BatchOptions& opts) {
@@ -364,7 +413,7 @@ int run_batch(const BatchOptions& opts) {
       const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
       std::string identity[2];
       for (int k = 0; k < 2 && job.error.empty(); ++k) {
-        identity[k] = fs::weakly_canonical(fs::absolute(*paths[k], ec), ec).string();
+        identity[k] = file_identity(*paths[k]);
         if (const auto earlier = written.find(identity[k]); earlier != written.end())
           job.error = job_where(opts.jobs_path, line) + ": " + *paths[k] +
                       ": also an output of line " + std::to_string(earlier->second) +
@@ -376,6 +425,8 @@ int run_batch(const BatchOptions& opts) {
     all.push_back(std::move(job));
   }
   if (in.bad()) return fail(opts.jobs_path + ": cannot read the jobs file");
+  if (const std::string clash = check_outputs(opts, all, written); !clash.empty())
+    return fail(clash);
 
   std::vector<const Job*> mine;  // this shard's: job i belongs to shard i mod N
   for (const Job& job : all)
@@ -487,8 +538,10 @@ void add_batch_command(CLI::App& app, Runner* run) {
       ->check(CLI::Range(1, kMaxParallelJobs));
   cmd->add_option("--shard", o->shard,
                   "Run the K-th of N slices, K/N (0 <= K < N): the jobs i with i mod N = K");
-  cmd->add_option("--results", o->results_path,
-                  "Write the result lines to this file (atomically, at the end) instead of stdout");
+  cmd->add_option(
+      "--results", o->results_path,
+      "Write the result lines to this file (atomically, at the end) instead of stdout (- for "
+      "stdout, at the end)");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress, failures or summary on stderr");
   cmd->callback([o, run, cmd] {
     o->shard_given = cmd->count("--shard") > 0;

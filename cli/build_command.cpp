@@ -15,6 +15,8 @@
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/core/path.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
@@ -35,6 +37,8 @@ std::string conflicting_flags(const BuildCommandOptions& o, MeshFormat format) {
     return "--medium: applies to .glb output only (the file records it beside the light)";
   if (o.ascii && format != MeshFormat::ply && format != MeshFormat::stl)
     return "--ascii: applies to .ply and .stl output only";
+  if (o.json && !o.report_path.empty() && named_descriptor(o.report_path) == 1)
+    return "--report " + o.report_path + ": --json prints the report on standard output already";
   if (o.refine == "error" && o.adaptive && o.max_error < 0)
     return "--adaptive: needs --max-error E (world units along the texel rays)";
   if (o.refine == "error" && !o.adaptive && o.max_error >= 0)
@@ -190,7 +194,7 @@ Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const std::st
   progress.end();
   nlohmann::json report = report_of();
   if (!o.report_path.empty()) {
-    if (Status s = write_bytes_atomically(o.report_path, report.dump(2) + "\n"); !s)
+    if (Status s = write_bytes_atomically(o.report_path, json_text(report, 2) + "\n"); !s)
       return s.error();
   }
   if (Status s = outputs.commit(); !s) return s.error();
@@ -244,12 +248,15 @@ int run_build(const BuildCommandOptions& o) {
   if (r.exit_code == 1) return invalid(r.error);
   if (r.exit_code != 0) return fail(r.error);
   if (o.json) {
-    std::printf("%s\n", r.report.dump(2).c_str());
+    std::printf("%s\n", json_text(r.report, 2).c_str());
   } else if (!o.quiet) {
-    std::printf("wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
-                o.out_path.c_str(), thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
-                r.report["volume"].get<double>(), progress.log().total_seconds(),
-                human_bytes(peak_memory_bytes()).c_str());
+    // After a report on standard output (--report -), the summary goes to stderr: stdout stays
+    // one JSON document.
+    std::FILE* summary = named_descriptor(o.report_path) == 1 ? stderr : stdout;
+    std::fprintf(summary, "wrote %s: %s triangles, %s vertices, volume %.6g, %.2f s, peak %s\n",
+                 o.out_path.c_str(), thousands(r.triangles).c_str(), thousands(r.vertices).c_str(),
+                 r.report["volume"].get<double>(), progress.log().total_seconds(),
+                 human_bytes(peak_memory_bytes()).c_str());
   }
   return 0;
 }
@@ -275,8 +282,10 @@ void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
   cmd.add_option("--medium", o.medium_path,
                  "Medium JSON to record in a .glb beside the light (its intensity becomes the glTF "
                  "light's)");
-  cmd.add_option("--report", o.report_path,
-                 "Write a JSON report: counts, bounds, volume, time and peak memory per stage");
+  cmd.add_option(
+      "--report", o.report_path,
+      "Write a JSON report: counts, bounds, volume, time and peak memory per stage (- for "
+      "standard output)");
   cmd.add_flag("--json", o.json, "Print the report as JSON on stdout");
   cmd.add_flag(
       "--adaptive", o.adaptive,
@@ -328,6 +337,32 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
     r.error = std::move(message);
     return r;
   };
+  // A NUL would end a path early, a line break split a message: no path may hold either.
+  std::vector<std::pair<std::string, std::string>> paths = {{"--light", o.light_path},
+                                                            {"--out", o.out_path},
+                                                            {"--report", o.report_path},
+                                                            {"--medium", o.medium_path}};
+  for (const std::string& p : o.depth_paths) paths.emplace_back("depth input", p);
+  for (const auto& [flag, path] : paths)
+    if (const std::string where = control_character_in(path); !where.empty())
+      return failed(2, flag + ": " + where + " in the path; paths may not hold one");
+  // No output may replace an input (compared by identity: the same inode, or the same new path).
+  std::vector<std::pair<std::string, std::string>> inputs = {{"--light", o.light_path},
+                                                             {"--medium", o.medium_path}};
+  for (const std::string& p : o.depth_paths) {
+    if (p.find("{face}") == std::string::npos) inputs.emplace_back("depth input", p);
+    for (int face = 0; face < kOmniFaces && p.find("{face}") != std::string::npos; ++face)
+      inputs.emplace_back("depth input", expand_face_pattern(p, face));
+  }
+  for (const auto& [out_flag, out] :
+       {std::pair<std::string, std::string>{"--out", o.out_path}, {"--report", o.report_path}}) {
+    if (out.empty()) continue;
+    const std::string identity = file_identity(out);
+    for (const auto& [in_flag, in] : inputs)
+      if (!in.empty() && file_identity(in) == identity)
+        return failed(2, out_flag + " " + out + ": is also the " + in_flag + " " + in +
+                             "; an output may not replace an input");
+  }
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
   if (!format) return failed(2, format.error().message);
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())

@@ -134,7 +134,7 @@ int run_check(const CheckCommandOptions& o) {
   progress.end(report.valid() ? "valid" : "invalid");
 
   if (o.json) {
-    std::printf("%s\n", report_json(o, report).dump(2).c_str());
+    std::printf("%s\n", json_text(report_json(o, report), 2).c_str());
   } else if (!o.quiet) {
     print_table(o, report);
   }

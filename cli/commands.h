@@ -5,6 +5,7 @@
 #include <functional>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 namespace lightvol::cli {
 
@@ -35,5 +36,12 @@ int invalid(const std::string& message);
 // `text` safe for a terminal line: control characters (line breaks, escapes, NUL), which a
 // message may quote from a hostile file, are written as \xNN.
 std::string printable(const std::string& text);
+
+// `j` as JSON text (`indent` as nlohmann's dump: -1 one line), valid UTF-8 whatever bytes its
+// strings hold: every report, --json and result line is made here. A byte that is not part of
+// valid UTF-8 (a Latin-1 file name) is written as U+FFFD, the replacement character
+// (docs/formats.md, "Text in JSON outputs").
+std::string json_text(const nlohmann::json& j, int indent = -1);
+std::string json_text(const nlohmann::ordered_json& j, int indent = -1);
 
 }  // namespace lightvol::cli

@@ -207,7 +207,7 @@ Status write_viewer_inputs(const std::string& data, const std::string& dir, cons
   for (const Volume& v : volumes)
     if (Status s = write_mesh(dir + "/volume_" + v.name + ".glb", v.mesh, options); !s) return s;
   if (Status s = write_mesh(dir + "/scene.glb", scene); !s) return s;
-  if (Status s = write_bytes_atomically(dir + "/camera.json", camera_json.dump(2) + "\n"); !s)
+  if (Status s = write_bytes_atomically(dir + "/camera.json", json_text(camera_json, 2) + "\n"); !s)
     return s;
   return write_bytes_atomically(dir + "/medium.json", medium_text);
 }

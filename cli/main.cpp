@@ -50,6 +50,14 @@ std::string printable(const std::string& text) {
   return out;
 }
 
+std::string json_text(const nlohmann::json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string json_text(const nlohmann::ordered_json& j, int indent) {
+  return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
 int fail(const std::string& message) {
   std::fprintf(stderr, "lightvol: %s\n", printable(with_flags(message)).c_str());
   return 2;
@@ -110,9 +118,15 @@ int main(int argc, char** argv) {
     if (!budget) return fail("--max-memory: " + budget.error().message);
     lightvol::set_memory_budget(*budget);
   }
+  // No exception leaves a command: a library's exception here is a bug, said in one line (exit 2,
+  // as docs/design.md says), never an abort.
   try {
     return run ? run() : 2;
   } catch (const std::bad_alloc&) {
     return fail("out of memory");
+  } catch (const std::exception& e) {
+    return fail(std::string("internal error: ") + e.what());
+  } catch (...) {
+    return fail("internal error: an unknown exception");
   }
 }

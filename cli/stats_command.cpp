@@ -242,7 +242,7 @@ int run_stats(const StatsOptions& o) {
     }
 
   if (o.json)
-    std::printf("%s\n", report_json(o, *light, *stats, rows).dump(2).c_str());
+    std::printf("%s\n", json_text(report_json(o, *light, *stats, rows), 2).c_str());
   else if (o.csv)
     print_csv(*stats, rows);
   else

@@ -322,6 +322,139 @@ TEST(BatchCli, ResultsFileInsteadOfStdout) {
   EXPECT_EQ(nlohmann::json::parse(lines[1])["status"], "failed");
 }
 
+// Before: --results /dev/stdout with stdout redirected to a file renamed a temporary over the
+// /dev/stdout symlink (not run on that code: it harms the machine).
+TEST(BatchCli, ResultsOnStandardOutput) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  for (const std::string results : {"/dev/stdout", "-"}) {
+    const test::CommandResult r = b.run("--results " + results);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::string> lines = lines_of(r.out);
+    ASSERT_EQ(lines.size(), 1u) << r.out;
+    EXPECT_EQ(nlohmann::json::parse(lines[0])["out"], "a.ply");
+    EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
+  }
+  b.write_jobs({R"({"inputs": ["a.exr"], "light": "spot.json", "out": "c.ply", "args": )"
+                R"(["--report", "-"]})"});
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("--report -: a job's report is a file"), std::string::npos) << r.out;
+}
+
+// Before: a job in a Latin-1 folder aborted the whole batch (exit 134) as its report or result
+// line was made; so did a helper's refusal quoting such a path, and a light whose long non-ASCII
+// value was cut inside a character.
+TEST(BatchCli, NonUtf8TextNeverAbortsABatch) {
+  Batch b;
+  const std::string folder = b.dir.file("caf\xe9");
+  ASSERT_TRUE(fs::create_directory(folder));
+  for (const char* name : {"a.exr", "spot.json"})
+    fs::copy_file(b.dir.file(name), folder + "/" + name);
+  std::ofstream(folder + "/bad.exr") << "not an image";
+  std::string e60;
+  for (int i = 0; i < 60; ++i) e60 += "\xc3\xa9";
+  std::ofstream(folder + "/long.json") << R"({"type": ")" + e60 + R"("})";
+  std::ofstream(folder + "/jobs.jsonl") << job("ok", "a.exr", "a.ply") << "\n"
+                                        << job("bad", "bad.exr", "b.ply") << "\n"
+                                        << job("long", "a.exr", "c.ply", "", "long.json") << "\n";
+  const test::CommandResult r = test::run_lightvol("batch " + q(folder + "/jobs.jsonl") + " -q");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  const std::string shown = b.dir.path() + "/caf\xef\xbf\xbd/";
+  EXPECT_EQ(without_seconds(lines[0]), ok_line(1, "ok", "a.ply"));
+  const nlohmann::json bad = nlohmann::json::parse(lines[1]);
+  EXPECT_EQ(bad["status"], "failed");
+  EXPECT_EQ(
+      bad["error"].get<std::string>().rfind(shown + "jobs.jsonl:2: " + shown + "bad.exr: ", 0), 0u)
+      << lines[1];
+  const nlohmann::json long_light = nlohmann::json::parse(lines[2]);
+  EXPECT_EQ(long_light["status"], "failed");
+  EXPECT_NE(long_light["error"].get<std::string>().find("got \"\xc3\xa9"), std::string::npos)
+      << lines[2];
+  EXPECT_EQ(nlohmann::json::parse(slurp(folder + "/a.ply.report.json"))["output"], shown + "a.ply");
+  EXPECT_FALSE(has_temporaries(folder));
+}
+
+// Before: "v\u0000.ply" wrote the volume and its report both to "v" (the report over the volume)
+// and the job said ok.
+TEST(BatchCli, ControlCharactersInPathsAreRefusedNamingLineAndKey) {
+  Batch b;
+  b.write_jobs({R"({"inputs": ["a.exr"], "light": "spot.json", "out": "v\u0000.ply"})",
+                R"({"inputs": ["a\n.exr"], "light": "spot.json", "out": "w.ply"})",
+                R"({"inputs": ["a.exr"], "light": "spot.json", "out": "x.ply", )"
+                R"("args": ["--report", "r\u001b.json"]})"});
+  const int before = b.dir.entries();
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  const std::string where = b.jobs + ":";
+  EXPECT_EQ(nlohmann::json::parse(lines[0])["error"],
+            where +
+                "1: key 'out': control character \\x00 at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["error"],
+            where +
+                "2: key 'inputs': control character \\x0a at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(nlohmann::json::parse(lines[2])["error"],
+            where +
+                "3: key 'args': control character \\x1b at byte 1; paths and flags may not "
+                "hold one");
+  EXPECT_EQ(b.dir.entries(), before);
+}
+
+// Before: --results naming a job's output replaced the volume with result lines (and a rerun
+// skipped the job), --results over the jobs file or a light destroyed it, and a job could write
+// its report over another job's light or its out over the jobs file.
+TEST(BatchCli, NoOutputReplacesAnInputOrAnotherOutput) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  const std::string jobs_text = slurp(b.jobs), light_text = slurp(b.dir.file("spot.json"));
+  const int before = b.dir.entries();
+  struct Case {
+    std::string results, message;
+  };
+  for (const Case& c :
+       {Case{"a.ply", ": is also an output of line 1; give the results their own file"},
+        Case{"a.ply.report.json", ": is also an output of line 1; give the results their own file"},
+        Case{"jobs.jsonl", ": is also the jobs file; an output may not replace an input"},
+        Case{"spot.json", ": is also " + b.dir.file("spot.json") +
+                              ", an input of line 1 (key 'light'); an output may not replace an "
+                              "input"}}) {
+    const test::CommandResult r = b.run("--results " + q(b.dir.file(c.results)));
+    EXPECT_EQ(r.exit_code, 2) << c.results;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, "lightvol: --results " + b.dir.file(c.results) + c.message + "\n");
+    EXPECT_EQ(b.dir.entries(), before) << c.results;  // nothing ran, nothing was written
+  }
+  EXPECT_EQ(slurp(b.jobs), jobs_text);
+
+  // A job's report over another job's light; a jobs file named like a job's out.
+  b.write_jobs(
+      {job("a", "a.exr", "a.ply"), job("b", "b.exr", "b.ply", R"("--report", "spot.json")")});
+  test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2);
+  std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 2u) << r.out;
+  EXPECT_EQ(nlohmann::json::parse(lines[0])["status"], "ok");
+  EXPECT_EQ(nlohmann::json::parse(lines[1])["error"],
+            b.jobs + ":2: " + b.dir.file("spot.json") + ": is also " + b.dir.file("spot.json") +
+                ", an input of line 1 (key 'light'); an output may not replace an input");
+  EXPECT_EQ(slurp(b.dir.file("spot.json")), light_text);
+
+  const std::string jobs_ply = b.dir.write("jobs.ply", job("c", "a.exr", "jobs.ply") + "\n");
+  r = test::run_lightvol("batch " + q(jobs_ply) + " -q");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(nlohmann::json::parse(r.out)["error"],
+            jobs_ply + ":1: " + jobs_ply +
+                ": is also the jobs file; an output may not replace an "
+                "input");
+  EXPECT_EQ(slurp(jobs_ply), job("c", "a.exr", "jobs.ply") + "\n");
+}
+
 // SIGINT while jobs run: the process dies of it, no temporary is left, and every volume that
 // appeared is whole, with its report; a rerun skips those and builds the rest.
 TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {

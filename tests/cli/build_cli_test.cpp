@@ -132,6 +132,112 @@ TEST(BuildCli, AFailingReportLeavesTheOldVolume) {
   EXPECT_EQ(w.dir.entries(), before);  // no temporary left either
 }
 
+// Before: with stdout redirected to a file (as run_lightvol does), /dev/stdout led to a regular
+// file, so the temporary was made in /dev and renamed over the /dev/stdout symlink: the machine
+// lost /dev/stdout and the file got nothing. (Not run on that code: it harms the machine;
+// AtomicFile.DescriptorPathsAreWrittenThroughAtTheirOffset shows the same with a link of its own.)
+TEST(BuildCli, ReportOnStandardOutput) {
+  Workspace w;
+  for (const std::string report : {"/dev/stdout", "-"}) {
+    const std::string out = w.dir.file("v.ply");
+    const test::CommandResult r = w.build("--out " + q(out) + " --report " + report);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);  // only the report: the summary is
+    EXPECT_EQ(j["triangles"], 124);                         // on stderr
+    EXPECT_NE(r.err.find("wrote " + out + ": 124 triangles"), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::is_symlink("/dev/stdout"));
+    EXPECT_TRUE(std::filesystem::is_regular_file(out));
+  }
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report - --json"),
+                     "--report -: --json prints the report on standard output already");
+  EXPECT_EQ(std::count_if(
+                std::filesystem::directory_iterator("/dev"), {},
+                [](const auto& e) { return e.path().filename().string().rfind(".lv-", 0) == 0; }),
+            0);
+}
+
+bool has_temporaries(const std::string& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().rfind(".lv-", 0) == 0) return true;
+  return false;
+}
+
+// Before: the JSON library threw on the Latin-1 bytes of the names and the process aborted (exit
+// 134): --report left .lv-* temporaries, --json committed the volume first. A byte that is not
+// UTF-8 now reaches the JSON as U+FFFD.
+TEST(BuildCli, Latin1NamesReachReportsAsReplacementCharacters) {
+  Workspace w;
+  const std::string folder = w.dir.file("caf\xe9");
+  ASSERT_TRUE(std::filesystem::create_directory(folder));
+  const std::string depth = folder + "/d\xe9pth.exr", light = folder + "/l.json";
+  std::filesystem::copy_file(w.depth, depth);
+  std::filesystem::copy_file(w.light, light);
+  const std::string out = folder + "/v.ply", report = folder + "/r.json";
+  const std::string shown = w.dir.path() + "/caf\xef\xbf\xbd/d\xef\xbf\xbdpth.exr";
+
+  test::CommandResult r = test::run_lightvol("build " + q(depth) + " --light " + q(light) +
+                                             " --out " + q(out) + " --report " + q(report));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(report))["inputs"][0], shown);
+  EXPECT_FALSE(has_temporaries(folder));
+
+  r = test::run_lightvol("build " + q(depth) + " --light " + q(light) + " --out " + q(out) +
+                         " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["inputs"][0], shown);
+
+  r = test::run_lightvol("check " + q(out) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["mesh"], w.dir.path() + "/caf\xef\xbf\xbd/v.ply");
+  EXPECT_FALSE(has_temporaries(folder));
+}
+
+// Before: the quoted value was cut at 81 bytes, inside a two-byte character, and the JSON library
+// threw on it: exit 134. Quotes are cut on character boundaries.
+TEST(BuildCli, LongNonAsciiValuesAreQuotedWholeCharacters) {
+  Workspace w;
+  std::string e60;
+  for (int i = 0; i < 60; ++i) e60 += "\xc3\xa9";  // é
+  const std::string light = w.dir.write(
+      "l.json", R"({"type": ")" + e60 + R"(", "position": [0, 4, 0], "direction": [0, -1, 0]})");
+  std::string e37;
+  for (int i = 0; i < 37; ++i) e37 += "\xc3\xa9";
+  expect_input_error(
+      test::run_lightvol("build " + q(w.depth) + " --light " + q(light) + " --out " +
+                         q(w.dir.file("v.ply"))),
+      "key 'type': expected \"spot\", \"directional\" or \"omni\", got \"" + e37 + "...\"");
+}
+
+// Before: a line break in a path was taken as it is (a file "v\n.ply", messages split in two).
+TEST(BuildCli, ControlCharactersInPathsAreRefused) {
+  Workspace w;
+  const int before = w.dir.entries();
+  expect_input_error(w.build("--out " + q(w.dir.file("v\n.ply"))),
+                     "--out: control character \\x0a at byte " +
+                         std::to_string(w.dir.path().size() + 2) +
+                         " in the path; paths may not hold one");
+  expect_input_error(
+      w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(w.dir.file("r\t.json"))),
+      "--report: control character \\x09");
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
+// Before: --report over the light (or the depth map) replaced the input with the report.
+TEST(BuildCli, NoOutputReplacesAnInput) {
+  Workspace w;
+  const std::string light_text = slurp(w.light);
+  const std::string link = w.dir.file("also_light.json");
+  ASSERT_EQ(::symlink(w.light.c_str(), link.c_str()), 0);
+  const int before = w.dir.entries();
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(link)),
+                     "--report " + link + ": is also the --light " + w.light +
+                         "; an output may not replace an input");
+  expect_input_error(w.build("--out " + q(w.dir.file("v.ply")) + " --report " + q(w.depth)),
+                     "--report " + w.depth + ": is also the depth input " + w.depth);
+  EXPECT_EQ(slurp(w.light), light_text);
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
 // Before: SIGINT, SIGTERM or SIGHUP during the write left the partial temporary beside the output.
 TEST(BuildCli, InterruptedWriteLeavesNothing) {
   Workspace w;

@@ -1,3 +1,4 @@
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/path.h>
 
 #include "support/test_support.h"
 
@@ -65,16 +67,122 @@ TEST(AtomicFile, MissingDirectoryIsNamed) {
   EXPECT_NE(s.error().message.find("does not exist"), std::string::npos) << s.error().message;
 }
 
-TEST(AtomicFile, DeviceOrPipeTargetIsRefusedAndKept) {
-  // Renaming over a FIFO (or /dev/stdout) would replace it with a plain file.
+// Before: a FIFO was refused ("is not a regular file"). A pipe is written through, never
+// replaced by a plain file.
+TEST(AtomicFile, PipeIsWrittenThroughAndStaysAPipe) {
   test::TempDir dir;
   const std::string fifo = dir.file("pipe.ply");
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  const Status s = write_bytes_atomically(fifo, "x");
-  ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.error().message.find("is not a regular file"), std::string::npos)
-      << s.error().message;
+  const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  ASSERT_TRUE(write_bytes_atomically(fifo, "bytes ").ok());
+  // A writer that opens its file by name: it fills a temporary elsewhere, copied to the pipe.
+  ASSERT_TRUE(write_file_atomically(fifo, [](const std::string& temp) -> Status {
+                std::ofstream(temp) << "and a file";
+                return {};
+              }).ok());
+  char buffer[64] = {};
+  const ssize_t n = ::read(reader, buffer, sizeof buffer);
+  ::close(reader);
+  EXPECT_EQ(std::string(buffer, n > 0 ? static_cast<std::size_t>(n) : 0), "bytes and a file");
   EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+  EXPECT_EQ(dir.entries(), 1);
+}
+
+// Before: the symlink was replaced by a plain file holding the output (as /dev/stdout was, for the
+// whole machine), and the file it led to kept its old content.
+TEST(AtomicFile, SymlinkToAFileElsewhereIsWrittenThroughAndStaysALink) {
+  test::TempDir links, files;
+  const std::string real = files.write("real.json", "old");
+  const std::string link = links.file("report.json");
+  ASSERT_EQ(::symlink(real.c_str(), link.c_str()), 0);
+  ASSERT_TRUE(write_bytes_atomically(link, "new").ok());
+  EXPECT_EQ(slurp(real), "new");
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(links.entries(), 1);  // no temporary beside the link
+  EXPECT_EQ(files.entries(), 1);
+
+  // The same inside a transaction (build's volume and report), with a writer that opens by name.
+  {
+    OutputTransaction outputs;
+    ASSERT_TRUE(write_file_atomically(link, [](const std::string& temp) -> Status {
+                  std::ofstream(temp) << "newer";
+                  return {};
+                }).ok());
+    ASSERT_TRUE(outputs.commit().ok());
+  }
+  EXPECT_EQ(slurp(real), "newer");
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(links.entries(), 1);
+  EXPECT_EQ(files.entries(), 1);
+}
+
+TEST(AtomicFile, SymlinkToAMissingFileCreatesItThere) {
+  test::TempDir links, files;
+  const std::string link = links.file("out.txt");
+  ASSERT_EQ(::symlink(files.file("new.txt").c_str(), link.c_str()), 0);
+  ASSERT_TRUE(write_bytes_atomically(link, "made").ok());
+  EXPECT_EQ(slurp(files.file("new.txt")), "made");
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(links.entries(), 1);
+}
+
+// What `--report /dev/stdout` with standard output redirected to a file meets, without touching
+// the real /dev: a symlink to /proc/self/fd/N, N a file in another folder with bytes already
+// written. Before: the temporary was made beside the link and renamed over it; the file got
+// nothing.
+TEST(AtomicFile, DescriptorPathsAreWrittenThroughAtTheirOffset) {
+  test::TempDir links, files;
+  const std::string real = files.file("stdout.txt");
+  const int fd = ::open(real.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::write(fd, "before\n", 7), 7);
+  const std::string link = links.file("stdout");
+  ASSERT_EQ(::symlink(("/proc/self/fd/" + std::to_string(fd)).c_str(), link.c_str()), 0);
+  ASSERT_TRUE(write_bytes_atomically(link, "report\n").ok());
+  ASSERT_TRUE(write_file_atomically("/dev/fd/" + std::to_string(fd), [](const std::string& temp) {
+                std::ofstream(temp) << "volume\n";
+                return Status{};
+              }).ok());
+  ASSERT_EQ(::write(fd, "after\n", 6), 6);
+  ::close(fd);
+  EXPECT_EQ(slurp(real), "before\nreport\nvolume\nafter\n");
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(links.entries(), 1);
+  EXPECT_EQ(files.entries(), 1);
+}
+
+TEST(AtomicFile, ClosedOrReadOnlyDescriptorsAreRefused) {
+  test::TempDir dir;
+  const Status closed = write_bytes_atomically("/dev/fd/987", "x");
+  ASSERT_FALSE(closed.ok());
+  EXPECT_EQ(closed.error().message, "/dev/fd/987: descriptor 987 is not open");
+  const std::string file = dir.write("in.txt", "keep");
+  const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  const std::string path = "/proc/self/fd/" + std::to_string(fd);
+  const Status read_only = write_bytes_atomically(path, "x");
+  ::close(fd);
+  ASSERT_FALSE(read_only.ok());
+  EXPECT_EQ(read_only.error().message,
+            path + ": descriptor " + std::to_string(fd) + " is not open for writing");
+  EXPECT_EQ(slurp(file), "keep");
+}
+
+TEST(AtomicFile, NamedDescriptors) {
+  EXPECT_EQ(named_descriptor("-"), 1);
+  EXPECT_EQ(named_descriptor("/dev/stdout"), 1);
+  EXPECT_EQ(named_descriptor("/dev/stderr"), 2);
+  EXPECT_EQ(named_descriptor("/dev/fd/7"), 7);
+  EXPECT_EQ(named_descriptor("/proc/self/fd/12"), 12);
+  EXPECT_EQ(named_descriptor("/proc/" + std::to_string(::getpid()) + "/fd/3"), 3);
+  EXPECT_EQ(named_descriptor("./-"), -1);
+  EXPECT_EQ(named_descriptor("/dev/fd/x"), -1);
+  EXPECT_EQ(named_descriptor("/dev/null"), -1);
+  test::TempDir dir;
+  const std::string link = dir.file("out");
+  ASSERT_EQ(::symlink("/dev/stderr", link.c_str()), 0);
+  EXPECT_EQ(named_descriptor(link), 2);
 }
 
 // Before: the temporary was ".NAME.lightvol-tmp-PID-N.ext", opened without O_EXCL: a symlink

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/path.h>
 
 namespace lightvol {
 namespace fs = std::filesystem;
@@ -147,10 +149,10 @@ fs::path directory_of(const fs::path& target) {
   return target.has_parent_path() ? target.parent_path() : fs::path(".");
 }
 
-// Creates a fresh file beside `target`, exclusively; returns its path and open descriptor.
-Result<std::pair<std::string, int>> create_temporary(const std::string& path,
+// Creates a fresh file in `dir` named after `target`, exclusively; returns its path and open
+// descriptor.
+Result<std::pair<std::string, int>> create_temporary(const std::string& path, const fs::path& dir,
                                                      const fs::path& target) {
-  const fs::path dir = directory_of(target);
   for (int attempt = 0; attempt < 64; ++attempt) {
     const std::string temp = (dir / random_name(target)).string();
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
@@ -163,27 +165,112 @@ Result<std::pair<std::string, int>> create_temporary(const std::string& path,
                ": every name tried exists"};
 }
 
-std::string identity_of(const fs::path& target) {
-  std::error_code ec;
-  const fs::path canonical = fs::weakly_canonical(fs::absolute(target, ec), ec);
-  return ec ? target.lexically_normal().string() : canonical.string();
+// Where an output goes: a file (a temporary beside it is renamed onto it; a symlink is followed
+// to the file it leads to, and stays a symlink), or a stream (a descriptor the bytes are written
+// through: standard output, a terminal, a pipe).
+struct Destination {
+  std::string target;  // a file: the path the finished temporary is renamed onto
+  int fd = -1;         // a stream: an open descriptor, owned
+  std::string identity;
+};
+
+Result<Destination> destination_of(const std::string& path) {
+  Destination d;
+  d.identity = file_identity(path);
+  if (const int named = named_descriptor(path); named >= 0) {
+    const int flags = ::fcntl(named, F_GETFL);
+    if (flags < 0) return Error{path + ": descriptor " + std::to_string(named) + " is not open"};
+    if ((flags & O_ACCMODE) == O_RDONLY)
+      return Error{path + ": descriptor " + std::to_string(named) + " is not open for writing"};
+    d.fd = ::fcntl(named, F_DUPFD_CLOEXEC, 3);
+    if (d.fd < 0)
+      return Error{path + ": cannot use descriptor " + std::to_string(named) + ": " +
+                   std::strerror(errno)};
+    return d;
+  }
+  Result<std::string> followed = follow_links(path);
+  if (!followed) return followed.error();
+  d.target = *followed;
+  struct stat st {};
+  if (::stat(d.target.c_str(), &st) != 0) {
+    // A file to create: its folder must exist.
+    std::error_code ec;
+    const fs::path dir = directory_of(d.target);
+    if (!fs::is_directory(dir, ec))
+      return Error{path + ": directory " + dir.string() + " does not exist"};
+    return d;
+  }
+  if (S_ISREG(st.st_mode)) return d;
+  if (S_ISDIR(st.st_mode)) return Error{path + ": is a directory"};
+  if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
+    // A device or a pipe is written through: renaming a file over it would replace it.
+    d.fd = ::open(d.target.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY);
+    if (d.fd < 0) return Error{path + ": cannot open for writing: " + std::strerror(errno)};
+    d.target.clear();
+    return d;
+  }
+  return Error{path + ": is " + (S_ISSOCK(st.st_mode) ? "a socket" : "a block device") +
+               "; outputs are written to files, character devices, pipes or standard output (-)"};
 }
+
+// Writes all of `bytes` to `fd` (after what the program printed: fd may be standard output).
+bool write_all(int fd, const char* bytes, std::size_t size) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, bytes, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    bytes += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// Copies what the writer put in `spool` to `fd`; the spool file is gone when this returns.
+Status copy_spool(const std::string& path, const std::string& spool, int fd) {
+  const int in = ::open(spool.c_str(), O_RDONLY | O_CLOEXEC);
+  ::unlink(spool.c_str());  // nothing left behind, whatever happens while copying
+  if (in < 0)
+    return Error{path + ": cannot read back the finished output: " + std::strerror(errno)};
+  std::vector<char> buffer(1 << 20);
+  Status status;
+  for (;;) {
+    const ssize_t n = ::read(in, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      status = Error{path + ": cannot read back the finished output: " + std::strerror(errno)};
+      break;
+    }
+    if (n == 0) break;
+    if (!write_all(fd, buffer.data(), static_cast<std::size_t>(n))) {
+      status = Error{path + ": write failed: " + std::strerror(errno)};
+      break;
+    }
+  }
+  ::close(in);
+  return status;
+}
+
 }  // namespace
 
 // ---- Transactions -----------------------------------------------------------------------------
 struct OutputTransaction::Impl {
   struct Staged {
-    std::string target;    // as given
-    std::string identity;  // canonical, to catch one file named twice
-    std::string temp;
+    std::string target;    // the file renamed onto (symlinks followed), or the path as given
+    std::string identity;  // core/path.h file_identity, to catch one file named twice
+    std::string temp;      // the finished temporary (a file) or spool (a stream); "" for bytes
     int slot = -1;
+    int fd = -1;        // a stream: written through at commit
+    std::string bytes;  // a stream's bytes, when there is no spool
   };
   std::vector<Staged> staged;
 
   void discard() {
     for (const Staged& s : staged) {
-      ::unlink(s.temp.c_str());
+      if (!s.temp.empty()) ::unlink(s.temp.c_str());
       unregister_temporary(s.slot);
+      if (s.fd >= 0) ::close(s.fd);
     }
     staged.clear();
   }
@@ -191,7 +278,22 @@ struct OutputTransaction::Impl {
 
 namespace {
 thread_local OutputTransaction::Impl* t_transaction = nullptr;
+
+// Writes a staged stream's output through its descriptor, and closes it.
+Status write_through(OutputTransaction::Impl::Staged& s) {
+  Status status;
+  if (!s.temp.empty()) {
+    status = copy_spool(s.target, s.temp, s.fd);
+    unregister_temporary(s.slot);
+    s.temp.clear();
+  } else if (!write_all(s.fd, s.bytes.data(), s.bytes.size())) {
+    status = Error{s.target + ": write failed: " + std::strerror(errno)};
+  }
+  ::close(s.fd);
+  s.fd = -1;
+  return status;
 }
+}  // namespace
 
 OutputTransaction::OutputTransaction() : impl_(std::make_unique<Impl>()), previous_(t_transaction) {
   t_transaction = impl_.get();
@@ -203,11 +305,29 @@ OutputTransaction::~OutputTransaction() {
 }
 
 Status OutputTransaction::commit() {
+  std::vector<Impl::Staged>& staged = impl_->staged;
+  if (Status s = commit_files(); !s) return s;
+  // A stream may block (a full pipe): a signal now acts at once. The spools are unlinked as their
+  // copies start, so nothing is left behind.
+  Status status;
+  for (Impl::Staged& s : staged)
+    if (Status written = write_through(s); !written && status.ok()) status = written;
+  staged.clear();
+  return status;
+}
+
+Status OutputTransaction::commit_files() {
   SignalDefer defer;
   std::vector<Impl::Staged>& staged = impl_->staged;
+  // The files first, all or nothing; the streams, which cannot be taken back, once they are in.
+  std::stable_partition(staged.begin(), staged.end(),
+                        [](const Impl::Staged& s) { return s.fd < 0; });
+  const std::size_t files = static_cast<std::size_t>(
+      std::find_if(staged.begin(), staged.end(), [](const Impl::Staged& s) { return s.fd >= 0; }) -
+      staged.begin());
   // Hard links keep the files about to be replaced, so a failed rename can put them back.
-  std::vector<std::string> backups(staged.size());
-  for (std::size_t i = 0; i < staged.size(); ++i) {
+  std::vector<std::string> backups(files);
+  for (std::size_t i = 0; i < files; ++i) {
     struct stat st {};
     if (::lstat(staged[i].target.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
     for (int attempt = 0; attempt < 16 && backups[i].empty(); ++attempt) {
@@ -223,7 +343,7 @@ Status OutputTransaction::commit() {
     for (const std::string& b : backups)
       if (!b.empty()) ::unlink(b.c_str());
   };
-  for (std::size_t i = 0; i < staged.size(); ++i) {
+  for (std::size_t i = 0; i < files; ++i) {
     if (std::rename(staged[i].temp.c_str(), staged[i].target.c_str()) == 0) continue;
     const std::string why =
         staged[i].target +
@@ -242,41 +362,58 @@ Status OutputTransaction::commit() {
     drop_backups();
     return Error{why};
   }
-  for (const Impl::Staged& s : staged) unregister_temporary(s.slot);
-  staged.clear();
+  for (std::size_t i = 0; i < files; ++i) unregister_temporary(staged[i].slot);
+  staged.erase(staged.begin(), staged.begin() + static_cast<std::ptrdiff_t>(files));
   drop_backups();
   return {};
 }
 
 // ---- Single files -----------------------------------------------------------------------------
-Status write_file_atomically(const std::string& path,
-                             const std::function<Status(const std::string& temp_path)>& write) {
-  const fs::path target(path);
-  std::error_code ec;
-  const fs::path dir = directory_of(target);
-  if (!fs::is_directory(dir, ec))
-    return Error{path + ": directory " + dir.string() + " does not exist"};
-  if (fs::is_directory(target, ec)) return Error{path + ": is a directory"};
-  // The finished file is renamed over the target: that would replace a device or a pipe
-  // (/dev/stdout) with a plain file.
-  if (const fs::file_status st = fs::status(target, ec); fs::exists(st) && !fs::is_regular_file(st))
-    return Error{path +
-                 ": exists and is not a regular file (a device or a pipe); outputs are "
-                 "written to files"};
-  const std::string identity = identity_of(target);
+namespace {
+
+// Writes one output: `write` fills a temporary (beside a file target; in the temporary folder for
+// a stream), or, with `bytes`, the bytes are the output.
+Status write_output(const std::string& path,
+                    const std::function<Status(const std::string& temp_path)>& write,
+                    const std::string_view* bytes) {
+  Result<Destination> destination = destination_of(path);
+  if (!destination) return destination.error();
+  Destination& d = *destination;
+  struct CloseFd {
+    int& fd;
+    ~CloseFd() {
+      if (fd >= 0) ::close(fd);
+    }
+  } close_fd{d.fd};
+  const bool stream = d.fd >= 0;
   if (t_transaction)
     for (const OutputTransaction::Impl::Staged& s : t_transaction->staged)
-      if (s.identity == identity)
+      if (s.identity == d.identity)
         return Error{path + ": is also " + (s.target == path ? "another" : s.target + ", another") +
                      " output of this run; give each output its own file"};
 
+  if (stream && bytes) {
+    if (t_transaction) {
+      t_transaction->staged.push_back({path, d.identity, "", -1, d.fd, std::string(*bytes)});
+      d.fd = -1;
+      return {};
+    }
+    if (!write_all(d.fd, bytes->data(), bytes->size()))
+      return Error{path + ": write failed: " + std::strerror(errno)};
+    return {};
+  }
+
+  const fs::path target(stream ? path : d.target);
+  std::error_code ec;
+  const fs::path dir = stream ? fs::temp_directory_path(ec) : directory_of(target);
+  if (ec) return Error{path + ": no folder for a temporary file: " + ec.message()};
   install_signal_cleanup();
   int slot = -1;
   Result<std::pair<std::string, int>> created = Error{""};
   {
     // A signal between creating the file and registering it would leave it behind.
     SignalDefer defer;
-    created = create_temporary(path, target);
+    created = create_temporary(path, dir, target);
     if (created) slot = register_temporary(fs::absolute(created->first, ec).string());
   }
   if (!created) return created.error();
@@ -289,7 +426,10 @@ Status write_file_atomically(const std::string& path,
 
   Status status;
   try {
-    status = write(temp);
+    status = bytes ? (write_all(fd, bytes->data(), bytes->size())
+                          ? Status{}
+                          : Status{Error{path + ": write failed: " + std::strerror(errno)}})
+                   : write(temp);
   } catch (const std::bad_alloc&) {
     status = Error{path + ": out of memory while writing"};
   } catch (const std::exception& e) {
@@ -304,10 +444,10 @@ Status write_file_atomically(const std::string& path,
     else if (mine.st_dev != now.st_dev || mine.st_ino != now.st_ino)
       status = Error{path + ": the temporary file " + temp + " was replaced while writing"};
   }
-  if (status.ok()) {
+  if (status.ok() && !stream) {
     // Replacing a file keeps its permission bits.
     struct stat old {};
-    if (::stat(path.c_str(), &old) == 0 && S_ISREG(old.st_mode) &&
+    if (::stat(d.target.c_str(), &old) == 0 && S_ISREG(old.st_mode) &&
         ::fchmod(fd, old.st_mode & 07777) != 0)
       status = Error{path + ": cannot keep the file's mode: " + std::strerror(errno)};
   }
@@ -318,11 +458,17 @@ Status write_file_atomically(const std::string& path,
   ::close(fd);
 
   if (t_transaction) {
-    t_transaction->staged.push_back({path, identity, temp, slot});
+    t_transaction->staged.push_back({stream ? path : d.target, d.identity, temp, slot, d.fd, ""});
+    d.fd = -1;
     return {};
   }
+  if (stream) {
+    OutputTransaction::Impl::Staged s{path, d.identity, temp, slot, d.fd, ""};
+    d.fd = -1;
+    return write_through(s);
+  }
   SignalDefer defer;
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+  if (std::rename(temp.c_str(), d.target.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     ::unlink(temp.c_str());
     unregister_temporary(slot);
@@ -332,15 +478,15 @@ Status write_file_atomically(const std::string& path,
   return {};
 }
 
+}  // namespace
+
+Status write_file_atomically(const std::string& path,
+                             const std::function<Status(const std::string& temp_path)>& write) {
+  return write_output(path, write, nullptr);
+}
+
 Status write_bytes_atomically(const std::string& path, std::string_view bytes) {
-  return write_file_atomically(path, [&](const std::string& temp) -> Status {
-    std::FILE* f = std::fopen(temp.c_str(), "wb");
-    if (!f) return Error{path + ": cannot create file: " + std::strerror(errno)};
-    const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    const bool closed = std::fclose(f) == 0;
-    if (!ok || !closed) return Error{path + ": write failed: " + std::strerror(errno)};
-    return {};
-  });
+  return write_output(path, nullptr, &bytes);
 }
 
 }  // namespace lightvol

@@ -20,6 +20,14 @@ namespace lightvol {
 // while the temporary file exists remove it before the process dies (unless the program handles or
 // ignores those signals itself).
 //
+// Where the output lands (core/path.h): a symlink is followed to the file it leads to; the
+// temporary is made beside that file and renamed onto it, and the symlink stays a symlink. A path
+// naming a descriptor ("-" for standard output, /dev/stdout, /dev/fd/N, /proc/self/fd/N), a
+// character device (a terminal, /dev/null) or a pipe is written through, never replaced: `write`
+// fills a temporary in the system's temporary folder (TMPDIR), whose bytes are then copied to it
+// (removed as the copy starts); write_bytes_atomically writes its bytes straight through. A block
+// device or a socket is refused.
+//
 // While an OutputTransaction is open on this thread, the finished file is not renamed yet: it is
 // staged in the transaction, and appears under `path` when the transaction commits.
 Status write_file_atomically(const std::string& path,
@@ -31,8 +39,10 @@ Status write_bytes_atomically(const std::string& path, std::string_view bytes);
 // All outputs of a run, committed together. Open one before writing the outputs; every
 // write_file_atomically on this thread until it is destroyed stages its file here. commit() renames
 // them all into place, or (if one rename fails) puts back what the others replaced and leaves every
-// target as it was; a transaction destroyed without commit() removes what it staged. Two outputs
-// naming the same file are an error at the second write.
+// target as it was; then writes the streams (standard output, pipes) through, which cannot be
+// taken back. A transaction destroyed without commit() removes what it staged. Two outputs naming
+// the same file (core/path.h file_identity: the same inode, or the same new path) are an error at
+// the second write.
 class OutputTransaction {
  public:
   OutputTransaction();
@@ -45,6 +55,7 @@ class OutputTransaction {
   struct Impl;
 
  private:
+  Status commit_files();  // renames the staged files into place, all or nothing
   std::unique_ptr<Impl> impl_;
   Impl* previous_ = nullptr;  // the transaction this one is nested in
 };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <lightvol/core/detail/json_keys.h>
+#include <lightvol/core/text.h>
 
 namespace lightvol {
 namespace {
@@ -17,6 +18,12 @@ using nlohmann::json;
 bool is_finite_number(const json& x) { return x.is_number() && std::isfinite(x.get<double>()); }
 
 constexpr std::size_t kQuoteLimit = 80;
+
+// JSON text that is valid UTF-8 whatever `v`'s strings hold (a quote cut, a Latin-1 name): a byte
+// that is not UTF-8 becomes U+FFFD.
+std::string dump_text(const json& v) {
+  return v.dump(-1, ' ', false, json::error_handler_t::replace);
+}
 
 // Appends `v`'s JSON text to `out` until `out` holds more than kQuoteLimit characters. Recursion
 // stops with the text: each level adds at least one character, so it is at most kQuoteLimit deep.
@@ -29,15 +36,15 @@ void dump_bounded(const json& v, std::string* out) {
     for (auto it = v.begin(); it != v.end() && out->size() <= kQuoteLimit; ++it) {
       if (!first) *out += ',';
       first = false;
-      if (object) *out += json(it.key()).dump() + ':';
+      if (object) *out += dump_text(json(it.key())) + ':';
       dump_bounded(it.value(), out);
     }
     *out += object ? '}' : ']';
   } else if (v.is_string()) {
     const std::string& s = v.get_ref<const std::string&>();
-    *out += json(s.substr(0, kQuoteLimit + 1)).dump();
+    *out += dump_text(json(utf8_prefix(s, kQuoteLimit + 1)));
   } else {
-    *out += v.dump();
+    *out += dump_text(v);
   }
 }
 
@@ -55,13 +62,13 @@ struct Refused {
 std::string describe_json(const json& v) {
   std::string s;
   dump_bounded(v, &s);
-  if (s.size() > kQuoteLimit) s = s.substr(0, kQuoteLimit - 3) + "...";
+  if (s.size() > kQuoteLimit) s = utf8_prefix(s, kQuoteLimit - 3) + "...";
   return std::string(v.type_name()) + " " + s;
 }
 
 std::string quote_text(std::string_view s) {
-  std::string q = json(std::string(s.substr(0, kQuoteLimit + 1))).dump();
-  if (q.size() > kQuoteLimit) q = q.substr(0, kQuoteLimit - 4) + "...\"";
+  std::string q = dump_text(json(utf8_prefix(s, kQuoteLimit + 1)));
+  if (q.size() > kQuoteLimit) q = utf8_prefix(q, kQuoteLimit - 4) + "...\"";
   return q;
 }
 
@@ -132,7 +139,7 @@ Result<json> parse_json_object(std::string_view text, const std::string& source,
 
 Error KeyReader::error(const std::string& key, const std::string& why) const {
   std::string name = prefix_ + key;  // unknown keys come from the input: quoted, not echoed whole
-  if (name.size() > kQuoteLimit) name = name.substr(0, kQuoteLimit - 3) + "...";
+  if (name.size() > kQuoteLimit) name = utf8_prefix(name, kQuoteLimit - 3) + "...";
   return {source_ + ": key '" + name + "': " + why};
 }
 

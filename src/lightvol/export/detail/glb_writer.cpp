@@ -214,7 +214,7 @@ Result<std::string> detail::annotate_glb(std::string_view glb, const GlbContent&
     }
   }
 
-  std::string json = doc.dump();
+  std::string json = doc.dump(-1, ' ', false, Json::error_handler_t::replace);
   json.resize((json.size() + 3) & ~std::size_t{3}, ' ');
   std::string out(20, '\0');
   const auto put = [&](std::size_t at, std::uint32_t v) { std::memcpy(out.data() + at, &v, 4); };
