@@ -5,6 +5,8 @@
 // coincide), on volumes built from depth maps, on the bundled scene and on the mesh fuzz corpus.
 // LIGHTVOL_SI_MESHES=N (default 300) sets the number of generated meshes
 // (tests/check/self_intersection_all.sh runs 10,000).
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -17,7 +19,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
@@ -162,9 +163,9 @@ Mesh generated(int index) {
     case 2: {  // two shells: apart, touching, overlapping, or one inside the other
       m = pillow(size(rng), rng);
       const bool inside = flip(rng) != 0;
-      const Mesh other = inside ? pillow(2, rng, 1.25, 1.25, 0, 0.25)
-                                : pillow(size(rng), rng, 0.5 * offset(rng), 0.5 * offset(rng),
-                                         0.25 * offset(rng));
+      const Mesh other =
+          inside ? pillow(2, rng, 1.25, 1.25, 0, 0.25)
+                 : pillow(size(rng), rng, 0.5 * offset(rng), 0.5 * offset(rng), 0.25 * offset(rng));
       append(m, other, flip(rng) != 0);
       break;
     }
@@ -280,7 +281,8 @@ TEST(ExactSelfIntersections, BuiltVolumesGiveCgalsVerdicts) {
   const Light spot = test::light_from_json(test::spot_json());
   const DepthImage depth = test::make_depth(48, 40, [](int c, int r) {
     if (c >= 10 && c < 20 && r >= 8 && r < 30) return 0.95f;
-    if ((c - 34) * (c - 34) + (r - 20) * (r - 20) < 40) return 0.9f + 0.001f * static_cast<float>(c);
+    if ((c - 34) * (c - 34) + (r - 20) * (r - 20) < 40)
+      return 0.9f + 0.001f * static_cast<float>(c);
     return 0.98f;
   });
   Result<Mesh> volume = build_static_volume(spot, depth, {}, "test.exr");
@@ -307,8 +309,8 @@ TEST(ExactSelfIntersections, BundledAndFuzzCorpusMeshesGiveCgalsVerdicts) {
   ASSERT_TRUE(scene.ok());
   expect_same_as_cgal(*scene, "sponza_crop.ply");
   static const char* const kExtensions[] = {".ply", ".obj", ".off", ".stl", ".drc", ".glb"};
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                     ("lightvol_si_corpus_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("lightvol_si_corpus_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   int read = 0;
   for (const auto& entry :
@@ -317,8 +319,8 @@ TEST(ExactSelfIntersections, BundledAndFuzzCorpusMeshesGiveCgalsVerdicts) {
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (bytes.empty()) continue;
     const std::filesystem::path file =
-        dir / (entry.path().filename().string() +
-               kExtensions[static_cast<unsigned char>(bytes[0]) % 6]);
+        dir /
+        (entry.path().filename().string() + kExtensions[static_cast<unsigned char>(bytes[0]) % 6]);
     std::ofstream(file, std::ios::binary) << bytes.substr(1);
     Result<Mesh> mesh = read_mesh(file.string());
     if (!mesh) continue;

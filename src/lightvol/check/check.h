@@ -83,9 +83,9 @@ struct CheckReport {
 };
 
 // Which code runs the self-intersection and bounds-a-volume tests. Both give the same verdicts
-// and pairs (CGAL's definitions, exact predicates); `lightvol` (detail/exact_checks.h) is lightvol's
-// own, in parallel and without building a CGAL::Surface_mesh, `cgal` is CGAL's Polygon Mesh
-// Processing (detail/cgal_checks.h).
+// and pairs (CGAL's definitions, exact predicates); `lightvol` (detail/exact_checks.h) is
+// lightvol's own, in parallel and without building a CGAL::Surface_mesh, `cgal` is CGAL's Polygon
+// Mesh Processing (detail/cgal_checks.h).
 enum class CheckEngine { lightvol, cgal };
 
 struct CheckOptions {

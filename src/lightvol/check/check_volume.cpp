@@ -1,6 +1,6 @@
-// check_volume: the linear checks, then the self-intersection and bounds-a-volume tests (lightvol's,
-// detail/exact_checks.cpp, or CGAL's, detail/cgal_checks.cpp), and the non-self-nesting verdict
-// they give without a light.
+// check_volume: the linear checks, then the self-intersection and bounds-a-volume tests
+// (lightvol's, detail/exact_checks.cpp, or CGAL's, detail/cgal_checks.cpp), and the
+// non-self-nesting verdict they give without a light.
 #include <algorithm>
 
 #include <lightvol/check/check.h>

@@ -6,13 +6,9 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <optional>
-#include <cstdio>
-#include <cstdlib>
-#include <initializer_list>
-#include <chrono>
-#include <ctime>
 #include <string>
 #include <utility>
 #include <vector>
@@ -40,7 +36,8 @@ using Tri = std::array<std::uint32_t, 3>;
 constexpr std::size_t kMaxPairs = 10000;
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-// ---- The mesh as flat arrays ---------------------------------------------------------------------
+// ---- The mesh as flat arrays
+// ---------------------------------------------------------------------
 
 struct Box {
   float lo[3], hi[3];
@@ -115,7 +112,8 @@ VertexFaces vertex_faces(const Geometry& g, std::size_t nv, std::size_t nt) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 12),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t v = r.begin(); v != r.end(); ++v)
-                        std::sort(vf.faces.begin() + vf.first[v], vf.faces.begin() + vf.first[v + 1]);
+                        std::sort(vf.faces.begin() + vf.first[v],
+                                  vf.faces.begin() + vf.first[v + 1]);
                     });
   return vf;
 }
@@ -173,8 +171,8 @@ bool segment_meets_triangle(const Point& a, const Point& b, const Point& c, cons
   return CGAL::do_intersect(Kernel::Triangle_3(a, b, c), Kernel::Segment_3(p, q));
 }
 
-bool all_on_one_side(const Point& a, const Point& b, const Point& c, const Point& p,
-                     const Point& q, const Point& r) {
+bool all_on_one_side(const Point& a, const Point& b, const Point& c, const Point& p, const Point& q,
+                     const Point& r) {
   const CGAL::Orientation o = CGAL::orientation(a, b, c, p);
   return o != CGAL::COPLANAR && o == CGAL::orientation(a, b, c, q) &&
          o == CGAL::orientation(a, b, c, r);
@@ -325,7 +323,8 @@ SphereBox arc_box(const Dir& u, const Dir& w, std::uint32_t face) {
   constexpr double kSlack = 1e-7;
   for (const auto& p : pts)
     for (int k = 0; k < 3; ++k)
-      box.lo[k] = std::min(box.lo[k], p[k] - kSlack), box.hi[k] = std::max(box.hi[k], p[k] + kSlack);
+      box.lo[k] = std::min(box.lo[k], p[k] - kSlack),
+      box.hi[k] = std::max(box.hi[k], p[k] + kSlack);
   return box;
 }
 
@@ -381,7 +380,8 @@ void hub_candidates(const Geometry& geo, const VertexFaces& vf, std::uint32_t h,
     }
 }
 
-// ---- Bounding-volume hierarchies over faces in Morton order --------------------------------------
+// ---- Bounding-volume hierarchies over faces in Morton order
+// --------------------------------------
 
 // Does triangle `tri` meet the box? The separating-axis test in double precision on a slightly
 // inflated box (as cgal_checks.cpp's): conservative, so it only prunes; the exact test follows.
@@ -435,8 +435,7 @@ class FaceTree {
   static constexpr std::size_t kLeaf = 8;
 
   FaceTree(const Geometry& geo, const std::vector<std::uint32_t>& faces,
-           const std::vector<Box>* boxes, const std::vector<std::uint32_t>* group,
-           const Box& world)
+           const std::vector<Box>* boxes, const std::vector<std::uint32_t>* group, const Box& world)
       : geo_(geo) {
     const std::size_t n = faces.size();
     struct Key {
@@ -586,9 +585,10 @@ void face_pieces(const Polygon& poly, double target, std::size_t budget, std::ui
     if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
   const double extent = hi[axis] - lo[axis];
   const std::size_t cuts =
-      extent <= target ? 1
-                       : std::min<std::size_t>(budget, static_cast<std::size_t>(
-                                                           std::ceil(std::min(extent / target, 1e6))));
+      extent <= target
+          ? 1
+          : std::min<std::size_t>(
+                budget, static_cast<std::size_t>(std::ceil(std::min(extent / target, 1e6))));
   if (cuts <= 1) {
     Box b;
     for (int k = 0; k < 3; ++k) {
@@ -613,7 +613,8 @@ void split_face(const std::array<std::array<double, 3>, 3>& t, double target, st
   face_pieces(Polygon{t[0], t[1], t[2]}, target, kMaxPieces, face, faces, boxes);
 }
 
-// ---- The search -----------------------------------------------------------------------------------
+// ---- The search
+// -----------------------------------------------------------------------------------
 
 struct Collector {
   std::size_t limit;
@@ -643,17 +644,17 @@ struct Search {
   }
 };
 
-// Long faces against each other, but for pairs around a common hub (hub_candidates' turn). Long faces are
-  // cut into pieces of about the short faces' size: the boxes of long faces lying side by side (a
-  // wall of slivers that a depth step makes) overlap each other's, their pieces' do not. Each
-  // piece of f against the pieces of the faces after f; nodes holding only pieces of faces around
-  // f's own hub are skipped whole.
+// Long faces against each other, but for pairs around a common hub (hub_candidates' turn). Long
+// faces are cut into pieces of about the short faces' size: the boxes of long faces lying side by
+// side (a wall of slivers that a depth step makes) overlap each other's, their pieces' do not. Each
+// piece of f against the pieces of the faces after f; nodes holding only pieces of faces around
+// f's own hub are skipped whole.
 // `queries` (a subset of `long_faces`) against `long_faces`: all the pairs when `after_only` is
 // false, else those whose second face comes after the first.
 void long_long_pieces(const Geometry& geo, const std::vector<std::uint32_t>& long_faces,
                       const std::vector<std::uint32_t>& queries, bool after_only,
-                      const std::vector<std::uint32_t>& group, std::uint32_t no_hub, double threshold,
-                      const Box& world, Search& s) {
+                      const std::vector<std::uint32_t>& group, std::uint32_t no_hub,
+                      double threshold, const Box& world, Search& s) {
   Collector& collector = *s.out;
   {
     const double target = std::max(threshold, 1e-30);
@@ -697,7 +698,8 @@ void long_long_pieces(const Geometry& geo, const std::vector<std::uint32_t>& lon
                   },
                   [&](std::size_t j) {
                     const std::uint32_t g = tree.face(j);
-                    if ((after_only ? g > f : g != f) && pb.overlaps(tree.box(j))) others.push_back(g);
+                    if ((after_only ? g > f : g != f) && pb.overlaps(tree.box(j)))
+                      others.push_back(g);
                   });
             std::sort(others.begin(), others.end());
             others.erase(std::unique(others.begin(), others.end()), others.end());
@@ -727,34 +729,33 @@ void long_long_from_hub(const Geometry& geo, std::uint32_t h,
   const Point hub = geo.point(h);
   std::vector<Box> dirs(long_faces.size());
   std::vector<char> through(long_faces.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, long_faces.size(), 256),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        const Tri t = geo.tri(long_faces[i]);
-                        SphereBox sb;
-                        const int at = t[0] == h ? 0 : t[1] == h ? 1 : t[2] == h ? 2 : -1;
-                        if (at >= 0) {
-                          sb = arc_box(direction(ph, geo.pos + 3 * std::size_t{t[(at + 1) % 3]}),
-                                       direction(ph, geo.pos + 3 * std::size_t{t[(at + 2) % 3]}),
-                                       0);
-                        } else {
-                          if (CGAL::do_intersect(Kernel::Triangle_3(geo.point(t[0]), geo.point(t[1]),
-                                                                    geo.point(t[2])),
-                                                 hub))
-                            through[i] = 1;
-                          const Dir u[3] = {direction(ph, geo.pos + 3 * std::size_t{t[0]}),
-                                            direction(ph, geo.pos + 3 * std::size_t{t[1]}),
-                                            direction(ph, geo.pos + 3 * std::size_t{t[2]})};
-                          sb = cone_box(u, 0);
-                        }
-                        Box b;
-                        for (int k = 0; k < 3; ++k) {
-                          b.lo[k] = std::nextafter(static_cast<float>(sb.lo[k]), -INFINITY);
-                          b.hi[k] = std::nextafter(static_cast<float>(sb.hi[k]), INFINITY);
-                        }
-                        dirs[i] = b;
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, long_faces.size(), 256),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const Tri t = geo.tri(long_faces[i]);
+          SphereBox sb;
+          const int at = t[0] == h ? 0 : t[1] == h ? 1 : t[2] == h ? 2 : -1;
+          if (at >= 0) {
+            sb = arc_box(direction(ph, geo.pos + 3 * std::size_t{t[(at + 1) % 3]}),
+                         direction(ph, geo.pos + 3 * std::size_t{t[(at + 2) % 3]}), 0);
+          } else {
+            if (CGAL::do_intersect(
+                    Kernel::Triangle_3(geo.point(t[0]), geo.point(t[1]), geo.point(t[2])), hub))
+              through[i] = 1;
+            const Dir u[3] = {direction(ph, geo.pos + 3 * std::size_t{t[0]}),
+                              direction(ph, geo.pos + 3 * std::size_t{t[1]}),
+                              direction(ph, geo.pos + 3 * std::size_t{t[2]})};
+            sb = cone_box(u, 0);
+          }
+          Box b;
+          for (int k = 0; k < 3; ++k) {
+            b.lo[k] = std::nextafter(static_cast<float>(sb.lo[k]), -INFINITY);
+            b.hi[k] = std::nextafter(static_cast<float>(sb.hi[k]), INFINITY);
+          }
+          dirs[i] = b;
+        }
+      });
   std::vector<std::uint32_t> rest;  // through h
   for (std::size_t i = 0; i < long_faces.size(); ++i)
     if (through[i]) rest.push_back(long_faces[i]);
@@ -794,17 +795,7 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
                                      std::size_t min_hub_degree, std::size_t limit) {
   Collector collector;
   collector.limit = limit;
-  const bool stats = std::getenv("LV_EXACT_STATS") != nullptr;
-  auto t0 = std::chrono::steady_clock::now();
-  double c0 = static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
-  const auto stamp = [&](const char* what) {
-    if (!stats) return;
-    const auto t1 = std::chrono::steady_clock::now();
-    const double c1 = static_cast<double>(std::clock()) / CLOCKS_PER_SEC;
-    std::fprintf(stderr, "%s %.3f s cpu %.3f\n", what, std::chrono::duration<double>(t1 - t0).count(), c1 - c0);
-    t0 = t1;
-    c0 = c1;
-  };
+
   Search s{geo, nt, std::vector<char>(nt, 0), std::vector<char>(nv, 0), &collector};
 
   // Degenerate faces: (f, f), and out of every other pair (CGAL's self_intersections).
@@ -855,32 +846,27 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
         .push_back(static_cast<std::uint32_t>(f));
   }
   const std::uint32_t no_hub = static_cast<std::uint32_t>(hubs.size());
-  if (std::getenv("LV_EXACT_STATS"))
-    std::fprintf(stderr, "short %zu long %zu hubs %zu threshold %g\n", short_faces.size(),
-                 long_faces.size(), hubs.size(), threshold);
   for (std::uint32_t& g : group)
     if (g == kNone) g = no_hub;
 
-  stamp("setup");
   // Short against short: each face's box against the faces after it in the tree's order.
   {
     const FaceTree tree(geo, short_faces, nullptr, nullptr, world);
     short_faces = {};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.size(), 256),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        if (collector.full()) return;
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                          const std::uint32_t f = tree.face(i);
-                          const Box fb = geo.box(f);
-                          tree.traverse(
-                              i + 1,
-                              [&](const Box& b, std::size_t, std::size_t) { return fb.overlaps(b); },
-                              [&](std::size_t j) {
-                                if (fb.overlaps(tree.box(j))) s.test(f, tree.face(j));
-                              });
-                        }
-                      });
-    stamp("short-short");
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, tree.size(), 256),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+          if (collector.full()) return;
+          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const std::uint32_t f = tree.face(i);
+            const Box fb = geo.box(f);
+            tree.traverse(
+                i + 1, [&](const Box& b, std::size_t, std::size_t) { return fb.overlaps(b); },
+                [&](std::size_t j) {
+                  if (fb.overlaps(tree.box(j))) s.test(f, tree.face(j));
+                });
+          }
+        });
     // Long against short: each long face's triangle through the short faces' tree.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, long_faces.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -902,14 +888,12 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
                         }
                       });
   }
-  stamp("long-short");
   // Long against long, but for pairs around a common hub (the hubs' turn, below).
   if (!hubs.empty()) {
     long_long_from_hub(geo, hubs.front(), long_faces, group, no_hub, threshold, world, s);
   } else {
     long_long_pieces(geo, long_faces, long_faces, true, group, no_hub, threshold, world, s);
   }
-  stamp("long-long");
   // Around each hub: the pairs whose least shared hub it is.
   std::vector<Pair> candidates;
   for (std::uint32_t h : hubs) {
@@ -930,7 +914,6 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
                       });
   }
 
-  stamp("hubs");
   std::vector<Pair> pairs;
   for (const std::vector<Pair>& local : collector.pairs)
     pairs.insert(pairs.end(), local.begin(), local.end());
@@ -943,8 +926,8 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
 
 // The first face repeating a vertex, or the first vertex (with its first face) where separate
 // fans meet: cgal_checks' to_surface_mesh refuses the mesh for these, with these messages.
-bool surface_mesh_valid(const Geometry& geo, const VertexFaces& vf, std::size_t nv,
-                        std::size_t nt, std::string* why_not) {
+bool surface_mesh_valid(const Geometry& geo, const VertexFaces& vf, std::size_t nv, std::size_t nt,
+                        std::string* why_not) {
   const std::size_t bad_face = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, nt, 1 << 16), nt,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
