@@ -533,6 +533,34 @@ class FaceTree {
     }
   }
 
+  // Visits the items after position i (as traverse(i + 1, ...)), walking up from i's leaf and
+  // into the right siblings of its ancestors: the ancestors' large boxes are not tested again for
+  // each query, as a walk from the root would.
+  template <class Enter, class Visit>
+  void traverse_after(std::size_t i, Enter&& enter, Visit&& visit) const {
+    const std::size_t n = faces_.size();
+    for (std::size_t j = i + 1; j < std::min(n, (i / kLeaf + 1) * kLeaf); ++j) visit(j);
+    std::size_t stack[128];
+    for (std::size_t k = p_ + i / kLeaf; k > 1; k /= 2) {
+      if (k & 1) continue;  // a right child: its sibling holds earlier positions
+      int top = 0;
+      stack[top++] = k + 1;
+      while (top > 0) {
+        const std::size_t m = stack[--top];
+        const int level = 63 - __builtin_clzll(m);
+        const std::size_t span = p_ >> level;
+        const std::size_t first = (m - (std::size_t{1} << level)) * span * kLeaf;
+        if (first >= n || !enter(nodes_[m], first, std::min(n, first + span * kLeaf))) continue;
+        if (m >= p_) {
+          for (std::size_t j = first; j < std::min(n, first + kLeaf); ++j) visit(j);
+        } else {
+          stack[top++] = 2 * m + 1;
+          stack[top++] = 2 * m;
+        }
+      }
+    }
+  }
+
  private:
   const Geometry& geo_;
   std::vector<std::uint32_t> faces_, groups_;
@@ -860,8 +888,8 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
           for (std::size_t i = r.begin(); i != r.end(); ++i) {
             const std::uint32_t f = tree.face(i);
             const Box fb = geo.box(f);
-            tree.traverse(
-                i + 1, [&](const Box& b, std::size_t, std::size_t) { return fb.overlaps(b); },
+            tree.traverse_after(
+                i, [&](const Box& b, std::size_t, std::size_t) { return fb.overlaps(b); },
                 [&](std::size_t j) {
                   if (fb.overlaps(tree.box(j))) s.test(f, tree.face(j));
                 });
