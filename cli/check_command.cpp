@@ -22,6 +22,7 @@ struct CheckCommandOptions {
   bool json = false;
   bool quiet = false;
   bool cgal = false;
+  std::string engine = "lightvol";
   int offenders = 5;
 };
 
@@ -129,6 +130,7 @@ int run_check(const CheckCommandOptions& o) {
   CheckOptions options;
   options.quantization_step = quantization_step;
   options.cgal_with_light = o.cgal;
+  options.engine = o.engine == "cgal" ? CheckEngine::cgal : CheckEngine::lightvol;
   options.max_offenders = o.offenders;
   const CheckReport report = check_volume(*mesh, o.light_path.empty() ? nullptr : &light, options);
   progress.end(report.valid() ? "valid" : "invalid");
@@ -161,6 +163,11 @@ void add_check_command(CLI::App& app, Runner* run) {
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json): linear-time proof");
   cmd->add_flag("--cgal", o->cgal,
                 "With --light, also run CGAL's self-intersection and volume tests");
+  cmd->add_option("--engine", o->engine,
+                  "Self-intersection and bounds-a-volume tests: lightvol's own (parallel) or "
+                  "CGAL's Polygon Mesh Processing; same verdicts")
+      ->check(CLI::IsMember({"lightvol", "cgal"}))
+      ->capture_default_str();
   cmd->add_option("--offenders", o->offenders, "Offenders kept per check")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

@@ -6,6 +6,7 @@
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
+#include <lightvol/check/detail/exact_checks.h>
 #include <lightvol/core/stages.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -56,6 +57,37 @@ void BM_CgalSelfIntersection(benchmark::State& state) {
   state.counters["peak_MiB"] = static_cast<double>(lightvol::peak_memory_bytes()) / (1 << 20);
 }
 BENCHMARK(BM_CgalSelfIntersection)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// lightvol's own self-intersection test (the default engine), stopping at the first pair.
+void BM_LightvolSelfIntersection(benchmark::State& state) {
+  const lightvol::Mesh& mesh = volume_1024();
+  bool intersects = true;
+  for (auto _ : state) {
+    intersects = lightvol::detail::exact_does_self_intersect(mesh);
+    benchmark::DoNotOptimize(intersects);
+  }
+  if (intersects) state.SkipWithError("a self-intersection was found");
+  state.counters["triangles"] = static_cast<double>(mesh.num_triangles());
+  state.counters["peak_MiB"] = static_cast<double>(lightvol::peak_memory_bytes()) / (1 << 20);
+}
+BENCHMARK(BM_LightvolSelfIntersection)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(5);
+
+// CGAL's own parallel test as it comes (PMP::does_self_intersect<Parallel_if_available_tag>, the
+// Surface_mesh built first), without cgal_checks' routes for long faces and hubs.
+void BM_CgalPmpParallelSelfIntersection(benchmark::State& state) {
+  const lightvol::Mesh& mesh = volume_1024();
+  bool intersects = true;
+  for (auto _ : state) {
+    intersects = lightvol::detail::cgal_pmp_does_self_intersect(mesh);
+    benchmark::DoNotOptimize(intersects);
+  }
+  if (intersects) state.SkipWithError("CGAL found a self-intersection");
+  state.counters["triangles"] = static_cast<double>(mesh.num_triangles());
+}
+BENCHMARK(BM_CgalPmpParallelSelfIntersection)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
 
 // Everything without a light: linear checks, CGAL self-intersections (all pairs) and
 // bounds-a-volume.

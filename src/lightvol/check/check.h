@@ -82,10 +82,17 @@ struct CheckReport {
   std::string first_failure() const;
 };
 
+// Which code runs the self-intersection and bounds-a-volume tests. Both give the same verdicts
+// and pairs (CGAL's definitions, exact predicates); `lightvol` (detail/exact_checks.h) is
+// lightvol's own, in parallel and without building a CGAL::Surface_mesh, `cgal` is CGAL's Polygon
+// Mesh Processing (detail/cgal_checks.h).
+enum class CheckEngine { lightvol, cgal };
+
 struct CheckOptions {
-  // With a light: also run CGAL's self-intersection and bounds-a-volume tests, which the light
+  // With a light: also run the self-intersection and bounds-a-volume tests, which the light
   // proof implies. Without a light they always run.
   bool cgal_with_light = false;
+  CheckEngine engine = CheckEngine::lightvol;
   int max_offenders = 5;  // offenders kept per check
   // The spacing of the grid the positions were quantized to (read_mesh reports it for Draco
   // files), 0 for exact ones; see check_volume_linear.

@@ -1,9 +1,11 @@
-// check_volume: the linear checks, then CGAL's self-intersection and bounds-a-volume tests
-// (detail/cgal_checks.cpp), and the non-self-nesting verdict they give without a light.
+// check_volume: the linear checks, then the self-intersection and bounds-a-volume tests
+// (lightvol's, detail/exact_checks.cpp, or CGAL's, detail/cgal_checks.cpp), and the
+// non-self-nesting verdict they give without a light.
 #include <algorithm>
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
+#include <lightvol/check/detail/exact_checks.h>
 #include <lightvol/check/detail/linear_checks.h>
 #include <lightvol/core/check.h>
 
@@ -37,9 +39,11 @@ CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOption
             skipped(kCheckBoundsVolume, "needs a closed, edge-manifold, oriented mesh")};
     if (!light) report.checks[nesting_at].detail = "needs a closed, edge-manifold, oriented mesh";
   } else {
+    const std::size_t max_pairs = static_cast<std::size_t>(std::max(options.max_offenders, 1));
     const detail::CgalChecks c =
-        detail::cgal_checks(mesh, passed(report, kCheckClosed),
-                            static_cast<std::size_t>(std::max(options.max_offenders, 1)));
+        options.engine == CheckEngine::cgal
+            ? detail::cgal_checks(mesh, passed(report, kCheckClosed), max_pairs)
+            : detail::exact_checks(mesh, passed(report, kCheckClosed), max_pairs);
     CheckResult si;
     si.name = kCheckSelfIntersections;
     if (!c.built) {

@@ -471,4 +471,33 @@ bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio,
   return !intersecting_pairs(sm, long_face_ratio, min_hub_degree, 1).empty();
 }
 
+bool cgal_pmp_does_self_intersect(const Mesh& mesh) {
+  SurfaceMesh sm;
+  std::string why_not;
+  if (!to_surface_mesh(mesh, &sm, &why_not)) return true;
+  return PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(sm);
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> cgal_pmp_self_intersections(const Mesh& mesh) {
+  SurfaceMesh sm;
+  std::string why_not;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> out;
+  if (!to_surface_mesh(mesh, &sm, &why_not)) return out;
+  std::vector<std::pair<FaceIndex, FaceIndex>> pairs;
+  PMP::self_intersections<CGAL::Parallel_if_available_tag>(sm, std::back_inserter(pairs));
+  for (const auto& [f, g] : pairs)
+    out.emplace_back(static_cast<std::uint32_t>(std::min(f, g).idx()),
+                     static_cast<std::uint32_t>(std::max(f, g).idx()));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+bool cgal_bounds_a_volume(const Mesh& mesh) {
+  SurfaceMesh sm;
+  std::string why_not;
+  if (!to_surface_mesh(mesh, &sm, &why_not)) return false;
+  return PMP::does_bound_a_volume(sm);
+}
+
 }  // namespace lightvol::detail

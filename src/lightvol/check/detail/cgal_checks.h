@@ -46,4 +46,18 @@ CgalChecks cgal_checks(const Mesh& mesh, bool closed, std::size_t max_pairs,
 bool cgal_does_self_intersect(const Mesh& mesh, double long_face_ratio = kLongFaceRatio,
                               std::size_t min_hub_degree = kMinHubDegree);
 
+// CGAL's own parallel test, PMP::does_self_intersect<Parallel_if_available_tag> on the whole
+// Surface_mesh (no long-face or hub routes), true also when the mesh cannot be converted. For
+// benchmarks and as the tests' oracle.
+bool cgal_pmp_does_self_intersect(const Mesh& mesh);
+
+// CGAL's PMP::self_intersections<Parallel_if_available_tag> on the whole Surface_mesh: every pair,
+// sorted (f < g, or f == g for a degenerate face). Empty when the mesh cannot be converted. The
+// tests' oracle.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> cgal_pmp_self_intersections(const Mesh& mesh);
+
+// PMP::does_bound_a_volume of a closed, edge-manifold, oriented mesh without self-intersections
+// (exact_checks' route for several connected components).
+bool cgal_bounds_a_volume(const Mesh& mesh);
+
 }  // namespace lightvol::detail
