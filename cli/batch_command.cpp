@@ -1,5 +1,7 @@
 // lightvol batch: many `build` jobs from one JSON-lines file, run in threads of one process, one
 // JSON line of result per job; --shard K/N runs one deterministic slice of them (docs/batch.md).
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <xxhash.h>
 
@@ -12,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -25,6 +28,7 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
+#include <lightvol/core/text_file.h>
 #include <lightvol/depth/cube_faces.h>
 
 #include "build_job.h"
@@ -192,9 +196,53 @@ std::vector<std::pair<std::string, std::string>> input_files(const BuildCommandO
   return files;
 }
 
+// The bytes a job's description files (the light, the medium) hold, read once: hashed, then
+// parsed by the build (a pipe has no second reading, and the build is of what was hashed).
+struct DescriptionTexts {
+  std::string light, medium;
+};
+
+// Feeds the regular file at `path` to `add` a chunk at a time, refusing what `build` refuses
+// before it opens an image: a missing file, a directory, a device or a pipe (`/dev/zero` would
+// never end, a FIFO without a writer would never open). Opened without blocking and checked
+// again on the descriptor, so a path swapped for a FIFO meanwhile is refused too; at most the
+// size the descriptor had is read.
+Status hash_image_file(const std::string& key, const std::string& path,
+                       const std::function<void(const char*, std::size_t)>& add) {
+  const std::string where = "key '" + key + "': " + path + ": ";
+  const std::string not_regular =
+      "is not a regular file (a device or a pipe); images are read "
+      "from files";
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (!fs::exists(status)) return Error{where + "cannot open: No such file or directory"};
+  if (fs::is_directory(status)) return Error{where + "is a directory, not an image"};
+  if (!fs::is_regular_file(status)) return Error{where + not_regular};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (fd < 0) return Error{where + "cannot open: " + std::strerror(errno)};
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return Error{where + not_regular};
+  std::vector<char> chunk(1 << 20);
+  for (auto left = static_cast<std::uint64_t>(st.st_size); left > 0;) {
+    const ssize_t got = ::read(
+        fd, chunk.data(), static_cast<std::size_t>(std::min<std::uint64_t>(left, chunk.size())));
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) return Error{where + "cannot read: " + std::strerror(errno)};
+    if (got == 0) break;  // shorter than it was: hashed as it is
+    add(chunk.data(), static_cast<std::size_t>(got));
+    left -= static_cast<std::uint64_t>(got);
+  }
+  return {};
+}
+
 // The job's content hash, "xxh3-128:<32 hex digits>": of the bytes of every file it reads (each
-// with its length), the options that change the output, and the lightvol version.
-Result<std::string> content_hash(const BuildCommandOptions& o) {
+// with its length), the options that change the output, and the lightvol version. The light's
+// and the medium's bytes are kept in `texts` for the build to parse.
+Result<std::string> content_hash(const BuildCommandOptions& o, DescriptionTexts* texts) {
   std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(),
                                                                  &XXH3_freeState);
   if (!state || XXH3_128bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
@@ -205,21 +253,25 @@ Result<std::string> content_hash(const BuildCommandOptions& o) {
   };
   add(std::string("lightvol ") + kVersion);
   add(json_text(output_options_json(o)));
-  std::vector<char> chunk(1 << 20);
   for (const auto& [key, path] : input_files(o)) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return Error{"key '" + key + "': " + path + ": cannot open: " + std::strerror(errno)};
     std::uint64_t size = 0;
     const std::uint64_t marker = ~std::uint64_t{0};  // a file, then its length after its bytes
     XXH3_128bits_update(state.get(), &marker, sizeof marker);
-    while (in) {
-      in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-      const auto got = static_cast<std::size_t>(in.gcount());
-      XXH3_128bits_update(state.get(), chunk.data(), got);
-      size += got;
+    if (key == "inputs") {
+      const Status hashed = hash_image_file(key, path, [&](const char* bytes, std::size_t n) {
+        XXH3_128bits_update(state.get(), bytes, n);
+        size += n;
+      });
+      if (!hashed) return hashed.error();
+    } else {
+      const bool light = key == "light";
+      Result<std::string> text =
+          read_text_file(path, light ? "light description" : "medium description");
+      if (!text) return Error{"key '" + key + "': " + text.error().message};
+      XXH3_128bits_update(state.get(), text->data(), text->size());
+      size = text->size();
+      (light ? texts->light : texts->medium) = std::move(*text);
     }
-    if (in.bad())
-      return Error{"key '" + key + "': " + path + ": cannot read: " + std::strerror(errno)};
     XXH3_128bits_update(state.get(), &size, sizeof size);
   }
   XXH128_canonical_t canonical;
@@ -288,7 +340,8 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
     return out;
   }
   const auto started = std::chrono::steady_clock::now();
-  const Result<std::string> hash = content_hash(job.options);
+  DescriptionTexts texts;
+  const Result<std::string> hash = content_hash(job.options, &texts);
   out.hash_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!hash) {
@@ -311,6 +364,8 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
   } held{gate};
   BuildJobHooks hooks;
   hooks.extra_report = {{"job_hash", *hash}};
+  hooks.light_text = &texts.light;
+  if (!job.options.medium_path.empty()) hooks.medium_text = &texts.medium;
   hooks.before_build = [&](const ShadowMaps& maps, BuildMemory mode) {
     const std::uint64_t bytes =
         build_memory_bytes(mode, maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);

@@ -3,9 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +15,7 @@
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/path.h>
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/core/text_file.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
@@ -71,13 +70,15 @@ BuildVolumeOptions volume_options(const BuildCommandOptions& o) {
 }
 
 // The --medium file as a GLB records it: checked by load_medium, without its formatting.
-Result<std::string> medium_json(const std::string& path) {
-  if (Result<Medium> medium = load_medium(path); !medium) return medium.error();
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  const nlohmann::json medium = nlohmann::json::parse(text.str(), nullptr, false);
-  if (medium.is_discarded()) return Error{path + ": changed while being read"};
+// `text` is the file's bytes when the caller has read them; else the file is read here, once (a
+// pipe has no second reading).
+Result<std::string> medium_json(const std::string& path, const std::string* text) {
+  Result<std::string> read =
+      text ? Result<std::string>(*text) : read_text_file(path, "medium description");
+  if (!read) return read.error();
+  if (Result<Medium> medium = parse_medium(*read, path); !medium) return medium.error();
+  const nlohmann::json medium = nlohmann::json::parse(*read, nullptr, false);
+  if (medium.is_discarded()) return Error{path + ": not JSON"};  // parse_medium parsed it
   return medium.dump();
 }
 
@@ -371,12 +372,14 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   const bool adaptive = options.grid == VolumeGrid::adaptive;
 
   progress.begin("reading " + o.light_path);
-  Result<Light> light = load_light(o.light_path);
+  Result<Light> light =
+      hooks.light_text ? parse_light(*hooks.light_text, o.light_path) : load_light(o.light_path);
   if (!light) return failed(2, light.error().message);
   progress.end();
   r.read_seconds += last_step_seconds(progress);
-  Result<std::string> medium =
-      o.medium_path.empty() ? Result<std::string>(std::string()) : medium_json(o.medium_path);
+  Result<std::string> medium = o.medium_path.empty()
+                                   ? Result<std::string>(std::string())
+                                   : medium_json(o.medium_path, hooks.medium_text);
   if (!medium) return failed(2, medium.error().message);
 
   const bool omni = light->type == LightType::omni;

@@ -56,6 +56,11 @@ struct BuildJobHooks {
   std::function<void(const ShadowMaps& maps, BuildMemory mode)> before_build;
   // Keys added to the report (batch: the job's content hash).
   nlohmann::json extra_report = nlohmann::json::object();
+  // The light's and the medium's bytes, when the caller has read them (batch: the bytes its
+  // content hash covers): parsed instead of reading the files again, so that a pipe is read once
+  // and what is built is what was hashed.
+  const std::string* light_text = nullptr;
+  const std::string* medium_text = nullptr;
 };
 
 // What one build run did.

@@ -1,6 +1,7 @@
 // `lightvol batch` as a user runs it: result lines, bad lines as failed jobs, idempotency by the
 // content hash, shards that partition the jobs, no partial output, parallel = serial, SIGINT.
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -164,6 +165,68 @@ TEST(BatchCli, ResultLinesForOkFailedAndSkippedJobs) {
   for (std::size_t i = 1; i + 1 < expected.size(); ++i)
     EXPECT_EQ(without_seconds(second[i]), expected[i]);
   EXPECT_EQ(nlohmann::json::parse(second.back())["status"], "skipped");
+}
+
+// Runs `lightvol ARGS` under a time limit of its own: timeout(1) kills it (exit 137) after
+// `seconds`, so that a batch that hangs fails the test instead of hanging the suite. `before` runs
+// first in the same shell (a writer feeding a FIFO in the background).
+test::CommandResult run_within(const std::string& args, const std::string& before = "",
+                               int seconds = 300) {
+  test::TempDir io;
+  const std::string out = io.file("stdout"), err = io.file("stderr");
+  const std::string command = before + "timeout -s KILL " + std::to_string(seconds) + " '" +
+                              LIGHTVOL_EXE + "' " + args + " >'" + out + "' 2>'" + err +
+                              "' </dev/null";
+  const int status = std::system(command.c_str());
+  test::CommandResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+// What `build` refuses, `batch` refuses without hanging: an input that is /dev/zero or a FIFO
+// (no writer) is not a regular file; a light that is /dev/zero ends at 64 MiB. A light and a
+// medium that are FIFOs fed once are read once: hashed, and those bytes built (the hash used to
+// read them, leaving the build's own read blocked).
+TEST(BatchCli, DevicesAndPipesAreRefusedOrReadOnceWithoutHanging) {
+  Batch b;
+  b.dir.write("medium.json", R"({"scattering": 0.05})");
+  for (const char* fifo : {"in.fifo", "light.fifo", "medium.fifo"})
+    ASSERT_EQ(::mkfifo(b.dir.file(fifo).c_str(), 0600), 0) << fifo;
+  b.write_jobs({
+      job("zero", "/dev/zero", "z.ply"),
+      job("zero light", "a.exr", "zl.ply", "", "/dev/zero"),
+      job("fifo", "in.fifo", "f.ply"),
+      job("fifo light", "a.exr", "fl.ply", "", "light.fifo"),
+      job("fifo medium", "a.exr", "fm.glb", R"("--medium", "medium.fifo")"),
+  });
+  // Each FIFO that is read gets one writer, which gives up after the batch's own time limit.
+  const auto feed = [&](const std::string& from, const std::string& fifo) {
+    return "(timeout -s KILL 300 sh -c \"cat '" + b.dir.file(from) + "' > '" + b.dir.file(fifo) +
+           "'\" >/dev/null 2>&1 &); ";
+  };
+  const test::CommandResult r =
+      run_within("batch " + q(b.jobs) + " --quiet --jobs 2",
+                 feed("spot.json", "light.fifo") + feed("medium.json", "medium.fifo"));
+  ASSERT_EQ(r.exit_code, 2) << r.err;
+  const std::string not_regular =
+      ": is not a regular file (a device or a pipe); images are read from files";
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 5u) << r.out;
+  EXPECT_EQ(without_seconds(lines[0]),
+            failed_line(1, "zero", "z.ply", b.at(1) + "key 'inputs': /dev/zero" + not_regular));
+  EXPECT_EQ(without_seconds(lines[1]),
+            failed_line(2, "zero light", "zl.ply",
+                        b.at(2) + "key 'light': /dev/zero: is larger than 64 MiB; a light "
+                                  "description is a small JSON file"));
+  EXPECT_EQ(without_seconds(lines[2]),
+            failed_line(3, "fifo", "f.ply",
+                        b.at(3) + "key 'inputs': " + b.dir.file("in.fifo") + not_regular));
+  EXPECT_EQ(without_seconds(lines[3]), ok_line(4, "fifo light", "fl.ply"));
+  EXPECT_EQ(without_seconds(lines[4]), ok_line(5, "fifo medium", "fm.glb"));
+  EXPECT_TRUE(fs::exists(b.dir.file("fl.ply")));
+  EXPECT_TRUE(fs::exists(b.dir.file("fm.glb")));
 }
 
 TEST(BatchCli, ExitZeroAndASummaryWhenEveryJobIsDone) {

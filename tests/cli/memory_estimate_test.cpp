@@ -9,10 +9,12 @@
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <lightvol/core/limits.h>
 #include <lightvol/depth/cube_faces.h>
@@ -23,9 +25,14 @@
 namespace lightvol {
 namespace {
 
-// Runs lightvol with `args` (no shell) and returns its peak resident size in bytes (the largest
-// of it and its own children, as wait4 reports), or 0 if it failed.
-std::uint64_t peak_of(const std::vector<std::string>& args) {
+struct CommandRun {
+  int exit_code = -1;
+  std::uint64_t peak = 0;  // bytes
+};
+
+// Runs lightvol with `args` (no shell): its exit code and peak resident size in bytes (the largest
+// of it and its own children, as wait4 reports).
+CommandRun run(const std::vector<std::string>& args) {
   std::vector<char*> argv;
   std::string exe = LIGHTVOL_EXE;
   argv.push_back(exe.data());
@@ -42,10 +49,33 @@ std::uint64_t peak_of(const std::vector<std::string>& args) {
   }
   int status = 0;
   rusage usage{};
-  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) ||
-      WEXITSTATUS(status) != 0)
-    return 0;
-  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status)) return {};
+  return {WEXITSTATUS(status), static_cast<std::uint64_t>(usage.ru_maxrss) * 1024};
+}
+
+// The peak of a run that succeeds, else 0.
+std::uint64_t peak_of(const std::vector<std::string>& args) {
+  const CommandRun r = run(args);
+  return r.exit_code == 0 ? r.peak : 0;
+}
+
+// The quadtree's triangles, from an adaptive build's report.
+std::uint64_t quadtree_triangles(const std::string& report) {
+  std::ifstream in(report);
+  return nlohmann::json::parse(in)["adaptive"]["quadtree_triangles"].get<std::uint64_t>();
+}
+
+// Independent noise at every texel: no two neighbours on one plane, so at a bound of 0 every texel
+// is a vertex, the worst case of every tessellation.
+DepthImage noise(int n) {
+  return test::make_depth(n, n, [](int c, int r) {
+    std::uint32_t h =
+        static_cast<std::uint32_t>(c) * 73856093u ^ static_cast<std::uint32_t>(r) * 19349663u;
+    h ^= h >> 13;
+    h *= 0x5bd1e995u;
+    h ^= h >> 15;
+    return 0.9f + 0.09f * static_cast<float>(h % 10007) / 10007.0f;
+  });
 }
 
 // A smooth map with a raised block: every mode has work to do (the adaptive tessellation refines
@@ -116,8 +146,17 @@ TEST_F(MemoryEstimate, BuildAndStatsOfOneMapPerMode) {
     expect_close("static --no-check .ply (streamed) " + size,
                  estimate(BuildMemory::static_streamed, n),
                  peak_of(with({dir_.file("s.ply"), "--no-check"})));
-    expect_close("adaptive " + size, estimate(BuildMemory::adaptive, n),
-                 peak_of(with({dir_.file("a.ply"), "--adaptive", "--max-error", "0.001"})));
+    // Adaptive: the estimate before the tessellation covers what is allocated until its size is
+    // known (a grid of up to a vertex per texel); then the builder's estimate from its quadtree's
+    // triangles is the one within 1.25x.
+    const std::string report = dir_.file("a.json");
+    const std::uint64_t adaptive = peak_of(
+        with({dir_.file("a.ply"), "--adaptive", "--max-error", "0.001", "--report", report}));
+    EXPECT_GE(estimate(BuildMemory::adaptive, n), static_cast<double>(adaptive)) << size;
+    expect_close(
+        "adaptive " + size,
+        static_cast<double>(adaptive_memory_bytes(n, n, 1, quadtree_triangles(report), true)),
+        adaptive);
     expect_close(
         "stats " + size, estimate(BuildMemory::stats, n),
         peak_of({"stats", depth, "--light", light, "--quiet", "--max-error", "0.001,0.01"}));
@@ -135,9 +174,59 @@ TEST_F(MemoryEstimate, OmniBuildOfSixFaces) {
     expect_close(
         "omni static checked " + size, estimate(BuildMemory::static_checked, n, 6),
         peak_of({"build", pattern, "--light", light, "--quiet", "--out", dir_.file("o.ply")}));
-    expect_close("omni adaptive " + size, estimate(BuildMemory::adaptive, n, 6),
-                 peak_of({"build", pattern, "--light", light, "--quiet", "--out",
-                          dir_.file("oa.ply"), "--adaptive", "--max-error", "0.001"}));
+    const std::string report = dir_.file("oa.json");
+    const std::uint64_t adaptive =
+        peak_of({"build", pattern, "--light", light, "--quiet", "--out", dir_.file("oa.ply"),
+                 "--adaptive", "--max-error", "0.001", "--report", report});
+    EXPECT_GE(estimate(BuildMemory::adaptive, n, 6), static_cast<double>(adaptive)) << size;
+    expect_close(
+        "omni adaptive " + size,
+        static_cast<double>(adaptive_memory_bytes(n, n, 6, quadtree_triangles(report), true)),
+        adaptive);
+  }
+}
+
+// The worst case of each tessellation: noise at a bound of 0, every texel a vertex (the collapse
+// removes none, and its tables cover every triangle). The builder's estimate from its quadtree's
+// triangles covers the peak, within 1.25x. Under a budget between the estimate before the
+// tessellation and that one, the build is refused before it allocates the collapse or the volume
+// (exit 2), its peak under the budget; issue 28's case (2048², a 797 MB peak accepted under 200M,
+// whose estimate was 164 MiB) is refused before its tessellation.
+TEST_F(MemoryEstimate, AdaptiveWorstCaseIsCoveredOrRefused) {
+  const std::string light = dir_.write("spot.json", test::spot_json("window"));
+  const int n = 2048;
+  const std::string depth = dir_.file("noise.exr");
+  ASSERT_TRUE(write_depth_image(depth, noise(n)).ok());
+  for (const bool collapse : {true, false}) {
+    const std::string tessellation = collapse ? "collapse" : "quadtree";
+    const std::string what = tessellation + ", 2048² noise, E = 0";
+    const std::vector<std::string> args = {
+        "build",       depth,   "--light",          light,
+        "--quiet",     "--out", dir_.file("w.ply"), "--adaptive",
+        "--max-error", "0",     "--tessellation",   tessellation};
+    const auto with = [&](std::vector<std::string> tail) {
+      std::vector<std::string> a = args;
+      a.insert(a.end(), tail.begin(), tail.end());
+      return a;
+    };
+    const std::string report = dir_.file("w.json");
+    const std::uint64_t peak = peak_of(with({"--report", report}));
+    ASSERT_GT(peak, 0u) << what;
+    const std::uint64_t triangles = quadtree_triangles(report);
+    EXPECT_EQ(triangles, 2u * (n - 1) * (n - 1)) << what << ": not the worst case";
+    const std::uint64_t estimated = adaptive_memory_bytes(n, n, 1, triangles, collapse);
+    expect_close(what, static_cast<double>(estimated), peak);
+
+    const auto before = static_cast<std::uint64_t>(estimate(BuildMemory::adaptive, n));
+    const std::uint64_t budget = (before + estimated) / 2;
+    ASSERT_LT(before, budget) << what;
+    const CommandRun refused = run(with({"--max-memory", std::to_string(budget)}));
+    EXPECT_EQ(refused.exit_code, 2) << what;
+    EXPECT_LE(refused.peak, budget) << what;
+
+    const CommandRun issue = run(with({"--max-memory", "200M"}));
+    EXPECT_EQ(issue.exit_code, 2) << what;
+    EXPECT_LE(issue.peak, std::uint64_t{200} << 20) << what;
   }
 }
 

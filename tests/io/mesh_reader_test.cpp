@@ -427,7 +427,7 @@ TEST(ReadMesh, BadFilesAreErrorsNamingTheFile) {
                          "end_header\n0 0 0\n"),
                "huge.ply");
   expect_error(dir.write("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"),
-               "non-finite coordinate");
+               "OBJ line 2: 'nan' is not a coordinate");
 
   // A binary PLY cut short: the header promises more than the body holds.
   const Mesh mesh = sample_volume();

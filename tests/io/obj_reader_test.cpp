@@ -59,10 +59,12 @@ TEST(ReadObj, MalformedLinesAreRefusedNamingTheLine) {
       {tri + "f -4 1 2\n", "OBJ line 4: face 0 names vertex -4, but there are 3 before it"},
       {tri + "f 1 2 3\nf 1 2 9\n", "OBJ line 5: face 1 names vertex 9, but there are 3"},
       {"v 0 0\n", "OBJ line 1: expected a vertex 'v x y z', got 'v 0 0'"},
-      {"v 0 zero 0\n", "OBJ line 1: expected a vertex 'v x y z', got 'v 0 zero 0'"},
+      {"v 0 zero 0\n",
+       "OBJ line 1: 'zero' is not a coordinate (a finite number within a float's range)"},
       {tri + "f 1 2 3\nv 0 0 1\n" + std::string("f 1\0 2 3\n", 9),
        "not an OBJ file (binary data in a text format)"},
-      {"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "has a vertex with a non-finite coordinate"},
+      {"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n",
+       "OBJ line 2: 'nan' is not a coordinate (a finite number within a float's range)"},
   };
   for (const auto& c : cases) {
     const std::string path = dir.write("bad.obj", c.text);

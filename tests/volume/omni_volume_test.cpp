@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/volume/build_volume.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -300,6 +301,61 @@ TEST(OmniFaces, AdjacencyMatchesTheTexelRays) {
       EXPECT_GT(dot(p[0], cross(p[1], p[2])), 0) << "corner triangle faces the light";
     }
     EXPECT_EQ(corners_used.size(), 24u);
+  }
+}
+
+// docs/design.md §2: a depth before the near plane is put on the near plane. Radial depths of 0,
+// 1e-20 and 1e-39 (a float denormal) on every face, at corners, borders and inside, build the
+// same volume as a depth of half the near distance, static (it aborted on an internal check) and
+// adaptive with either tessellation (it refused the pixel as unreachable); static vertices there
+// are the texels' near-plane points.
+TEST(OmniVolume, RadialDepthsAtZeroAreOnTheNearPlaneInEveryBuild) {
+  const Light light = light_from_json(omni_json("radial"));
+  const int w = 9;
+  const auto tiny = [w](int f, int c, int r) {
+    return (c == 0 && r == 0) || (c == w - 1 && r == w - 1) || (c == 4 && r == f) ||
+           (r == w - 1 && c == (f + 2) % w);
+  };
+  const auto cube_with = [&](float value) {
+    const CubeFaces bumps = bumpy_cube(w);
+    return cube_of([&](int f) {
+      return make_depth(
+          w, w, [&](int c, int r) { return tiny(f, c, r) ? value : bumps.faces[f].at(c, r); });
+    });
+  };
+  std::vector<BuildVolumeOptions> builds(3);
+  builds[1].grid = builds[2].grid = VolumeGrid::adaptive;
+  builds[1].adaptive.max_error = builds[2].adaptive.max_error = 0.01;
+  builds[2].adaptive.tessellation = Tessellation::quadtree;
+  std::vector<Mesh> expected;
+  for (const BuildVolumeOptions& options : builds) {
+    Result<Mesh> mesh = build_volume(light, ShadowMaps::faces(cube_with(0.05f)), options);
+    ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+    expected.push_back(std::move(*mesh));
+  }
+  for (const float value : {0.0f, 1e-20f, 1e-39f}) {
+    for (std::size_t b = 0; b < builds.size(); ++b) {
+      SCOPED_TRACE("depth " + std::to_string(value) + ", build " + std::to_string(b));
+      Result<Mesh> mesh = build_volume(light, ShadowMaps::faces(cube_with(value)), builds[b]);
+      ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+      EXPECT_EQ(mesh->positions, expected[b].positions);
+      EXPECT_EQ(mesh->indices, expected[b].indices);
+      EXPECT_TRUE(is_closed_and_oriented(*mesh));
+      EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+    }
+    const Mesh mesh = build(light, cube_with(value));
+    for (int f = 0; f < kOmniFaces; ++f) {
+      const Unprojector u(light, w, w, f, Space::world);
+      for (int r = 0; r < w; ++r)
+        for (int c = 0; c < w; ++c) {
+          if (!tiny(f, c, r)) continue;
+          const Vec3d n = u.near_point(c, r);
+          EXPECT_EQ(mesh.vertex(static_cast<std::size_t>((f * w + r) * w + c)),
+                    (std::array<float, 3>{static_cast<float>(n.x), static_cast<float>(n.y),
+                                          static_cast<float>(n.z)}))
+              << "face " << f << " texel (" << c << ", " << r << ")";
+        }
+    }
   }
 }
 

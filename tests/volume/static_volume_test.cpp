@@ -466,5 +466,34 @@ TEST(StaticVolumeStream, RefusesBeforeAnyPositionWhenTheVerticesDecide) {
   EXPECT_EQ(handed_on, 0u);
 }
 
+// A spot light's radial and linear depths of 0, 1e-20 and 1e-39 are before its near plane and go
+// on it (docs/design.md §2), static and adaptive: the same volume as half the near distance
+// (radial ones were refused as "shorter than the texel ray's distance from the light").
+TEST(StaticVolume, SpotDepthsAtZeroAreOnTheNearPlane) {
+  for (const std::string encoding : {"radial", "linear"}) {
+    const Light light = test::light_from_json(test::spot_json(encoding));
+    const auto map = [](float value) {
+      DepthImage d = occluded(33, 31);
+      for (std::size_t v = 0; v < d.values.size(); v += 3) d.values[v] = value;
+      return ShadowMaps::planar(d, "depth.exr");
+    };
+    std::vector<BuildVolumeOptions> builds(3);
+    builds[1].grid = builds[2].grid = VolumeGrid::adaptive;
+    builds[1].adaptive.max_error = builds[2].adaptive.max_error = 0.01;
+    builds[2].adaptive.tessellation = Tessellation::quadtree;
+    for (const BuildVolumeOptions& options : builds) {
+      Result<Mesh> expected = build_volume(light, map(0.05f), options);  // near is 0.1
+      ASSERT_TRUE(expected.ok()) << expected.error().message;
+      for (const float value : {0.0f, 1e-20f, 1e-39f}) {
+        SCOPED_TRACE(encoding + ", depth " + std::to_string(value));
+        Result<Mesh> mesh = build_volume(light, map(value), options);
+        ASSERT_TRUE(mesh.ok()) << mesh.error().message;
+        EXPECT_EQ(mesh->positions, expected->positions);
+        EXPECT_EQ(mesh->indices, expected->indices);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace lightvol

@@ -115,6 +115,18 @@ constexpr double kDepthBytesPerTexel = 4;
 // Adaptive: the floats read, the texel depths and error scales (doubles), the error pyramid
 // (floats, a third of a texel's), the quadtree's and the collapse's per-texel tables.
 constexpr double kAdaptiveBytesPerTexel = 24;
+// Adaptive, before the tessellation's size is known: its grid may hold every texel as a vertex
+// (4 bytes) and two triangles per texel (12 bytes each), as it does on noise at a bound of 0.
+constexpr double kAdaptiveGridWorstBytesPerTexel = 4 + 2 * 12;
+// Adaptive, once the quadtree's triangle count T is known, per quadtree triangle: the quadtree
+// grid (a vertex id per two triangles, three indices) and the volume assembled from it (12 bytes
+// of position per two triangles, 12 of indices, the check's and the writer's share); the collapse
+// adds its tables (a point and a star of triangles per vertex, a triangle's corners and flags) and
+// the grid it returns. Measured on noise at a bound of 0 (T = 2 per texel; 2048²: peaks of
+// 400.5 MiB and 778 MiB, 36.5 and 83.5 bytes per triangle over the per-texel tables), with some
+// room above.
+constexpr double kQuadtreeBytesPerTriangle = 40;
+constexpr double kCollapseBytesPerTriangle = 90;
 // lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
 // file's buffers.
 constexpr double kImageReaderBase = 136.0 * (1 << 20);
@@ -131,6 +143,7 @@ double build_bytes_per_texel(BuildMemory mode) {
     case BuildMemory::static_streamed:
       return kDepthBytesPerTexel + 0.5;  // the rows in flight are a fixed few MiB
     case BuildMemory::adaptive:
+      return kAdaptiveBytesPerTexel + kAdaptiveGridWorstBytesPerTexel;
     case BuildMemory::stats:
       return kAdaptiveBytesPerTexel;
   }
@@ -148,6 +161,19 @@ std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int6
   // whichever is larger.
   const double lightvol = static_cast<double>(process_base_bytes()) +
                           texels * static_cast<double>(images) * build_bytes_per_texel(mode);
+  const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;
+  const double bytes = std::max(lightvol, reader);
+  return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);
+}
+
+std::uint64_t adaptive_memory_bytes(std::int64_t width, std::int64_t height, int images,
+                                    std::uint64_t quadtree_triangles, bool collapse) {
+  if (width <= 0 || height <= 0 || images <= 0) return 0;
+  const double texels = static_cast<double>(width) * static_cast<double>(height);
+  const double lightvol = static_cast<double>(process_base_bytes()) +
+                          texels * static_cast<double>(images) * kAdaptiveBytesPerTexel +
+                          static_cast<double>(quadtree_triangles) *
+                              (collapse ? kCollapseBytesPerTriangle : kQuadtreeBytesPerTriangle);
   const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;
   const double bytes = std::max(lightvol, reader);
   return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);

@@ -46,6 +46,18 @@ enum class BuildMemory {
 std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int64_t height,
                                  int images = 1);
 
+// Peak memory of an adaptive build (build --adaptive) from `images` maps of W×H texels once their
+// quadtree tessellation is known to have `quadtree_triangles` triangles in all: the per-texel
+// tables, then what grows with the triangles (the quadtree grid, the collapse's tables when
+// `collapse`, the volume assembled from the grid, its check and its writer), or lightvol-image's
+// peak, whichever is larger. The adaptive builders check it against the budget before they
+// collapse and assemble; build_memory_bytes(BuildMemory::adaptive) covers what they allocate
+// before that, a grid of up to one vertex and two triangles per texel included. At or above the
+// measured peak and within 1.25× of it, for any map up to the worst case, noise at a bound of 0
+// (every texel a vertex; tests/cli/memory_estimate_test.cpp).
+std::uint64_t adaptive_memory_bytes(std::int64_t width, std::int64_t height, int images,
+                                    std::uint64_t quadtree_triangles, bool collapse);
+
 // The per-texel terms of build_memory_bytes, for the docs and tests.
 double build_bytes_per_texel(BuildMemory mode);
 // lightvol's fixed part: its resident size before it reads a map, and a build's fixed buffers.

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -23,6 +24,8 @@
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
 #include <lightvol/io/detail/ply_reader.h>
+#include <lightvol/io/detail/stl_reader.h>
+#include <lightvol/io/detail/text_numbers.h>
 #include <lightvol/io/mesh_decode.h>
 #include <lightvol/io/mesh_format.h>
 #include <lightvol/io/mesh_reader.h>
@@ -171,6 +174,15 @@ std::string file_head(const std::string& path, std::size_t n) {
   return head;
 }
 
+// Whether an STL file whose first bytes are `head` is binary: its size is that of the triangle
+// count after its 80-byte header (as OpenMesh decides), whatever its first word.
+bool stl_is_binary(const std::string& head, std::uintmax_t size) {
+  if (size < 84 || head.size() < 84) return false;
+  std::uint32_t n = 0;
+  std::memcpy(&n, head.data() + 80, sizeof(n));
+  return size == 84 + 50 * static_cast<std::uintmax_t>(n);
+}
+
 // Cheap sanity checks before reading: OFF's magic word, and STL's size arithmetic before handing
 // the file to OpenMesh, whose reader trusts its input.
 Status check_header(const std::string& path, MeshFormat format, std::uintmax_t size) {
@@ -196,11 +208,7 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
       return {};  // read_off reads and bounds the rest
     }
     case MeshFormat::stl: {
-      if (size >= 84) {
-        std::uint32_t n = 0;
-        std::memcpy(&n, head.data() + 80, sizeof(n));
-        if (size == 84 + 50 * static_cast<std::uintmax_t>(n)) return {};  // binary
-      }
+      if (stl_is_binary(head, size)) return {};
       std::size_t first = head.find_first_not_of(" \t\r\n");
       if (first != std::string::npos && head.compare(first, 5, "solid") == 0 &&
           head.find('\0') == std::string::npos)
@@ -300,20 +308,34 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
     if (!next_line(&words))
       return Error{path + ": OFF file ends after " + std::to_string(v) + " of " +
                    std::to_string(nv) + " vertices"};
-    double x = 0, y = 0, z = 0, w = 1;
-    if (!(words >> x >> y >> z) || (homogeneous && !(words >> w)))
-      return Error{at_line() +
-                   (homogeneous ? "expected a vertex: x y z w" : "expected a vertex: x y z")};
+    // x y z (and w): each a finite number, the point (divided by w) within a float's range.
+    std::array<double, 4> xyzw{0, 0, 0, 1};
+    for (int k = 0; k < (homogeneous ? 4 : 3); ++k) {
+      std::string word;
+      if (!(words >> word))
+        return Error{at_line() +
+                     (homogeneous ? "expected a vertex: x y z w" : "expected a vertex: x y z")};
+      float coordinate = 0;
+      if (!(homogeneous ? detail::parse_number(word, &xyzw[k]) && std::isfinite(xyzw[k])
+                        : detail::parse_coordinate(word, &coordinate)))
+        return Error{at_line() + detail::not_a_coordinate(word)};
+      if (!homogeneous) xyzw[k] = coordinate;
+    }
     if (homogeneous) {
-      if (!(std::isfinite(w) && w != 0))
+      const double w = xyzw[3];
+      if (w == 0)
         return Error{at_line() + "vertex " + std::to_string(v) +
                      " has the homogeneous coordinate 0 (a point at infinity)"};
-      x /= w;
-      y /= w;
-      z /= w;
+      for (int k = 0; k < 3; ++k) {
+        xyzw[k] /= w;
+        if (!(std::abs(xyzw[k]) <= std::numeric_limits<float>::max()))
+          return Error{at_line() + "vertex " + std::to_string(v) +
+                       " divided by its homogeneous coordinate is beyond a float's range"};
+      }
     }
-    mesh.positions.insert(mesh.positions.end(),
-                          {static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+    mesh.positions.insert(
+        mesh.positions.end(),
+        {static_cast<float>(xyzw[0]), static_cast<float>(xyzw[1]), static_cast<float>(xyzw[2])});
   }
   std::vector<long long> face;
   for (long long f = 0; f < nf; ++f) {
@@ -360,10 +382,10 @@ Result<Mesh> read_with_openmesh_here(const std::string& path, std::uintmax_t siz
   return mesh;
 }
 
-// STL through OpenMesh's reader, which trusts its input: in a child process (core/isolated.h),
-// with 5 s of processor time and 10 s per MiB (it parses tens of MiB a second) and the budget.
-Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std::uintmax_t size) {
-  if (Status s = check_header(path, format, size); !s) return s.error();
+// Binary STL through OpenMesh's reader, which trusts its input: in a child process
+// (core/isolated.h), with 5 s of processor time and 10 s per MiB (it parses tens of MiB a second)
+// and the budget.
+Result<Mesh> read_with_openmesh(const std::string& path, std::uintmax_t size) {
   IsolationLimits limits;
   limits.cpu_seconds = 5 + 10.0 * static_cast<double>(size) / (1 << 20);
   limits.wall_seconds = 10 + 4 * limits.cpu_seconds;
@@ -397,6 +419,13 @@ Result<Mesh> read_with_openmesh(const std::string& path, MeshFormat format, std:
       });
   if (!run) return run.error();
   return result;
+}
+
+// STL: binary by OpenMesh, ASCII by lightvol's own reader (io/detail/stl_reader.h).
+Result<Mesh> read_stl(const std::string& path, std::uintmax_t size) {
+  if (Status s = check_header(path, MeshFormat::stl, size); !s) return s.error();
+  return stl_is_binary(file_head(path, 84), size) ? read_with_openmesh(path, size)
+                                                  : detail::read_stl_ascii(path);
 }
 
 // DRC and GLB: the whole file in memory, decoded by Draco or read by the GLB reader.
@@ -446,7 +475,7 @@ Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
                       : *format == MeshFormat::off ? read_off(path, size)
                       : *format == MeshFormat::ply ? detail::read_ply(path, size)
                       : *format == MeshFormat::obj ? detail::read_obj(path)
-                                                   : read_with_openmesh(path, *format, size);
+                                                   : read_stl(path, size);
   if (!mesh) return mesh;
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};
   if (mesh->num_vertices() >= std::numeric_limits<std::uint32_t>::max())

@@ -286,7 +286,11 @@ Mat4d omni_face_view(const Light& light, int face) {
 // ---- Unprojector --------------------------------------------------------------------------------
 
 Unprojector::Unprojector(const Light& light, int width, int height, int face, Space space)
-    : depth_(light.depth), flip_y_(light.flip_y), width_(width), height_(height) {
+    : depth_(light.depth),
+      perspective_(light.is_perspective()),
+      flip_y_(light.flip_y),
+      width_(width),
+      height_(height) {
   LV_CHECK(width >= 2 && height >= 2);
   bool ok = false;
   inv_projection_ = inverse(light.projection, &ok);
@@ -411,8 +415,15 @@ bool Unprojector::point(int col, int row, double depth, Vec3d* out) const {
   } else {
     // |pn + t·dv| = depth, the far root (the ray leaves the light).
     const double a = dot(dv, dv), b = 2 * dot(pn, dv), c = dot(pn, pn) - depth * depth;
-    const double disc = b * b - 4 * a * c;
-    if (disc < 0) return false;
+    double disc = b * b - 4 * a * c;
+    if (disc < 0) {
+      // A perspective ray starts at the light: every radial depth is reached, and one before the
+      // near plane (0, 1e-20: a discriminant of 4·a·depth² that rounding may make negative) has
+      // its far root at t ≤ 0, the near plane. Only a parallel ray can pass the light at a
+      // distance greater than the depth.
+      if (!perspective_) return false;
+      disc = 0;
+    }
     t = (-b + std::sqrt(disc)) / (2 * a);
   }
   t = std::clamp(t, min_t_, 1.0);

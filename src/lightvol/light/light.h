@@ -76,7 +76,8 @@ class Unprojector {
   // plane the near plane's; for a directional light, depths at or before its near plane give the
   // point min_t() of the way down the ray instead, so that no vertex lies in the cap's plane (see
   // min_t()). Returns false only for a radial depth that a parallel (directional) ray never
-  // reaches: one smaller than the ray's distance from the light position.
+  // reaches: one smaller than the ray's distance from the light position. A perspective ray
+  // starts at the light, so it reaches every radial depth: 0 and 1e-39 give the near plane's point.
   bool point(int col, int row, double depth, Vec3d* out) const;
 
   // The points of a whole row of `width` texels, as float xyz triples into `out` (3·width floats):
@@ -109,6 +110,7 @@ class Unprojector {
   Vec3d eye_far(int col, int row) const;
 
   DepthEncoding depth_;
+  bool perspective_;
   bool flip_y_;
   int width_, height_;
   Mat4d inv_projection_;  // clip → eye

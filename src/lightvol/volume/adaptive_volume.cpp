@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/limits.h>
 #include <lightvol/light/texel.h>
 #include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
@@ -115,8 +116,16 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   r.quadtree_triangles = grid.num_triangles();
   r.leaves = grid.leaves;
   r.fixup_rounds = grid.fixup_rounds;
-  if (options.refinement == Refinement::max_error &&
-      options.tessellation == Tessellation::collapse) {
+  const bool collapse =
+      options.refinement == Refinement::max_error && options.tessellation == Tessellation::collapse;
+  // What grows with the tessellation (the collapse's tables, the volume) is measured against the
+  // budget now that its size is known, before it is allocated.
+  if (Status s = check_memory(
+          adaptive_memory_bytes(depth.width, depth.height, 1, grid.num_triangles(), collapse),
+          source, "the adaptive volume at this bound");
+      !s)
+    return s.error();
+  if (collapse) {
     // The closing follows whatever border the grid keeps: no side is locked.
     CollapseReport c;
     grid = collapse_grid(pyramid.texels(), grid, *bound, {}, &c);

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/core/limits.h>
 #include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
@@ -105,14 +106,19 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   Result<OmniRefinement> refinement =
       OmniRefinement::create(light, cube, options.refinement, volume.space);
   if (!refinement) return refinement.error();
-  return refinement->build(*bound, options.measure, report, detail, options.tessellation);
+  Status memory;
+  Mesh mesh =
+      refinement->build(*bound, options.measure, report, detail, options.tessellation, &memory);
+  if (!memory) return memory.error();
+  return mesh;
 }
 
 // Long (over 80 lines) on purpose: the six faces' tessellation rounds (seam vertices forced across
 // faces until no face adds any) and the assembly share the per-face state; split, it would pass
 // that state around without making a step readable on its own.
 Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
-                           OmniAdaptiveDetail* detail, Tessellation tessellation) const {
+                           OmniAdaptiveDetail* detail, Tessellation tessellation,
+                           Status* memory) const {
   const CubeFaces& cube = *cube_;
   const std::vector<RefinementPyramid>& pyramids = pyramids_;
   const std::vector<Unprojector>& faces = faces_;
@@ -147,7 +153,16 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     r.leaves += g.leaves;
     r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
   }
-  if (pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse) {
+  const bool collapse =
+      pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse;
+  // What grows with the tessellation (the collapse's tables, the volume) is measured against the
+  // budget now that its size is known, before it is allocated.
+  if (memory) {
+    *memory = check_memory(adaptive_memory_bytes(w, w, kOmniFaces, r.quadtree_triangles, collapse),
+                           cube.sources[0], "the adaptive omni volume at this bound");
+    if (!*memory) return Mesh{};
+  }
+  if (collapse) {
     // Each face collapses its quadtree grid, seam vertices too (they slide along their side);
     // then each seam keeps what either of its faces kept, and a face that kept less collapses its
     // quadtree grid again keeping those. Keeps only grow (within the quadtree's border), so this

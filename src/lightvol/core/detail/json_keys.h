@@ -12,6 +12,7 @@
 
 #include <lightvol/core/math.h>
 #include <lightvol/core/result.h>
+#include <lightvol/core/text_file.h>  // read_text_file, for the descriptions
 
 namespace lightvol {
 
@@ -23,9 +24,6 @@ std::string format_number(double x);
 std::string describe_json(const nlohmann::json& v);
 // A string from the input as a message quotes it: at most about 80 characters, in double quotes.
 std::string quote_text(std::string_view s);
-
-// The whole text of a description file; `what` names it in errors ("light description").
-Result<std::string> read_text_file(const std::string& path, const char* what);
 
 // `text` as a JSON object. Malformed JSON, numbers beyond double's range (1e99999), a NUL byte,
 // a key repeated in one object, nesting deeper than 32 levels and anything but an object are

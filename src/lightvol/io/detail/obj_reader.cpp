@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <lightvol/io/detail/obj_reader.h>
+#include <lightvol/io/detail/text_numbers.h>
 
 namespace lightvol::detail {
 namespace {
@@ -72,12 +73,9 @@ Result<Mesh> read_obj(const std::string& path) {
       float xyz[3];
       for (float& c : xyz) {
         const std::string_view word = next_word(line, &at);
-        double value = 0;
-        const char* first = word.data() + (word.size() > 1 && word[0] == '+' ? 1 : 0);  // "+1.5"
-        const auto [end, ec] = std::from_chars(first, word.data() + word.size(), value);
-        if (word.empty() || ec != std::errc() || end != word.data() + word.size())
+        if (word.empty())
           return fail("expected a vertex 'v x y z', got '" + std::string(line.substr(0, 60)) + "'");
-        c = static_cast<float>(value);
+        if (!parse_coordinate(word, &c)) return fail(not_a_coordinate(word));
       }
       mesh.positions.insert(mesh.positions.end(), xyz, xyz + 3);
     } else if (keyword == "f") {

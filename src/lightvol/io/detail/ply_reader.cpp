@@ -23,6 +23,7 @@
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/io/detail/ply_reader.h>
+#include <lightvol/io/detail/text_numbers.h>
 
 namespace lightvol::detail {
 namespace {
@@ -740,11 +741,6 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
   return mesh.take();
 }
 
-bool parse_number(std::string_view word, double* value) {
-  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), *value);
-  return ec == std::errc() && end == word.data() + word.size();
-}
-
 // ASCII: one element a line (blank lines are skipped), its values separated by blanks.
 Result<Mesh> read_ascii(const std::string& path, const Header& header) {
   std::ifstream in(path, std::ios::binary);
@@ -774,7 +770,13 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
         if (at >= words.size())
           return fail(std::to_string(words.size()) +
                       " values, too few for the properties of element '" + e.name + "'");
-        if (!parse_number(words[at], &value)) return fail(quoted(words[at]) + " is not a number");
+        if (p.role >= Role::x && p.role <= Role::z) {
+          float coordinate = 0;
+          if (!parse_coordinate(words[at], &coordinate)) return fail(not_a_coordinate(words[at]));
+          value = coordinate;
+        } else if (!parse_number(words[at], &value)) {
+          return fail(quoted(words[at]) + " is not a number");
+        }
         ++at;
         if (!p.list) {
           if (p.role != Role::skip) mesh.set(i, p.role, value);
