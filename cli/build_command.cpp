@@ -14,8 +14,8 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/path.h>
-#include <lightvol/depth/cube_faces.h>
 #include <lightvol/core/text_file.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
 #include <lightvol/light/light.h>
