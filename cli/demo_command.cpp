@@ -187,7 +187,7 @@ Result<std::vector<Volume>> build_volumes(const Light& light, const ShadowMaps& 
 
 // What the web viewer (web/) needs beside the demo's other outputs: the volumes as GLBs carrying
 // their light and the medium, the scene as a GLB, the camera (at the demo's image size) and the
-// medium.
+// medium; the live page (web/live.html) also the light (light.json, the demo's spot).
 Status write_viewer_inputs(const std::string& data, const std::string& dir, const Mesh& scene,
                            const Light& light, const Camera& camera,
                            const std::vector<Volume>& volumes) {
@@ -208,6 +208,10 @@ Status write_viewer_inputs(const std::string& data, const std::string& dir, cons
     if (Status s = write_mesh(dir + "/volume_" + v.name + ".glb", v.mesh, options); !s) return s;
   if (Status s = write_mesh(dir + "/scene.glb", scene); !s) return s;
   if (Status s = write_bytes_atomically(dir + "/camera.json", json_text(camera_json, 2) + "\n"); !s)
+    return s;
+  if (Status s =
+          write_bytes_atomically(dir + "/light.json", slurp(data + "/sponza_demo_spot.json"));
+      !s)
     return s;
   return write_bytes_atomically(dir + "/medium.json", medium_text);
 }
@@ -341,7 +345,8 @@ int run_demo(const DemoOptions& o) {
   progress.begin("web viewer inputs");
   if (Status s = write_viewer_inputs(data, o.out_dir, scene->mesh, light, camera, *volumes); !s)
     return fail(s.error().message);
-  summary.add("web viewer inputs", "volume_static.glb", "", "+ adaptive, scene, camera, medium");
+  summary.add("web viewer inputs", "volume_static.glb", "",
+              "+ adaptive, scene, camera, medium, light");
   bool all_valid = true;
   for (const Volume& v : *volumes) {
     progress.begin("check " + v.name);
@@ -377,7 +382,11 @@ int run_demo(const DemoOptions& o) {
         "view it in a browser: node %s %s\n  then open "
         "http://127.0.0.1:8000/web/"
         "index.html?volume=/data/volume_static.glb&camera=/data/camera.json&medium=/data/"
-        "medium.json&scene=/data/scene.glb\n",
+        "medium.json&scene=/data/scene.glb\n"
+        "  or the live page (drag the light; a ball moves through it): "
+        "http://127.0.0.1:8000/web/"
+        "live.html?scene=/data/scene.glb&light=/data/light.json&medium=/data/"
+        "medium.json&camera=/data/camera.json&animate=1\n",
         serve.string().c_str(), o.out_dir.c_str());
   if (!all_valid) return fail("a demo volume failed its checks (see the table)");
   return 0;

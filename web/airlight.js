@@ -153,18 +153,21 @@ export class AirlightRenderer {
     });
     this.surfaceMaterial = material('SURFACE', { view_projection: { value: new THREE.Matrix4() } },
                                     { side: THREE.DoubleSide });
-    this.volumeMaterial = material('VOLUME', {
-      surface: { value: this.surfaceTarget.texture },
-      baseline: { value: 1 },
-      panels: { value: 2 },
-      facing_sign: { value: -1 },
-    }, {
+    // Pass 1's state: no culling, no depth test, additive float blending (light_volume.js draws
+    // its live volume with it too).
+    this.volumeState = {
       side: THREE.DoubleSide, depthTest: false, depthWrite: false, transparent: true,
       blending: THREE.CustomBlending, blendEquation: THREE.AddEquation,
       blendSrc: THREE.OneFactor, blendDst: THREE.OneFactor,
       blendEquationAlpha: THREE.AddEquation, blendSrcAlpha: THREE.OneFactor,
       blendDstAlpha: THREE.OneFactor,
-    });
+    };
+    this.volumeMaterial = material('VOLUME', {
+      surface: { value: this.surfaceTarget.texture },
+      baseline: { value: 1 },
+      panels: { value: 2 },
+      facing_sign: { value: -1 },
+    }, this.volumeState);
     this.resolveMaterial = material('RESOLVE', {
       accumulated: { value: this.accumulateTarget.texture },
       baseline: { value: 1 },
@@ -253,7 +256,9 @@ export class AirlightRenderer {
     this.volumeMaterial.uniforms.facing_sign.value = det3 < 0 ? 1 : -1;
   }
 
-  render() {
+  // `drawSurfaces` (optional): draws the scene's surfaces into the bound surface target instead of
+  // setScene's geometries (the live page's moving objects: light_volume.js).
+  render(drawSurfaces = null) {
     const { renderer, gl } = this;
     const previousTarget = renderer.getRenderTarget();
     // The passes clear their targets themselves (the surface to 3e38, "nothing there"): three's
@@ -264,7 +269,8 @@ export class AirlightRenderer {
     renderer.setRenderTarget(this.surfaceTarget);
     gl.clearBufferfv(gl.COLOR, 0, new Float32Array([3e38, 0, 0, 0]));
     gl.clearBufferfi(gl.DEPTH_STENCIL, 0, 1, 0);
-    renderer.render(this.surfaceScene, this.dummyCamera);
+    if (drawSurfaces) drawSurfaces();
+    else renderer.render(this.surfaceScene, this.dummyCamera);
 
     renderer.setRenderTarget(this.accumulateTarget);
     gl.clearBufferfv(gl.COLOR, 0, new Float32Array([0, 0, 0, 0]));

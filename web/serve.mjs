@@ -67,5 +67,7 @@ if (process.argv[1] && resolve(process.argv[1]) === fileURLToPath(import.meta.ur
   if (data) {
     console.log(`open ${url('/web/index.html?volume=/data/volume_static.glb&camera=/data/camera.json' +
                           '&medium=/data/medium.json&scene=/data/scene.glb')}`);
+    console.log(`  or ${url('/web/live.html?scene=/data/scene.glb&light=/data/light.json' +
+                            '&medium=/data/medium.json&camera=/data/camera.json&animate=1')}`);
   }
 }

@@ -74,6 +74,13 @@ TEST(Demo, RunsOnTheBundledSceneAtSize64) {
   EXPECT_NE(r.out.find("web/serve.mjs " + dir.path()), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("web/index.html?volume=/data/volume_static.glb"), std::string::npos)
       << r.out;
+  // The live page's light: the demo's own spot.
+  Result<Light> live_light = load_light(dir.file("light.json"));
+  ASSERT_TRUE(live_light) << live_light.error().message;
+  EXPECT_EQ(live_light->type, LightType::spot);
+  EXPECT_NE(r.out.find("web/live.html?scene=/data/scene.glb&light=/data/light.json"),
+            std::string::npos)
+      << r.out;
 
   for (const char* png : {"shadow_map.png", "camera_depth.png"})
     EXPECT_TRUE(std::filesystem::exists(dir.file(png))) << png;

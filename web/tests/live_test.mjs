@@ -1,0 +1,219 @@
+// The live page (web/live.html, web/light_volume.js) in a real browser: Debian's chromium, headless,
+// WebGL2 on SwiftShader, driven by puppeteer-core. For a spot, a directional and an omni light on
+// `lightvol demo`'s scene, camera and medium, with animate=1, frames 0 and 30: the page's airlight
+// (window.lightvolAirlight()) must match, within 1 % relative L2, `lightvol render --method volume`
+// of the volume `lightvol build` makes from that frame's window.lightvolShadowMap() (written as a
+// PFM) and window.lightvolLight(), clamped to the page's own surface distances (written as a radial
+// camera depth); the two frames' shadow maps and airlights must differ (the ball moved). Bad input:
+// a light without castShadow, and a browser without float blending, must give their messages on
+// the page and in the console.
+//   node web/tests/live_test.mjs PATH/TO/lightvol [--only spot|directional|omni|errors]
+//                                [--size N] [--screenshot DIR] [--keep DIR]
+// Exit 0 when every case passes, 1 when one fails, 2 when something could not run.
+import { execFileSync } from 'node:child_process';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, resolve } from 'node:path';
+import puppeteer from 'puppeteer-core';
+import * as THREE from 'three';
+import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
+import { serve, REPOSITORY } from '../serve.mjs';
+
+const args = process.argv.slice(2);
+const lightvol = args[0] && resolve(args[0]);
+const option = (name, fallback) => {
+  const i = args.indexOf(name);
+  return i >= 0 ? args[i + 1] : fallback;
+};
+if (!lightvol || !existsSync(lightvol)) {
+  console.error('usage: live_test.mjs PATH/TO/lightvol [--only CASE] [--size N] [--screenshot DIR] [--keep DIR]');
+  process.exit(2);
+}
+const size = Number(option('--size', 96));  // the shadow maps' size (omni: each face's half)
+const screenshots = option('--screenshot', null);
+const keep = option('--keep', null);
+const only = option('--only', null);
+const chromium = process.env.CHROMIUM ?? '/usr/bin/chromium';
+const TOLERANCE = 0.01;
+
+const work = keep ? resolve(keep) : mkdtempSync(join(tmpdir(), 'lightvol-live-'));
+mkdirSync(work, { recursive: true });
+if (screenshots) mkdirSync(resolve(screenshots), { recursive: true });
+const run = (...a) => execFileSync(lightvol, [...a, '--quiet'], { cwd: work, stdio: ['ignore', 'ignore', 'inherit'] });
+
+// A PFM image (one channel): lightvol reads it through OpenImageIO; rows are stored bottom first.
+function writePfm(path, values, width, height) {
+  const header = Buffer.from(`Pf\n${width} ${height}\n-1.0\n`, 'latin1');
+  const body = Buffer.alloc(4 * width * height);
+  for (let r = 0; r < height; ++r)
+    for (let c = 0; c < width; ++c) body.writeFloatLE(values[(height - 1 - r) * width + c], 4 * (r * width + c));
+  writeFileSync(path, Buffer.concat([header, body]));
+}
+
+// An EXR image (lightvol render --out X.exr): first channel, top row first.
+function readExr(path) {
+  const bytes = readFileSync(path);
+  const loader = new EXRLoader();
+  loader.setDataType(THREE.FloatType);
+  const image = loader.parse(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
+  const { width: w, height: h, data: rgba } = image;
+  const channels = rgba.length / (w * h);
+  const out = new Float32Array(w * h);
+  for (let r = 0; r < h; ++r)
+    for (let c = 0; c < w; ++c) out[r * w + c] = rgba[((h - 1 - r) * w + c) * channels];
+  return { width: w, height: h, values: out };
+}
+
+function relativeL2(a, ref, mask = null) {
+  let d = 0, n = 0;
+  for (let i = 0; i < ref.length; ++i) {
+    if (mask && mask[i]) continue;
+    d += (a[i] - ref[i]) ** 2;
+    n += ref[i] ** 2;
+  }
+  return Math.sqrt(d) / Math.sqrt(n);
+}
+
+// ---- inputs: the demo's scene, camera and medium; three lights ------------------------------------
+run('demo', '--out', '.', '--size', '128');
+const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
+writeFileSync(join(work, 'camera_radial.json'), JSON.stringify({ ...camera, depth: 'radial' }));
+const lights = {
+  spot: JSON.parse(readFileSync(join(work, 'light.json'), 'utf8')),
+  directional: { type: 'directional', position: [0.5, 10.0, -6.5], direction: [0.2, -0.9, 1], up: [0, 1, 0],
+                 ortho: [-5, 5, -5, 5], near: 0.1, far: 30.0 },
+  omni: { type: 'omni', position: [0.5, 3.0, -1.0], near: 0.1, far: 40.0 },
+};
+for (const [name, json] of Object.entries(lights)) writeFileSync(join(work, `light_${name}.json`), JSON.stringify(json));
+
+// ---- the browser ----------------------------------------------------------------------------------
+const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
+const { server, url } = await serve({ data: work });
+const browser = await puppeteer.launch({
+  executablePath: chromium,
+  headless: true,
+  args: ['--headless', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+         '--disable-gpu', '--no-first-run', '--disable-background-networking',
+         '--disable-component-update', '--disable-sync', `--user-data-dir=${profile}`],
+  userDataDir: profile,
+});
+
+async function open(name, extra = '', before = null) {
+  const page = await browser.newPage();
+  await page.setViewport({ width: Math.max(camera.width, 480), height: camera.height + 60 });
+  const messages = [];
+  page.on('console', (m) => messages.push(m.text()));
+  page.on('pageerror', (e) => messages.push(e.message));
+  if (before) await before(page);
+  const faceSize = name === 'omni' ? size / 2 : size;
+  await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/light_${name}.json` +
+                      `&medium=/data/medium.json&camera=/data/camera.json&animate=1&size=${faceSize}${extra}`));
+  await page.waitForFunction(() => document.title.startsWith('lightvol:'), { timeout: 300000 });
+  return { page, messages, title: await page.title() };
+}
+
+const grab = (page, hook) => page.evaluate((h) => {
+  const v = window[h]();
+  return ArrayBuffer.isView(v) ? Array.from(v) : v;
+}, hook);
+
+// One captured frame against lightvol: build from its map and light, render with its surfaces.
+async function checkFrame(page, name, frame) {
+  const airlight = Float32Array.from(await grab(page, 'lightvolAirlight'));
+  const map = Float32Array.from(await grab(page, 'lightvolShadowMap'));
+  const light = await grab(page, 'lightvolLight');
+  const surface = Float32Array.from(await grab(page, 'lightvolSurface'));
+  const counts = Float32Array.from(await grab(page, 'lightvolFaceCounts'));
+  const tag = `${name}_${frame}`;
+  writeFileSync(join(work, `${tag}_light.json`), JSON.stringify(light));
+  // Spot and directional maps are W × H with W the page's size; omni maps six W × W faces, W × 6W.
+  const faces = light.type === 'omni' ? 6 : 1;
+  const mapWidth = faces === 6 ? Math.round(Math.sqrt(map.length / 6)) : size;
+  const mapHeight = map.length / mapWidth / faces;
+  writePfm(join(work, `${tag}_map.pfm`), map, mapWidth, mapHeight * faces);
+  // The page's distances to its surfaces (3e38: none) as a radial camera depth; far or none: 1e30.
+  writePfm(join(work, `${tag}_surface.pfm`), surface.map((t) => (t >= 1e38 ? 1e30 : t)), camera.width, camera.height);
+  run('build', `${tag}_map.pfm`, '--light', `${tag}_light.json`, '--out', `${tag}_volume.ply`);
+  run('render', `${tag}_volume.ply`, '--light', `${tag}_light.json`, '--camera', 'camera_radial.json',
+      '--depth', `${tag}_surface.pfm`, '--medium', 'medium.json', '--method', 'volume', '--out', `${tag}_reference.exr`);
+  const reference = readExr(join(work, `${tag}_reference.exr`));
+  // SwiftShader can drop or double a fragment on a shared edge of long triangles: a pixel whose
+  // back-minus-front face count is not the one most pixels have is left out (at most 1 %).
+  const inside = counts.filter((x) => x === 1).length > counts.length / 2 ? 1 : 0;
+  const mask = counts.map((x) => (x === inside ? 0 : 1));
+  const cracks = mask.reduce((a, b) => a + b, 0);
+  const l2 = airlight.length === reference.values.length ? relativeL2(airlight, reference.values, mask) : Infinity;
+  const lit = reference.values.filter((x) => x > 0).length;
+  const ok = l2 <= TOLERANCE && cracks <= 0.01 * mask.length && lit > 0.05 * mask.length;
+  console.log(`${name} frame ${frame}: relative L2 ${(100 * l2).toFixed(4)} % against lightvol render --method volume ` +
+              `of build's volume of the page's ${mapWidth}x${mapHeight}${faces > 1 ? 'x6' : ''} map ` +
+              `(${reference.width}x${reference.height}, ${lit} pixels lit, ${cracks} left out whose face count is not ${inside})` +
+              (ok ? '' : '  FAILED'));
+  return { ok, airlight, map };
+}
+
+let failed = false;
+try {
+  for (const name of ['spot', 'directional', 'omni']) {
+    if (only && only !== name) continue;
+    const started = Date.now();
+    const { page, messages, title } = await open(name);
+    if (title !== 'lightvol:done') {
+      console.log(`${name}: the page failed (${title}): ${messages.join(' | ')}  FAILED`);
+      failed = true;
+      await page.close();
+      continue;
+    }
+    const first = await checkFrame(page, name, 0);
+    if (screenshots) await page.screenshot({ path: join(resolve(screenshots), `live_${name}_0.png`) });
+    const frame = await page.evaluate(() => window.lightvolStep(30));
+    const second = await checkFrame(page, name, frame);
+    if (screenshots) await page.screenshot({ path: join(resolve(screenshots), `live_${name}_30.png`) });
+    // The ball moved: texels of the map and pixels of the airlight change (a pixel by more than 1 %
+    // of its own value, far more than rounding), and only where the ball's shadow was or is: less
+    // than half of the map changes.
+    let changed = 0, pixels = 0;
+    for (let i = 0; i < first.map.length; ++i) if (first.map[i] !== second.map[i]) ++changed;
+    for (let i = 0; i < first.airlight.length; ++i)
+      if (Math.abs(first.airlight[i] - second.airlight[i]) > 0.01 * Math.abs(first.airlight[i])) ++pixels;
+    const moved = relativeL2(second.airlight, first.airlight);
+    const differ = frame === 30 && changed > 0.002 * first.map.length && changed < 0.5 * first.map.length &&
+                   pixels > 0.01 * first.airlight.length;
+    console.log(`${name}: frames 0 and ${frame} differ in ${changed} of ${first.map.length} shadow-map texels and ` +
+                `${pixels} of ${first.airlight.length} pixels (airlight ${(100 * moved).toFixed(2)} % relative L2); ` +
+                `page ${((Date.now() - started) / 1000).toFixed(1)} s` + (differ ? '' : '  FAILED'));
+    const quiet = messages.every((m) => !/error/i.test(m));
+    if (!quiet) console.log(`${name}: console: ${messages.join(' | ')}  FAILED`);
+    failed ||= !first.ok || !second.ok || !differ || !quiet;
+    await page.close();
+  }
+  if (!only || only === 'errors') {
+    // A light without castShadow: the addon's message on the page and in the console.
+    const expectations = [
+      { what: 'a light without castShadow', extra: '&shadow=0', pattern: /castShadow = false/ },
+      { what: 'a browser without float blending', extra: '', pattern: /lacks EXT_float_blend/,
+        before: (page) => page.evaluateOnNewDocument(() => {
+          const original = WebGL2RenderingContext.prototype.getExtension;
+          WebGL2RenderingContext.prototype.getExtension = function (name) {
+            return name === 'EXT_float_blend' ? null : original.call(this, name);
+          };
+        }) },
+    ];
+    for (const e of expectations) {
+      const { page, messages, title } = await open('spot', e.extra, e.before);
+      const shown = await page.evaluate(() => document.getElementById('status').textContent);
+      const ok = title === 'lightvol:error' && e.pattern.test(shown) && messages.some((m) => e.pattern.test(m));
+      console.log(`errors: ${e.what}: page says "${shown}"; console ${messages.some((m) => e.pattern.test(m)) ? 'too' : 'NOT'}` +
+                  (ok ? '' : '  FAILED'));
+      if (screenshots) await page.screenshot({ path: join(resolve(screenshots), `live_error_${e.extra ? 'shadow' : 'float'}.png`) });
+      failed ||= !ok;
+      await page.close();
+    }
+  }
+} finally {
+  await browser.close();
+  server.close();
+  rmSync(profile, { recursive: true, force: true });
+  if (!keep) rmSync(work, { recursive: true, force: true });
+}
+process.exit(failed ? 1 : 0);
