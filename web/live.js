@@ -23,7 +23,10 @@ import { parseFrame } from './airlight.js';
 import { LightVolume } from './light_volume.js';
 
 const status = document.getElementById('status');
-const say = (text) => { status.textContent = text; };
+const say = (text, error = false) => {
+  status.textContent = text;
+  status.style.color = error ? '#f88' : '#aaa';
+};
 
 async function fetchJson(url) {
   const response = await fetch(url);
@@ -83,7 +86,8 @@ async function main() {
   const lightUrl = params.get('light'), cameraUrl = params.get('camera');
   const sceneUrl = params.get('scene'), mediumUrl = params.get('medium');
   if (!lightUrl || !cameraUrl) {
-    say('usage: live.html?scene=URL&light=URL&medium=URL&camera=URL[&animate=1][&size=N]');
+    say('usage: live.html?scene=URL&light=URL&medium=URL&camera=URL[&animate=1][&size=N]', true);
+    console.error('lightvol live: no light= or camera= in the address');
     document.title = 'lightvol:error';
     return;
   }
@@ -128,7 +132,8 @@ async function main() {
   light.color.setRGB(...LIGHT_COLOUR);
   scene.add(light);
   if (light.target) scene.add(light.target);
-  scene.add(new THREE.AmbientLight(new THREE.Color(0.5, 0.62, 0.9), 0.03));
+  // Lambert radiance albedo/π × 0.002 ≈ 0.0002, lightvol demo's ambient radiance.
+  scene.add(new THREE.AmbientLight(new THREE.Color(0.5, 0.62, 0.9), 0.002));
 
   // The moving object: a ball on a line across the light, between the light and the scene.
   const lightPosition = light.position.clone();
@@ -213,7 +218,8 @@ async function main() {
     volume.render(scene, camera);
     const ms = performance.now() - t0;
     if (exposure === null) {
-      // As lightvol's PNGs: the 99.5th percentile of the first picture maps to 4 before x/(1+x).
+      // As lightvol demo's picture: the 99.5th percentile of the first frame maps to 1.2 before
+      // x/(1+x).
       const air = volume.readAirlight(), surface = volume.readSurface();
       const gl = renderer.getContext(), rgba = new Float32Array(width * height * 4);
       renderer.setRenderTarget(litTarget);
@@ -226,7 +232,7 @@ async function main() {
       }
       picture.sort();
       const p = picture[Math.min(picture.length - 1, Math.floor(0.995 * picture.length))];
-      exposure = p > 0 ? 4 / p : 1;
+      exposure = p > 0 ? 1.2 / p : 1;
       composite.material.uniforms.exposure.value = exposure;
     }
     renderer.setRenderTarget(null);
@@ -244,7 +250,7 @@ async function main() {
   const capture = () => {
     captured = { frame, airlight: volume.readAirlight(), shadowMap: volume.readShadowMap(),
                  light: structuredClone(volume.lightJson()), surface: volume.readSurface(),
-                 counts: volume.readFaceCounts() };
+                 counts: volume.readFaceCounts(), indices: volume.geometry.index.array };
   };
   window.lightvolAirlight = () => captured.airlight;
   window.lightvolShadowMap = () => captured.shadowMap;
@@ -252,6 +258,7 @@ async function main() {
   window.lightvolSurface = () => captured.surface;
   window.lightvolFaceCounts = () => captured.counts;
   window.lightvolFrame = () => captured.frame;
+  window.lightvolIndices = () => captured.indices;  // the volume's triangles (build's)
 
   const play = document.getElementById('play');
   play.checked = animate;
@@ -309,7 +316,8 @@ async function main() {
 }
 
 main().catch((e) => {
-  say(`error: ${e.message}`);
+  say(`error: ${e.message}`, true);
+  document.getElementById('view').style.display = 'none';  // no black picture under the message
   console.error(`lightvol live: ${e.message}`);
   document.title = 'lightvol:error';
 });

@@ -133,8 +133,17 @@ async function checkFrame(page, name, frame) {
   writePfm(join(work, `${tag}_map.pfm`), map, mapWidth, mapHeight * faces);
   // The page's distances to its surfaces (3e38: none) as a radial camera depth; far or none: 1e30.
   writePfm(join(work, `${tag}_surface.pfm`), surface.map((t) => (t >= 1e38 ? 1e30 : t)), camera.width, camera.height);
-  run('build', `${tag}_map.pfm`, '--light', `${tag}_light.json`, '--out', `${tag}_volume.ply`);
-  run('render', `${tag}_volume.ply`, '--light', `${tag}_light.json`, '--camera', 'camera_radial.json',
+  run('build', `${tag}_map.pfm`, '--light', `${tag}_light.json`, '--out', `${tag}_volume.off`);
+  // The page draws build's triangles, in build's order: its index buffer is the OFF's faces.
+  const indices = await grab(page, 'lightvolIndices');
+  const off = readFileSync(join(work, `${tag}_volume.off`), 'utf8').split('\n');
+  const [vertices, triangles] = off[1].split(' ').map(Number);
+  let sameTriangles = indices.length === 3 * triangles;
+  for (let t = 0; sameTriangles && t < triangles; ++t) {
+    const f = off[2 + vertices + t].split(' ').map(Number);
+    sameTriangles = f[0] === 3 && f[1] === indices[3 * t] && f[2] === indices[3 * t + 1] && f[3] === indices[3 * t + 2];
+  }
+  run('render', `${tag}_volume.off`, '--light', `${tag}_light.json`, '--camera', 'camera_radial.json',
       '--depth', `${tag}_surface.pfm`, '--medium', 'medium.json', '--method', 'volume', '--out', `${tag}_reference.exr`);
   const reference = readExr(join(work, `${tag}_reference.exr`));
   // SwiftShader can drop or double a fragment on a shared edge of long triangles: a pixel whose
@@ -144,10 +153,11 @@ async function checkFrame(page, name, frame) {
   const cracks = mask.reduce((a, b) => a + b, 0);
   const l2 = airlight.length === reference.values.length ? relativeL2(airlight, reference.values, mask) : Infinity;
   const lit = reference.values.filter((x) => x > 0).length;
-  const ok = l2 <= TOLERANCE && cracks <= 0.01 * mask.length && lit > 0.05 * mask.length;
+  const ok = l2 <= TOLERANCE && cracks <= 0.01 * mask.length && lit > 0.05 * mask.length && sameTriangles;
   console.log(`${name} frame ${frame}: relative L2 ${(100 * l2).toFixed(4)} % against lightvol render --method volume ` +
               `of build's volume of the page's ${mapWidth}x${mapHeight}${faces > 1 ? 'x6' : ''} map ` +
-              `(${reference.width}x${reference.height}, ${lit} pixels lit, ${cracks} left out whose face count is not ${inside})` +
+              `(${reference.width}x${reference.height}, ${lit} pixels lit, ${cracks} left out whose face count is not ${inside}); ` +
+              `its ${indices.length / 3} triangles ${sameTriangles ? 'are' : 'are NOT'} build's ${triangles}` +
               (ok ? '' : '  FAILED'));
   return { ok, airlight, map };
 }

@@ -1,0 +1,57 @@
+// Frame times of the live page (web/live.html, LightVolume) in headless chromium, one table in one
+// run: the demo's scene and 480×360 camera, the demo's spot, a directional and an omni light, for
+// several shadow-map sizes; per row the whole frame (shadow map, lit scene, volume and airlight,
+// composite) and the live volume with its airlight alone, each frame waited for
+// (window.lightvolTime). On SwiftShader (no GPU) these are a CPU rasterizer's times.
+//   node tests/bench/web_live_bench.mjs PATH/TO/lightvol [FRAMES]
+import { execFileSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { createRequire } from 'node:module';
+import { tmpdir } from 'node:os';
+import { join, resolve } from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+
+const [lightvolArg, framesArg] = process.argv.slice(2);
+if (!lightvolArg) {
+  console.error('usage: web_live_bench.mjs PATH/TO/lightvol [FRAMES]');
+  process.exit(2);
+}
+const web = fileURLToPath(new URL('../../web', import.meta.url));
+const require = createRequire(join(web, 'package.json'));
+const puppeteer = (await import(pathToFileURL(require.resolve('puppeteer-core')).href)).default;
+const { serve } = await import(pathToFileURL(join(web, 'serve.mjs')).href);
+const frames = Number(framesArg ?? 3);
+const work = mkdtempSync(join(tmpdir(), 'lightvol-live-bench-'));
+execFileSync(resolve(lightvolArg), ['demo', '--out', work, '--size', '512', '--quiet']);
+writeFileSync(join(work, 'light_directional.json'), JSON.stringify({
+  type: 'directional', position: [0.5, 10.0, -6.5], direction: [0.2, -0.9, 1], up: [0, 1, 0],
+  ortho: [-5, 5, -5, 5], near: 0.1, far: 30.0 }));
+writeFileSync(join(work, 'light_omni.json'), JSON.stringify({ type: 'omni', position: [0.5, 3.0, -1.0], near: 0.1, far: 40.0 }));
+const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
+const rows = [['light', 'spot', 256], ['light', 'spot', 512], ['light', 'spot', 1024],
+              ['light_directional', 'directional', 512], ['light_directional', 'directional', 1024],
+              ['light_omni', 'omni', 128], ['light_omni', 'omni', 256], ['light_omni', 'omni', 512]];
+const { server, url } = await serve({ data: work });
+const browser = await puppeteer.launch({
+  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', headless: true,
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-gpu'] });
+try {
+  console.log(`camera ${camera.width}x${camera.height}, ${frames} frames a row`);
+  console.log('| light, map | triangles | whole frame | volume + airlight |\n|---|---|---|---|');
+  for (const [file, name, size] of rows) {
+    const page = await browser.newPage();
+    await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/${file}.json&medium=/data/medium.json` +
+                        `&camera=/data/camera.json&animate=1&size=${size}`));
+    await page.waitForFunction(() => document.title.startsWith('lightvol:'), { timeout: 900000 });
+    if ((await page.title()) !== 'lightvol:done') throw new Error(`${name} ${size}: the page failed`);
+    const t = await page.evaluate((n) => window.lightvolTime(n), frames);
+    const map = name === 'omni' ? `6 × ${size}²` : `${size}²`;
+    console.log(`| ${name}, ${map} | ${t.triangles.toLocaleString('en')} | ${(t.frame / 1000).toFixed(1)} s | ` +
+                `${(t.volume / 1000).toFixed(1)} s |`);
+    await page.close();
+  }
+} finally {
+  await browser.close();
+  server.close();
+  rmSync(work, { recursive: true, force: true });
+}
