@@ -263,8 +263,9 @@ export class LightVolume {
   // renderer: a THREE.WebGLRenderer (WebGL2) with shadowMap.enabled; light: a SpotLight,
   // DirectionalLight or PointLight with castShadow; options: glsl (loadShader()'s text), width and
   // height (the airlight target: the camera's image in pixels), medium (lightvol's medium JSON:
-  // scattering, absorption, intensity, phase; intensity defaults to the light's).
-  constructor(renderer, light, { glsl, width, height, medium = {} }) {
+  // scattering, absorption, intensity, phase, profile; intensity defaults to the light's), cone
+  // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true).
+  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true }) {
     const name = light && (light.name ? `'${light.name}'` : light.type);
     if (!light || !(light.isSpotLight || light.isDirectionalLight || light.isPointLight))
       throw new Error(`LightVolume: ${name ?? 'no light'} is not a SpotLight, DirectionalLight or PointLight`);
@@ -280,11 +281,13 @@ export class LightVolume {
     const missing = missingFloatSupport(gl);
     if (missing) throw new Error(missing);
     this.renderer = renderer;
+    this.glsl = glsl;
     this.light = light;
     this.gl = gl;
     this.type = light.isSpotLight ? 'spot' : light.isDirectionalLight ? 'directional' : 'omni';
     this.airlight = new AirlightRenderer(renderer, glsl, { width, height });
     this.medium = medium;
+    this.cone = cone;
     this.size = null;        // [W, H] of the current index buffer
     this.copies = [];        // the shadow map's depth, copied: 1 or 6 render targets
     this.live = {
@@ -356,6 +359,22 @@ export class LightVolume {
 
   setMedium(medium) { this.medium = medium; }
 
+  // lightvol's medium JSON as the airlight uses it now: the given medium, its intensity the light's
+  // unless given, and for a spot light with `cone` (and no profile of its own) the SpotLight's cone
+  // as lightvol's soft-edged profile: three.js attenuates a spot by smoothstep(cos angle,
+  // cos(angle·(1 − penumbra)), cos α), lightvol's profile by smoothstep(cos outer_deg,
+  // cos inner_deg, cos α): the same function (a penumbra under 0.001 is taken as 0.001: lightvol
+  // needs inner_deg < outer_deg).
+  mediumJson() {
+    const { light } = this;
+    const medium = { ...this.medium, intensity: this.medium.intensity ?? light.intensity };
+    if (light.isSpotLight && this.cone && !medium.profile) {
+      const outer = THREE.MathUtils.radToDeg(light.angle);
+      medium.profile = { inner_deg: outer * (1 - Math.max(light.penumbra, 1e-3)), outer_deg: outer };
+    }
+    return medium;
+  }
+
   // Renders the airlight of `light` seen by `camera` through the surfaces of `scene` (its visible
   // meshes, drawn with their current matrices), from the shadow map three.js rendered for the
   // light in the last renderer.render(): call it after that, every frame.
@@ -367,7 +386,8 @@ export class LightVolume {
     this.setUniforms(json);
     const frame = parseFrame(json);
     airlight.setLight(frame);
-    airlight.setMedium({ ...this.medium, intensity: this.medium.intensity ?? light.intensity });
+    this.lastMedium = this.mediumJson();
+    airlight.setMedium(this.lastMedium);
     camera.updateMatrixWorld();
     airlight.setCamera({ view: camera.matrixWorldInverse, projection: camera.projectionMatrix, flipY: false });
     const shadowUpdate = renderer.shadowMap.autoUpdate;
@@ -494,8 +514,9 @@ export class LightVolume {
   readAirlight() { return this.airlight.readAirlight(); }
   readSurface() { return this.airlight.readSurface(); }
   readFaceCounts() { return this.airlight.readFaceCounts(); }
-  // lightvol's light JSON of the map the last render() used.
+  // lightvol's light JSON of the map the last render() used, and the medium it used.
   lightJson() { return this.lastLight; }
+  lastMediumJson() { return this.lastMedium; }
 
   // The shadow map the last render() used, in its window depth, as lightvol reads images: W × H
   // floats, top row first (omni: the six faces +X −X +Y −Y +Z −Z one under the other, W × 6W).
@@ -520,6 +541,73 @@ export class LightVolume {
     });
     renderer.setRenderTarget(previous);
     target.dispose();
+    return out;
+  }
+
+  // For tests, never in a frame: the volume's vertices as the GPU makes them from the map the last
+  // render() used (xyz floats, world space, build's order), captured by transform feedback from
+  // the same LIGHTVOL_LIVE_VOLUME_VERTEX stage with the same uniforms and read back.
+  readPositions() {
+    const { gl, renderer } = this;
+    const u = this.live, props = renderer.properties;
+    if (!this.captureProgram) {
+      const shader = (type, source) => {
+        const s = gl.createShader(type);
+        gl.shaderSource(s, `#version 300 es\n${source}`);
+        gl.compileShader(s);
+        if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(`LightVolume: ${gl.getShaderInfoLog(s)}`);
+        return s;
+      };
+      const program = gl.createProgram();
+      gl.attachShader(program, shader(gl.VERTEX_SHADER, stageSource(this.glsl, 'LIGHTVOL_LIVE_VOLUME_VERTEX')));
+      gl.attachShader(program, shader(gl.FRAGMENT_SHADER,
+                                      'precision highp float;\nout vec4 colour;\nvoid main() { colour = vec4(0.0); }\n'));
+      gl.transformFeedbackVaryings(program, ['world'], gl.INTERLEAVED_ATTRIBS);
+      gl.linkProgram(program);
+      if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`LightVolume: ${gl.getProgramInfoLog(program)}`);
+      this.captureProgram = program;
+    }
+    const program = this.captureProgram;
+    const [width, height] = this.size;
+    const n = staticVolumeCounts(this.type, width, height).vertices;
+    renderer.resetState();
+    gl.useProgram(program);
+    const at = (name) => gl.getUniformLocation(program, name);
+    gl.uniform2i(at('live_size'), width, height);
+    for (const name of ['live_flip_y', 'live_depth', 'live_type', 'live_standard']) gl.uniform1i(at(name), u[name].value);
+    gl.uniform1f(at('live_min_t'), u.live_min_t.value);
+    for (const name of ['live_ray_x', 'live_ray_y', 'live_near_0', 'live_far_0']) gl.uniform4fv(at(name), u[name].value.toArray());
+    const matrices = new Float32Array(16 * OMNI_FACES);
+    u.live_eye_to_world.value.forEach((m, f) => matrices.set(m.elements, 16 * f));
+    gl.uniformMatrix4fv(at('live_eye_to_world'), false, matrices);
+    gl.uniform3fv(at('live_apex'), u.live_apex.value.toArray());
+    gl.uniform3fv(at('live_cap'), u.live_cap.value.toArray());
+    gl.uniformMatrix4fv(at('view_projection'), false, new THREE.Matrix4().elements);
+    u.shadow_maps.value.forEach((texture, f) => {
+      gl.activeTexture(gl.TEXTURE0 + f);
+      gl.bindTexture(gl.TEXTURE_2D, props.get(texture).__webglTexture);
+      gl.uniform1i(at(`shadow_maps[${f}]`), f);
+    });
+    const buffer = gl.createBuffer(), feedback = gl.createTransformFeedback();
+    gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer);
+    gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 12 * n, gl.STREAM_READ);
+    gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, feedback);
+    gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);
+    gl.enable(gl.RASTERIZER_DISCARD);
+    gl.beginTransformFeedback(gl.POINTS);
+    gl.drawArrays(gl.POINTS, 0, n);
+    gl.endTransformFeedback();
+    gl.disable(gl.RASTERIZER_DISCARD);
+    gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
+    gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
+    const out = new Float32Array(3 * n);
+    gl.bindBuffer(gl.COPY_READ_BUFFER, buffer);
+    gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
+    gl.bindBuffer(gl.COPY_READ_BUFFER, null);
+    gl.deleteBuffer(buffer);
+    gl.deleteTransformFeedback(feedback);
+    renderer.resetState();
     return out;
   }
 

@@ -52,7 +52,7 @@ function makeLight(json, size, castShadow) {
   const position = new THREE.Vector3().fromArray(json.position ?? [0, 0, 0]);
   let light, width = size, height = size;
   if (type === 'spot') {
-    light = new THREE.SpotLight(0xffffff, 1, 0, THREE.MathUtils.degToRad(json.fov_y_deg / 2), 0, 2);
+    light = new THREE.SpotLight(0xffffff, 1, 0, THREE.MathUtils.degToRad(json.fov_y_deg / 2), 0.2, 2);
     height = Math.max(2, Math.round(size / (json.aspect ?? 1)));
   } else if (type === 'directional') {
     light = new THREE.DirectionalLight(0xffffff, 1);
@@ -249,16 +249,20 @@ async function main() {
   let captured = null;
   const capture = () => {
     captured = { frame, airlight: volume.readAirlight(), shadowMap: volume.readShadowMap(),
-                 light: structuredClone(volume.lightJson()), surface: volume.readSurface(),
-                 counts: volume.readFaceCounts(), indices: volume.geometry.index.array };
+                 light: structuredClone(volume.lightJson()), medium: structuredClone(volume.lastMediumJson()),
+                 surface: volume.readSurface(),
+                 counts: volume.readFaceCounts(), indices: volume.geometry.index.array,
+                 positions: volume.readPositions() };
   };
   window.lightvolAirlight = () => captured.airlight;
   window.lightvolShadowMap = () => captured.shadowMap;
   window.lightvolLight = () => captured.light;
+  window.lightvolMedium = () => captured.medium;  // the medium the airlight used (spot: the cone's profile)
   window.lightvolSurface = () => captured.surface;
   window.lightvolFaceCounts = () => captured.counts;
   window.lightvolFrame = () => captured.frame;
   window.lightvolIndices = () => captured.indices;  // the volume's triangles (build's)
+  window.lightvolPositions = () => captured.positions;  // its vertices, as the GPU made them
 
   const play = document.getElementById('play');
   play.checked = animate;

@@ -122,10 +122,12 @@ async function checkFrame(page, name, frame) {
   const airlight = Float32Array.from(await grab(page, 'lightvolAirlight'));
   const map = Float32Array.from(await grab(page, 'lightvolShadowMap'));
   const light = await grab(page, 'lightvolLight');
+  const medium = await grab(page, 'lightvolMedium');
   const surface = Float32Array.from(await grab(page, 'lightvolSurface'));
   const counts = Float32Array.from(await grab(page, 'lightvolFaceCounts'));
   const tag = `${name}_${frame}`;
   writeFileSync(join(work, `${tag}_light.json`), JSON.stringify(light));
+  writeFileSync(join(work, `${tag}_medium.json`), JSON.stringify(medium));
   // Spot and directional maps are W × H with W the page's size; omni maps six W × W faces, W × 6W.
   const faces = light.type === 'omni' ? 6 : 1;
   const mapWidth = faces === 6 ? Math.round(Math.sqrt(map.length / 6)) : size;
@@ -143,8 +145,21 @@ async function checkFrame(page, name, frame) {
     const f = off[2 + vertices + t].split(' ').map(Number);
     sameTriangles = f[0] === 3 && f[1] === indices[3 * t] && f[2] === indices[3 * t + 1] && f[3] === indices[3 * t + 2];
   }
+  // And its vertices (the GPU's, by transform feedback) are build's, within float rounding: 1e-5
+  // of the largest coordinate (src/lightvol/render/live_volume.h's bound).
+  const positions = Float32Array.from(await grab(page, 'lightvolPositions'));
+  let largest = 0, worst = 0;
+  const samePositions = positions.length === 3 * vertices;
+  for (let v = 0; samePositions && v < vertices; ++v) {
+    const p = off[2 + v].split(' ').map(Number);
+    for (let k = 0; k < 3; ++k) {
+      largest = Math.max(largest, Math.abs(p[k]));
+      worst = Math.max(worst, Math.abs(p[k] - positions[3 * v + k]));
+    }
+  }
+  const closePositions = samePositions && worst <= 1e-5 * largest;
   run('render', `${tag}_volume.off`, '--light', `${tag}_light.json`, '--camera', 'camera_radial.json',
-      '--depth', `${tag}_surface.pfm`, '--medium', 'medium.json', '--method', 'volume', '--out', `${tag}_reference.exr`);
+      '--depth', `${tag}_surface.pfm`, '--medium', `${tag}_medium.json`, '--method', 'volume', '--out', `${tag}_reference.exr`);
   const reference = readExr(join(work, `${tag}_reference.exr`));
   // SwiftShader can drop or double a fragment on a shared edge of long triangles: a pixel whose
   // back-minus-front face count is not the one most pixels have is left out (at most 1 %).
@@ -153,11 +168,13 @@ async function checkFrame(page, name, frame) {
   const cracks = mask.reduce((a, b) => a + b, 0);
   const l2 = airlight.length === reference.values.length ? relativeL2(airlight, reference.values, mask) : Infinity;
   const lit = reference.values.filter((x) => x > 0).length;
-  const ok = l2 <= TOLERANCE && cracks <= 0.01 * mask.length && lit > 0.05 * mask.length && sameTriangles;
+  const ok = l2 <= TOLERANCE && cracks <= 0.01 * mask.length && lit > 0.05 * mask.length && sameTriangles &&
+             closePositions;
   console.log(`${name} frame ${frame}: relative L2 ${(100 * l2).toFixed(4)} % against lightvol render --method volume ` +
               `of build's volume of the page's ${mapWidth}x${mapHeight}${faces > 1 ? 'x6' : ''} map ` +
               `(${reference.width}x${reference.height}, ${lit} pixels lit, ${cracks} left out whose face count is not ${inside}); ` +
-              `its ${indices.length / 3} triangles ${sameTriangles ? 'are' : 'are NOT'} build's ${triangles}` +
+              `its ${indices.length / 3} triangles ${sameTriangles ? 'are' : 'are NOT'} build's ${triangles}, ` +
+              `its ${positions.length / 3} vertices within ${(worst / largest).toExponential(1)} of the largest coordinate of build's` +
               (ok ? '' : '  FAILED'));
   return { ok, airlight, map };
 }
