@@ -184,6 +184,15 @@ export class AirlightRenderer {
     this.dummyCamera = new THREE.Camera();
   }
 
+  // A new image size (the camera's, in pixels): the targets keep their textures, reallocated at
+  // their next use.
+  setSize(width, height) {
+    this.width = width;
+    this.height = height;
+    for (const t of [this.surfaceTarget, this.accumulateTarget, this.airlightTarget]) t.setSize(width, height);
+    this.common.viewport.value.set(width, height);
+  }
+
   setVolume(geometry) {
     this.volumeScene.clear();
     const mesh = new THREE.Mesh(geometry, this.volumeMaterial);

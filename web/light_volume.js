@@ -358,6 +358,9 @@ export class LightVolume {
   get triangles() { return this.geometry.index ? this.geometry.index.count / 3 : 0; }
 
   setMedium(medium) { this.medium = medium; }
+  // The camera's new image size in pixels (renderer.getDrawingBufferSize()); the textures stay the
+  // same objects.
+  setSize(width, height) { this.airlight.setSize(width, height); }
 
   // lightvol's medium JSON as the airlight uses it now: the given medium, its intensity the light's
   // unless given, and for a spot light with `cone` (and no profile of its own) the SpotLight's cone

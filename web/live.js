@@ -267,6 +267,14 @@ async function main() {
   const play = document.getElementById('play');
   play.checked = animate;
   play.disabled = !animate;
+  // For the test of LightVolume.setSize: the airlight at another size, then at this one again.
+  window.lightvolResize = (w, h) => {
+    volume.setSize(w, h);
+    volume.render(scene, camera);
+    const other = volume.readAirlight();
+    volume.setSize(width, height);
+    return other.length;
+  };
   window.lightvolStep = (n = 1) => {
     play.checked = false;
     frame = captured.frame + n;

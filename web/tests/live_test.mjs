@@ -209,6 +209,18 @@ try {
     console.log(`${name}: frames 0 and ${frame} differ in ${changed} of ${first.map.length} shadow-map texels and ` +
                 `${pixels} of ${first.airlight.length} pixels (airlight ${(100 * moved).toFixed(2)} % relative L2); ` +
                 `page ${((Date.now() - started) / 1000).toFixed(1)} s` + (differ ? '' : '  FAILED'));
+    if (name === 'spot') {
+      // LightVolume.setSize: a frame at 60×45, then frame 30 again at the camera's size: the same
+      // airlight as before, bit for bit.
+      const small = await page.evaluate(() => window.lightvolResize(60, 45));
+      await page.evaluate(() => window.lightvolStep(0));
+      const again = Float32Array.from(await grab(page, 'lightvolAirlight'));
+      const same = small === 60 * 45 && again.length === second.airlight.length &&
+                   again.every((x, i) => x === second.airlight[i]);
+      console.log(`spot: setSize(60, 45) gave ${small} pixels; back at ${camera.width}x${camera.height} frame 30 ` +
+                  `${same ? 'is' : 'is NOT'} the same airlight` + (same ? '' : '  FAILED'));
+      failed ||= !same;
+    }
     const quiet = messages.every((m) => !/error/i.test(m));
     if (!quiet) console.log(`${name}: console: ${messages.join(' | ')}  FAILED`);
     failed ||= !first.ok || !second.ok || !differ || !quiet;
