@@ -9,9 +9,11 @@
 // Hooks (docs/web.md): document.title = 'lightvol:done' after the first frame (the JSON camera's);
 // window.lightvolAirlight() (Float32Array, width × height, top row first), lightvolShadowMap()
 // (its window depth, top row first; omni: the six faces one under the other), lightvolLight()
-// (lightvol's light JSON of that map), lightvolSurface(), lightvolFaceCounts() and lightvolFrame()
-// give the frame captured last: the first, or the one lightvolStep(n) rendered (it stops the
-// animation, advances it n frames from the last captured frame and renders).
+// (lightvol's light JSON of that map), lightvolMedium(), lightvolSurface(), lightvolFaceCounts(),
+// lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
+// first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
+// the last captured frame and renders). lightvolTime(n): milliseconds per frame;
+// lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
