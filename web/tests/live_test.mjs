@@ -5,8 +5,8 @@
 // of the volume `lightvol build` makes from that frame's window.lightvolShadowMap() (written as a
 // PFM) and window.lightvolLight(), clamped to the page's own surface distances (written as a radial
 // camera depth); the two frames' shadow maps and airlights must differ (the ball moved). Bad input:
-// a light without castShadow, and a browser without float blending, must give their messages on
-// the page and in the console.
+// a light without castShadow, a browser without float blending or float render targets, must give
+// their messages on the page and in the console.
 //   node web/tests/live_test.mjs PATH/TO/lightvol [--only spot|directional|omni|errors]
 //                                [--size N] [--screenshot DIR] [--keep DIR]
 // Exit 0 when every case passes, 1 when one fails, 2 when something could not run.
@@ -228,15 +228,19 @@ try {
   }
   if (!only || only === 'errors') {
     // A light without castShadow: the addon's message on the page and in the console.
+    // A browser without an extension: getExtension overridden before the page's scripts run.
+    const without = (extension) => (page) => page.evaluateOnNewDocument((x) => {
+      const original = WebGL2RenderingContext.prototype.getExtension;
+      WebGL2RenderingContext.prototype.getExtension = function (name) {
+        return name === x ? null : original.call(this, name);
+      };
+    }, extension);
     const expectations = [
-      { what: 'a light without castShadow', extra: '&shadow=0', pattern: /castShadow = false/ },
-      { what: 'a browser without float blending', extra: '', pattern: /lacks EXT_float_blend/,
-        before: (page) => page.evaluateOnNewDocument(() => {
-          const original = WebGL2RenderingContext.prototype.getExtension;
-          WebGL2RenderingContext.prototype.getExtension = function (name) {
-            return name === 'EXT_float_blend' ? null : original.call(this, name);
-          };
-        }) },
+      { what: 'a light without castShadow', tag: 'shadow', extra: '&shadow=0', pattern: /castShadow = false/ },
+      { what: 'a browser without float blending', tag: 'blend', extra: '', pattern: /lacks EXT_float_blend/,
+        before: without('EXT_float_blend') },
+      { what: 'a browser without float render targets', tag: 'float', extra: '',
+        pattern: /lacks EXT_color_buffer_float/, before: without('EXT_color_buffer_float') },
     ];
     for (const e of expectations) {
       const { page, messages, title } = await open('spot', e.extra, e.before);
@@ -244,7 +248,7 @@ try {
       const ok = title === 'lightvol:error' && e.pattern.test(shown) && messages.some((m) => e.pattern.test(m));
       console.log(`errors: ${e.what}: page says "${shown}"; console ${messages.some((m) => e.pattern.test(m)) ? 'too' : 'NOT'}` +
                   (ok ? '' : '  FAILED'));
-      if (screenshots) await page.screenshot({ path: join(resolve(screenshots), `live_error_${e.extra ? 'shadow' : 'float'}.png`) });
+      if (screenshots) await page.screenshot({ path: join(resolve(screenshots), `live_error_${e.tag}.png`) });
       failed ||= !ok;
       await page.close();
     }
