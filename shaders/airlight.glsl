@@ -27,6 +27,8 @@
 //       (col, row)'s centre ray and depth, then the closing's (spot: the apex; directional: the
 //       border's near-plane copies, then the cap's centre; omni: none). Drawn with build's
 //       triangles as the index buffer, with LIGHTVOL_VOLUME_FRAGMENT.
+//   LIGHTVOL_LIVE_COMMON  only the live stage's uniforms and functions (a texel's grid point, the
+//       border ring), for the adaptive live volume's compute passes (shaders/live_adaptive.comp).
 
 #if defined(LIGHTVOL_VOLUME_VERTEX) || defined(LIGHTVOL_SURFACE_VERTEX)
 layout(location = 0) in vec3 position;
@@ -38,7 +40,7 @@ void main() {
 }
 #endif
 
-#ifdef LIGHTVOL_LIVE_VOLUME_VERTEX
+#if defined(LIGHTVOL_LIVE_VOLUME_VERTEX) || defined(LIGHTVOL_LIVE_COMMON)
 // The shadow maps as the light's projection rendered them: texture row t (t = 0 at the bottom)
 // holds NDC y = -1 + 2(t + 1/2)/H. Depth textures (compare mode off) or R32F, read with texelFetch.
 // Spot and directional lights use shadow_maps[0]; omni lights the six faces +X -X +Y -Y +Z -Z.
@@ -60,8 +62,6 @@ uniform vec4 live_far_0;
 uniform mat4 live_eye_to_world[6];  // the light's (omni: each face's) eye to world
 uniform vec3 live_apex;        // world: the spot's apex
 uniform vec3 live_cap;         // world: the directional cap's centre
-uniform mat4 view_projection;
-out vec3 world;
 
 vec2 live_ndc(ivec2 texel) {
   vec2 t = (2.0 * vec2(texel) + 1.0) / vec2(live_size) - 1.0;
@@ -125,6 +125,11 @@ ivec2 live_ring_texel(int k) {
   return ivec2(0, h1 - (k - w1));
 }
 
+#endif
+
+#ifdef LIGHTVOL_LIVE_VOLUME_VERTEX
+uniform mat4 view_projection;
+out vec3 world;
 void main() {
   int texels = live_size.x * live_size.y;
   int v = gl_VertexID;

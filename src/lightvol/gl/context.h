@@ -113,7 +113,12 @@ namespace lightvol::gl {
   X(PFNGLGETBUFFERSUBDATAPROC, glGetBufferSubData)                   \
   X(PFNGLTRANSFORMFEEDBACKVARYINGSPROC, glTransformFeedbackVaryings) \
   X(PFNGLBEGINTRANSFORMFEEDBACKPROC, glBeginTransformFeedback)       \
-  X(PFNGLENDTRANSFORMFEEDBACKPROC, glEndTransformFeedback)
+  X(PFNGLENDTRANSFORMFEEDBACKPROC, glEndTransformFeedback)           \
+  X(PFNGLDISPATCHCOMPUTEPROC, glDispatchCompute)                     \
+  X(PFNGLDISPATCHCOMPUTEINDIRECTPROC, glDispatchComputeIndirect)     \
+  X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                         \
+  X(PFNGLDRAWELEMENTSINDIRECTPROC, glDrawElementsIndirect)           \
+  X(PFNGLCLEARBUFFERDATAPROC, glClearBufferData)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
@@ -192,6 +197,8 @@ class Program {
   static Result<Program> compile(const std::string& vertex_source,
                                  const std::string& fragment_source, const std::string& name,
                                  const std::vector<std::string>& feedback = {});
+  // A compute program from one GLSL source.
+  static Result<Program> compile_compute(const std::string& source, const std::string& name);
   GLuint id() const { return handle_.id(); }
   void use() const { glUseProgram(handle_.id()); }
   // Uniform location by name (-1 when the linker dropped it; setting -1 is a no-op in GL).

@@ -244,6 +244,9 @@ void GlVolumeRenderer::set_volume(const Mesh& volume) {
 
 Status GlVolumeRenderer::set_volume(const LiveVolume& live, LiveDraw draw) {
   State& s = *state_;
+  if (live.adaptive() && draw == LiveDraw::vertex_stage)
+    return Error{
+        "live volume: an adaptive live volume is drawn in two passes (LiveDraw::two_pass)"};
   if (s.live_program.id() == 0) {
     Result<Program> program =
         Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
@@ -297,8 +300,7 @@ Image GlVolumeRenderer::render(double* seconds) {
     s.live->bind(program, 2);
     glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
   } else if (s.live) {
-    glBindVertexArray(s.live->mesh_vertex_array());
-    glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
+    s.live->draw_mesh();
   } else {
     glBindVertexArray(s.vao.id());
     glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <limits>
@@ -7,6 +8,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/render/detail/airlight_glsl.h>
+#include <lightvol/render/live_adaptive.h>
 #include <lightvol/render/live_volume.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
@@ -173,18 +175,35 @@ struct LiveVolume::State {
   Framebuffer target;  // 1×1: a draw needs a complete framebuffer even with rasterization off
   GLsizei index_count = 0;
   std::uint64_t vertices = 0, triangles = 0;
+  std::unique_ptr<detail::LiveAdaptive> adaptive;  // set: LiveOptions::max_error
 };
 
 LiveVolume::~LiveVolume() = default;
 
 Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light,
-                                                       const std::vector<GlShadowMap>& maps) {
+                                                       const std::vector<GlShadowMap>& maps,
+                                                       const LiveOptions& options) {
   std::unique_ptr<LiveVolume> live(new LiveVolume());
   live->state_ = std::make_unique<State>();
   State& s = *live->state_;
   s.light = light;
   if (const std::string problem = maps_problem(light, maps); !problem.empty())
     return Error{problem};
+  if (options.max_error) {
+    const double e = *options.max_error;
+    if (!std::isfinite(e) || e < 0)
+      return Error{"live volume: max_error: expected a finite number >= 0, got " +
+                   std::to_string(e)};
+    if (options.max_rounds < 1 || options.max_rounds > 63)
+      return Error{"live volume: max_rounds: expected 1 to 63, got " +
+                   std::to_string(options.max_rounds)};
+    if (std::string problem = detail::live_adaptive_problem(light); !problem.empty())
+      return Error{problem};
+    Result<std::unique_ptr<detail::LiveAdaptive>> adaptive =
+        detail::LiveAdaptive::create(e, options.max_rounds);
+    if (!adaptive) return adaptive.error();
+    s.adaptive = std::move(*adaptive);
+  }
   Result<Program> capture =
       Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
                        "#version 450 core\nout vec4 colour;\nvoid main() { colour = vec4(0.0); }\n",
@@ -226,6 +245,13 @@ Status LiveVolume::set_shadow_maps(const std::vector<GlShadowMap>& maps) {
   if (!resized) return {};
   const int w = maps[0].width, h = maps[0].height;
   s.uniforms = live_uniforms(s.light, w, h);
+  if (s.adaptive) {
+    if (Status st = s.adaptive->resize(s.light, w, h); !st) return st;
+    s.vertices = s.adaptive->max_vertices();
+    s.triangles = s.adaptive->max_triangles();
+    s.index_count = 0;
+    return {};
+  }
   const bool omni = s.light.type == LightType::omni;
   const std::vector<std::uint32_t> indices =
       omni ? omni_volume_indices(s.light, w) : static_volume_indices(s.light, w, h);
@@ -252,6 +278,7 @@ const std::vector<GlShadowMap>& LiveVolume::shadow_maps() const { return state_-
 std::uint64_t LiveVolume::num_vertices() const { return state_->vertices; }
 std::uint64_t LiveVolume::num_triangles() const { return state_->triangles; }
 GLsizei LiveVolume::index_count() const { return state_->index_count; }
+bool LiveVolume::adaptive() const { return state_->adaptive != nullptr; }
 
 void LiveVolume::bind(const Program& program, int unit) const {
   const State& s = *state_;
@@ -284,10 +311,47 @@ void LiveVolume::bind(const Program& program, int unit) const {
   glBindVertexArray(s.vao.id());
 }
 
-GLuint LiveVolume::mesh_vertex_array() const { return state_->mesh_vao.id(); }
+GLuint LiveVolume::mesh_vertex_array() const {
+  return state_->adaptive ? state_->adaptive->vertex_array() : state_->mesh_vao.id();
+}
+
+void LiveVolume::draw_mesh() const {
+  const State& s = *state_;
+  if (s.adaptive) {
+    s.adaptive->draw();
+  } else {
+    glBindVertexArray(s.mesh_vao.id());
+    glDrawElements(GL_TRIANGLES, s.index_count, GL_UNSIGNED_INT, nullptr);
+  }
+}
+
+Result<LiveMesh> LiveVolume::read_mesh() const {
+  const State& s = *state_;
+  if (s.adaptive) {
+    generate();
+    return s.adaptive->read_back();
+  }
+  Result<std::vector<float>> positions = read_positions();
+  if (!positions) return positions.error();
+  LiveMesh m;
+  m.mesh.positions = std::move(*positions);
+  m.mesh.indices.resize(static_cast<std::size_t>(s.index_count));
+  glBindBuffer(GL_COPY_READ_BUFFER, s.indices.id());
+  glGetBufferSubData(GL_COPY_READ_BUFFER, 0,
+                     static_cast<GLsizeiptr>(m.mesh.indices.size() * sizeof(std::uint32_t)),
+                     m.mesh.indices.data());
+  glBindBuffer(GL_COPY_READ_BUFFER, 0);
+  if (std::string e = pending_error(); !e.empty())
+    return Error{"OpenGL: reading the live volume's triangles: " + e};
+  return m;
+}
 
 void LiveVolume::generate() const {
   const State& s = *state_;
+  if (s.adaptive) {
+    s.adaptive->generate([this](const Program& program) { bind(program, 2); });
+    return;
+  }
   s.target.bind();
   s.capture.use();
   static constexpr float kIdentity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -305,6 +369,11 @@ void LiveVolume::generate() const {
 
 Result<std::vector<float>> LiveVolume::read_positions() const {
   const State& s = *state_;
+  if (s.adaptive) {
+    Result<LiveMesh> m = read_mesh();
+    if (!m) return m.error();
+    return std::move(m->mesh.positions);
+  }
   generate();
   std::vector<float> positions(3 * static_cast<std::size_t>(s.vertices));
   glBindBuffer(GL_COPY_READ_BUFFER, s.positions.id());

@@ -18,8 +18,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
+#include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/gl/context.h>
@@ -41,16 +43,49 @@ struct GlShadowMap {
 // file. Engines hand their own depth pass's texture to LiveVolume instead.
 gl::TextureHandle upload_shadow_map(const Light& light, const DepthImage& depth);
 
+// How the live volume tessellates the map.
+struct LiveOptions {
+  // Unset: the static volume (every texel a vertex). Set: the adaptive volume at this bound E
+  // (world units, finite, >= 0), made by compute shaders every frame: `lightvol build --adaptive
+  // --tessellation quadtree --max-error E`'s quadtree (the same cells, balance, fix-up and
+  // configurations: the same triangles), closed as build closes it, drawn with an indirect draw
+  // whose count the GPU writes. Every texel's point lies within E of its ray's point on the
+  // volume. Spot and directional lights, window depth or linear depth (docs/rendering.md).
+  std::optional<double> max_error;
+  // The most fix-up rounds (splitting leaves whose configuration breaks E) a frame runs, 1..63;
+  // rounds after the first that splits nothing cost nothing. read_mesh() tells whether a frame
+  // converged.
+  int max_rounds = 32;
+};
+
+// A generated volume read back (LiveVolume::read_mesh; tests and tools only).
+struct LiveMesh {
+  Mesh mesh;  // world space; static: build's vertices and triangles; adaptive: the grid's
+              // vertices in texel order, then the closing's
+  std::vector<std::uint32_t> vertex_texels;  // adaptive: per grid vertex, row * W + col
+  std::uint64_t grid_triangles = 0;          // adaptive: triangles before the closing
+  int fixup_rounds = 0;                      // adaptive: rounds that split a leaf
+  bool converged = true;  // adaptive: the last round allowed split nothing (the bound holds)
+};
+
+namespace detail {
+class LiveAdaptive;
+}
+
 class LiveVolume {
  public:
   // For `light` (its `depth` says how the maps' texels encode depth) and its maps: one for a spot
   // or directional light, six square faces of one size for an omni light (+X −X +Y −Y +Z −Z, each
   // rendered with omni_face_view and the light's projection). Compiles the capture program and
   // uploads build's triangles for the maps' size. Errors: set_shadow_maps'.
+  // With options.max_error, the adaptive volume (LiveOptions); errors also: a bound that is not
+  // finite and >= 0, rounds outside 1..63, an omni light, a radial depth encoding.
   static Result<std::unique_ptr<LiveVolume>> create(const Light& light,
-                                                    const std::vector<GlShadowMap>& maps);
-  static Result<std::unique_ptr<LiveVolume>> create(const Light& light, const GlShadowMap& map) {
-    return create(light, std::vector<GlShadowMap>{map});
+                                                    const std::vector<GlShadowMap>& maps,
+                                                    const LiveOptions& options = {});
+  static Result<std::unique_ptr<LiveVolume>> create(const Light& light, const GlShadowMap& map,
+                                                    const LiveOptions& options = {}) {
+    return create(light, std::vector<GlShadowMap>{map}, options);
   }
   ~LiveVolume();
 
@@ -65,9 +100,11 @@ class LiveVolume {
 
   const Light& light() const;
   const std::vector<GlShadowMap>& shadow_maps() const;
-  // build's counts for the map (static_volume_counts).
+  // build's counts for the map (static_volume_counts); adaptive: the most a map of this size can
+  // give (what the buffers hold; read_mesh() tells what a frame made).
   std::uint64_t num_vertices() const;
   std::uint64_t num_triangles() const;
+  bool adaptive() const;
 
   // For tests and tools, never in a frame: the vertices the GPU makes from the map as it is now,
   // captured by transform feedback and read back (xyz floats, world space, build's order).
@@ -80,12 +117,17 @@ class LiveVolume {
   // A vertex array whose attribute 0 is that buffer (xyz floats) and whose element buffer holds
   // the triangles.
   GLuint mesh_vertex_array() const;
+  // Draws what generate() made as triangles from mesh_vertex_array() (static: glDrawElements;
+  // adaptive: glDrawElementsIndirect, the count written by the GPU), with the program in use.
+  void draw_mesh() const;
+  // For tests and tools, never in a frame: generate(), then the mesh read back.
+  Result<LiveMesh> read_mesh() const;
 
   // For GlVolumeRenderer: with `program` (compiled from the LIGHTVOL_LIVE_VOLUME_VERTEX stage) in
   // use, sets its live_* uniforms, binds the maps to texture units `unit`.. `unit` + 5 and binds
   // the vertex array whose element buffer holds the triangles. No allocation.
   void bind(const gl::Program& program, int unit) const;
-  // Indices to draw (3 per triangle).
+  // Indices to draw (3 per triangle); adaptive: 0 (the GPU writes the count: draw_mesh).
   GLsizei index_count() const;
 
  private:

@@ -1,0 +1,616 @@
+// lightvol's adaptive live volume (docs/rendering.md, "Live volumes"): the compute passes that
+// tessellate a shadow map at a bound E on the GPU, every frame, into a vertex and an index buffer
+// and the indirect draw command that draws them. The quadtree is `lightvol build --adaptive
+// --tessellation quadtree`'s (src/lightvol/tessellate/): the same cells, the same measures in
+// double precision, the same 2:1 balance, the same fix-up rounds and the same 16 edge-split
+// configurations, so the same triangles.
+//
+// The host prepends "#version 450 core", "#define LIGHTVOL_LIVE_COMMON", one "#define LV_<PASS>"
+// and shaders/airlight.glsl (for live_grid_point, live_segment and live_ring_texel), then this
+// file. Passes, in the order of a frame (render/live_adaptive.cpp):
+//   LV_TEXELS    per texel: window depth and error scale in double (TexelDepths).
+//   LV_OWN       per level 1..top, per cell and band of rows: a cell splits when a child did, or
+//                when one of its texels lies farther than E from the cell's two triangles (the
+//                pyramid's value above E).
+//   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1);
+//                in fix-up round r, first the cells the round's test failed.
+//   LV_CONTROL   one invocation before fix-up round r: the round's dispatch sizes, zero when the
+//                round before split nothing.
+//   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
+//                leaf, later rounds those whose parent or neighbour split in the round before).
+//   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
+//   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
+//   LV_TRIANGLES per cell: its triangles, as indices of vertex ranks.
+//   LV_VERTICES  per bitmap word: its vertices' world positions and texel ids.
+//   LV_CLOSE     one invocation: the border ring's closing (spot fan, directional walls and cap),
+//                the draw command and the statistics.
+// Cells: level L ≥ 1 holds nx(L) × ny(L) cells of 2^L quads a side, clipped at the far edges;
+// split[] holds them level after level (offsets in Params), 0 for an unsplit cell and r + 1 for a
+// cell split in round r (0: threshold and first balance).
+
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 0) readonly buffer Params {
+  double m[16];  // clip to world, row-major (inverse(view) · inverse(projection))
+  double h1[4];
+  double w0_c, w0_dc, w0_dr, w1, uniform_scale;
+  double pz, pzc, pw, pwc, near_d, far_d;
+  double bound;          // E, for the fix-up's triangle tests
+  double pyramid_bound;  // the largest float <= E: a value rounded up to float exceeds E iff
+                         // the double exceeds this
+  int width, height, flip_y, encoding;  // encoding: 0 window, 1 linear
+  int uniform_flag, top_in_params, standard, type;
+  int cells_total, p_pad0, p_pad1, p_pad2;
+  int nx[16];
+  int ny[16];
+  int offset[17];  // first cell of level L (1..top) in split[]; offset[top + 1] = cells_total
+};
+
+layout(std430, binding = 1) buffer Depths { double depth[]; };
+layout(std430, binding = 2) buffer Scales { double scale[]; };
+layout(std430, binding = 3) coherent buffer Splits { uint split[]; };
+layout(std430, binding = 4) buffer Fails { uint fail[]; };
+// control[0..63]: fails per round; control[64 + k]: dispatch sizes written by LV_CONTROL
+// (3 per dispatch: the test, then the balance of levels 2..top); stats from control[160] on;
+// control[kDraw..kDraw + 4]: the indirect draw command.
+layout(std430, binding = 5) coherent buffer Control { uint control[]; };
+layout(std430, binding = 6) buffer Bits { uint bits[]; };
+layout(std430, binding = 7) buffer Counts { uint tri_count[]; };   // per cell
+layout(std430, binding = 16) buffer Offsets { uint tri_offset[]; };  // per cell: its first one
+layout(std430, binding = 8) buffer Ranks { uint word_rank[]; };    // per bitmap word
+layout(std430, binding = 9) buffer Indices { uint indices[]; };
+layout(std430, binding = 10) buffer Positions { float positions[]; };
+layout(std430, binding = 11) buffer TexelIds { uint texel_ids[]; };
+layout(std430, binding = 13) buffer ScanSums { uint scan_sums[]; };
+
+// The root's level, as a uniform (read from Params it came back 0 in some invocations of some
+// passes on llvmpipe).
+uniform int top_level;
+uniform int level;   // LV_OWN, LV_BALANCE
+uniform int round_;  // LV_BALANCE, LV_TEST, LV_CONTROL
+uniform int rounds;  // LV_CONTROL, LV_CLOSE: the most fix-up rounds a frame runs
+
+const int kBandRows = 16;
+const uint kStats = 160u;  // control[kStats + ...]: rounds used, converged, grid vertices, grid
+                           // triangles, closing triangles
+const uint kDraw = 192u;
+const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
+
+int cell_index(int L, int i, int j) { return offset[L] + j * nx[L] + i; }
+
+bool in_level(int L, int i, int j) {
+  return L >= 1 && L <= top_level && i >= 0 && j >= 0 && i < nx[L] && j < ny[L];
+}
+
+uint split_at(int L, int i, int j) { return in_level(L, i, j) ? split[cell_index(L, i, j)] : 0u; }
+bool is_split(int L, int i, int j) { return split_at(L, i, j) != 0u; }
+
+// Cell box: texels x0..x1, y0..y1 (build's rows: row 0 the top of the light's view).
+ivec4 cell_box(int L, int i, int j) {
+  int s = 1 << L;
+  return ivec4(i * s, j * s, min(i * s + s, width - 1), min(j * s + s, height - 1));
+}
+
+double d_at(int x, int y) { return depth[y * width + x]; }
+
+// The level and coordinates of flattened cell c (levels from `first` on).
+ivec3 cell_of(int c, int first) {
+  int L = first;
+  while (L < top_level && c >= offset[L + 1]) ++L;
+  int k = c - offset[L];
+  return ivec3(L, k % nx[L], k / nx[L]);
+}
+
+// Configuration of a leaf: the edges whose same-level neighbour is split and whose midpoint lies
+// inside the (clipped) edge.
+uint config_of(int L, int i, int j, ivec4 b) {
+  int half_ = 1 << (L - 1);
+  uint config = 0u;
+  if (b.x + half_ < b.z) {
+    if (is_split(L, i, j - 1)) config |= kSplitTop;
+    if (is_split(L, i, j + 1)) config |= kSplitBottom;
+  }
+  if (b.y + half_ < b.w) {
+    if (is_split(L, i - 1, j)) config |= kSplitLeft;
+    if (is_split(L, i + 1, j)) config |= kSplitRight;
+  }
+  return config;
+}
+
+// The triangles of a cell in configuration `config` (lattice points, positively oriented in
+// (col, row)): detail::cell_triangles, in its order. Returns the count.
+int cell_triangles(ivec4 b, int half_, uint config, out ivec2 tri[18]) {
+  ivec2 a = b.xy, bb = ivec2(b.z, b.y), c = ivec2(b.x, b.w), d = b.zw;
+  ivec2 mt = ivec2(b.x + half_, b.y), mr = ivec2(b.z, b.y + half_), mb = ivec2(b.x + half_, b.w),
+        ml = ivec2(b.x, b.y + half_);
+  int n = 0;
+  bool top_ = (config & kSplitTop) != 0u, right = (config & kSplitRight) != 0u,
+       bottom = (config & kSplitBottom) != 0u, left = (config & kSplitLeft) != 0u;
+  if (top_ && left) {
+    tri[0] = a; tri[1] = mt; tri[2] = ml; tri[3] = mt; tri[4] = bb; tri[5] = ml;
+    tri[6] = ml; tri[7] = bb; tri[8] = c; n = 3;
+  } else if (top_) {
+    tri[0] = a; tri[1] = mt; tri[2] = c; tri[3] = mt; tri[4] = bb; tri[5] = c; n = 2;
+  } else if (left) {
+    tri[0] = a; tri[1] = bb; tri[2] = ml; tri[3] = ml; tri[4] = bb; tri[5] = c; n = 2;
+  } else {
+    tri[0] = a; tri[1] = bb; tri[2] = c; n = 1;
+  }
+  int k = 3 * n;
+  if (right && bottom) {
+    tri[k] = mr; tri[k + 1] = d; tri[k + 2] = mb; tri[k + 3] = bb; tri[k + 4] = mr;
+    tri[k + 5] = mb; tri[k + 6] = bb; tri[k + 7] = mb; tri[k + 8] = c; n += 3;
+  } else if (right) {
+    tri[k] = bb; tri[k + 1] = mr; tri[k + 2] = c; tri[k + 3] = mr; tri[k + 4] = d;
+    tri[k + 5] = c; n += 2;
+  } else if (bottom) {
+    tri[k] = bb; tri[k + 1] = d; tri[k + 2] = mb; tri[k + 3] = bb; tri[k + 4] = mb;
+    tri[k + 5] = c; n += 2;
+  } else {
+    tri[k] = bb; tri[k + 1] = d; tri[k + 2] = c; n += 1;
+  }
+  return n;
+}
+
+#ifdef LV_TEXELS
+void main() {
+  int v = int(gl_GlobalInvocationID.x);
+  if (v >= width * height) return;
+  int col = v % width, row = v / width;
+  int texture_row = flip_y == 1 ? row : height - 1 - row;
+  precise double stored = double(texelFetch(shadow_maps[0], ivec2(col, texture_row), 0).r);
+  precise double d;
+  if (encoding == 0) {
+    d = clamp(stored, 0.0LF, 1.0LF);
+  } else {
+    precise double z = -clamp(stored, near_d, far_d);
+    d = clamp(0.5LF * ((pz * z + pzc) / (pw * z + pwc) + 1.0LF), 0.0LF, 1.0LF);
+  }
+  depth[v] = d;
+  if (uniform_flag == 0) {
+    precise double x = 2.0LF * (double(col) + 0.5LF) / double(width) - 1.0LF;
+    precise double y_down = 2.0LF * (double(row) + 0.5LF) / double(height) - 1.0LF;
+    precise double y = flip_y == 1 ? y_down : -y_down;
+    precise double h0[4];
+    for (int k = 0; k < 4; ++k) h0[k] = m[4 * k] * x + m[4 * k + 1] * y - m[4 * k + 2] + m[4 * k + 3];
+    precise double gx = h1[0] * h0[3] - h0[0] * h1[3];
+    precise double gy = h1[1] * h0[3] - h0[1] * h1[3];
+    precise double gz = h1[2] * h0[3] - h0[2] * h1[3];
+    precise double len = sqrt(gx * gx + gy * gy + gz * gz);
+    scale[v] = len / abs(h0[3] + d * h1[3]);
+  }
+}
+#endif
+
+#ifdef LV_OWN
+// TexelDepths::error at texel (x, y) for the plane's depth dp, with the denominator's w0 given.
+double texel_error(int x, int y, double dp, double w0) {
+  precise double e = abs(dp - d_at(x, y));
+  if (uniform_flag == 1) return e;  // times uniform_scale by the caller
+  precise double r = e * scale[y * width + x] / abs(w0 + dp * w1);
+  return r;
+}
+
+void main() {
+  int L = level;
+  int bands = ((1 << L) + kBandRows) / kBandRows;
+  int task = int(gl_GlobalInvocationID.x);
+  if (task >= nx[L] * ny[L] * bands) return;
+  int cell = task / bands, band = task - cell * bands;
+  int i = cell % nx[L], j = cell / nx[L];
+  int c = cell_index(L, i, j);
+  if (split[c] != 0u) return;
+  if (L > 1 && (is_split(L - 1, 2 * i, 2 * j) || is_split(L - 1, 2 * i + 1, 2 * j) ||
+                is_split(L - 1, 2 * i, 2 * j + 1) || is_split(L - 1, 2 * i + 1, 2 * j + 1))) {
+    split[c] = 1u;
+    return;
+  }
+  ivec4 b = cell_box(L, i, j);
+  precise double worst = 0.0LF;
+  if (L == 1 && b.z - b.x == 2 && b.w - b.y == 2) {
+    // A whole level-1 cell: five texels, each halfway along an edge or the diagonal.
+    int x = b.x, y = b.y;
+    precise double da = d_at(x, y), db = d_at(x + 2, y), dc = d_at(x, y + 2),
+                   dd = d_at(x + 2, y + 2);
+    ivec2 p[5] = ivec2[5](ivec2(x + 1, y), ivec2(x, y + 1), ivec2(x + 1, y + 1),
+                          ivec2(x + 2, y + 1), ivec2(x + 1, y + 2));
+    precise double dp[5] = double[5](0.5LF * (da + db), 0.5LF * (da + dc), 0.5LF * (db + dc),
+                                     0.5LF * (db + dd), 0.5LF * (dc + dd));
+    for (int k = 0; k < 5; ++k) {
+      precise double w0 = w0_c + double(p[k].x) * w0_dc + double(p[k].y) * w0_dr;
+      worst = max(worst, texel_error(p[k].x, p[k].y, dp[k], w0));
+    }
+    if (uniform_flag == 1) worst *= uniform_scale;
+    if (worst > pyramid_bound) split[c] = 1u;
+    return;
+  }
+  int wx = b.z - b.x, wy = b.w - b.y;
+  precise double da = d_at(b.x, b.y), db = d_at(b.z, b.y), dc = d_at(b.x, b.w),
+                 dd = d_at(b.z, b.w);
+  precise double g1x = (db - da) / double(wx), g1y = (dc - da) / double(wy);
+  precise double g2x = (dd - dc) / double(wx), g2y = (dd - db) / double(wy);
+  int y_begin = b.y + band * kBandRows, y_end = min(b.y + (band + 1) * kBandRows, b.w + 1);
+  for (int y = y_begin; y < y_end; ++y) {
+    int s = y - b.y;
+    int xs = b.x + (wx == wy ? wy - s : (wx * (wy - s)) / wy);
+    precise double base1 = da + g1y * double(s), base2 = dd + g2y * double(y - b.w);
+    precise double w0y = w0_c + 0.0LF * w0_dc + double(y) * w0_dr;
+    for (int x = b.x; x <= b.z; ++x) {
+      precise double dp =
+          x <= xs ? base1 + g1x * double(x - b.x) : base2 + g2x * double(x - b.z);
+      precise double w0 = w0y + w0_dc * double(x);
+      worst = max(worst, texel_error(x, y, dp, w0));
+    }
+    // A texel above the bound decides the cell: stop the band (and the other bands of the cell).
+    precise double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
+    if (scaled > pyramid_bound) {
+      split[c] = 1u;
+      return;
+    }
+    if (split[c] != 0u) return;
+  }
+}
+#endif
+
+#ifdef LV_BALANCE
+void main() {
+  int L = level;
+  int cell = int(gl_GlobalInvocationID.x);
+  if (cell >= nx[L] * ny[L]) return;
+  int i = cell % nx[L], j = cell / nx[L];
+  int c = cell_index(L, i, j);
+  uint mark = uint(round_) + 1u;
+  if (round_ > 0 && fail[c] == uint(round_)) {
+    split[c] = mark;
+    return;
+  }
+  if (split[c] != 0u) return;
+  int l = L - 1, ci = 2 * i, cj = 2 * j;
+  bool any = is_split(l, ci, cj) || is_split(l, ci + 1, cj) || is_split(l, ci, cj + 1) ||
+             is_split(l, ci + 1, cj + 1) || is_split(l, ci - 1, cj) ||
+             is_split(l, ci - 1, cj + 1) || is_split(l, ci + 2, cj) ||
+             is_split(l, ci + 2, cj + 1) || is_split(l, ci, cj - 1) ||
+             is_split(l, ci + 1, cj - 1) || is_split(l, ci, cj + 2) || is_split(l, ci + 1, cj + 2);
+  if (any) split[c] = mark;
+}
+#endif
+
+#ifdef LV_CONTROL
+void main() {
+  if (gl_GlobalInvocationID.x != 0u) return;
+  bool run = round_ == 1 || control[round_ - 1] != 0u;
+  int cells2 = cells_total - offset[min(2, top_level + 1)];
+  control[64u] = run ? uint((cells2 + 63) / 64) : 0u;
+  control[65u] = 1u;
+  control[66u] = 1u;
+  for (int L = 2; L <= top_level; ++L) {
+    uint k = 64u + 3u * uint(L - 1);
+    control[k] = run ? uint((nx[L] * ny[L] + 63) / 64) : 0u;
+    control[k + 1u] = 1u;
+    control[k + 2u] = 1u;
+  }
+}
+#endif
+
+#ifdef LV_TEST
+// The largest error (TexelDepths::error) over the texels of the closed triangle (a, b, c) whose
+// window depth is the plane through its corners' depths: detail::triangle_error, early out above
+// E (returns a value above E then).
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
+  int area2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+  if (area2 < 0) {
+    ivec2 t = b;
+    b = c;
+    c = t;
+    area2 = -area2;
+  }
+  precise double da = d_at(a.x, a.y), db = d_at(b.x, b.y), dc = d_at(c.x, c.y);
+  precise double inv = 1.0LF / double(area2);
+  precise double gx = ((db - da) * double(c.y - a.y) - (dc - da) * double(b.y - a.y)) * inv;
+  precise double gy = ((dc - da) * double(b.x - a.x) - (db - da) * double(c.x - a.x)) * inv;
+  ivec2 v[3] = ivec2[3](a, b, c);
+  int y0 = min(a.y, min(b.y, c.y)), y1 = max(a.y, max(b.y, c.y));
+  precise double worst = 0.0LF;
+  for (int y = y0; y <= y1; ++y) {
+    int lo = -2147483647, hi = 2147483647;
+    bool empty = false;
+    for (int k = 0; k < 3; ++k) {
+      ivec2 p = v[k], q = v[(k + 1) % 3];
+      int ex = q.x - p.x, ey = q.y - p.y;
+      int A = -ey, C = ex * (y - p.y) + ey * p.x;
+      if (A > 0) {
+        lo = max(lo, -floor_div(C, A));
+      } else if (A < 0) {
+        hi = min(hi, floor_div(C, -A));
+      } else if (C < 0) {
+        empty = true;
+      }
+    }
+    if (empty || lo > hi) continue;
+    precise double base = da + gy * double(y - a.y) + gx * double(lo - a.x);
+    precise double w0 = w0_c + double(lo) * w0_dc + double(y) * w0_dr;
+    for (int x = lo; x <= hi; ++x) {
+      precise double dp = base + gx * double(x - lo);
+      precise double e = abs(dp - d_at(x, y));
+      if (uniform_flag == 0)
+        e = e * scale[y * width + x] / abs(w0 + w0_dc * double(x - lo) + dp * w1);
+      worst = max(worst, e);
+    }
+    precise double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
+    if (scaled > bound) return true;
+  }
+  return false;
+}
+
+void main() {
+  int first = offset[min(2, top_level + 1)];
+  int c = first + int(gl_GlobalInvocationID.x);
+  if (c >= cells_total || top_level < 2) return;
+  ivec3 cl = cell_of(c, 2);
+  int L = cl.x, i = cl.y, j = cl.z;
+  if (split[c] != 0u) return;
+  uint parent = L == top_level ? 1u : split_at(L + 1, i / 2, j / 2);
+  if (parent == 0u) return;  // not a leaf
+  if (round_ > 1) {
+    uint r = uint(round_);
+    if (parent != r && split_at(L, i - 1, j) != r && split_at(L, i + 1, j) != r &&
+        split_at(L, i, j - 1) != r && split_at(L, i, j + 1) != r)
+      return;  // nothing around it changed since it passed
+  }
+  ivec4 b = cell_box(L, i, j);
+  uint config = config_of(L, i, j, b);
+  if (config == 0u) return;
+  ivec2 tri[18];
+  int n = cell_triangles(b, 1 << (L - 1), config, tri);
+  for (int t = 0; t < n; ++t) {
+    if (triangle_fails(tri[3 * t], tri[3 * t + 1], tri[3 * t + 2])) {
+      fail[c] = uint(round_);
+      atomicAdd(control[round_], 1u);
+      return;
+    }
+  }
+}
+#endif
+
+#if defined(LV_COUNT) || defined(LV_TRIANGLES)
+// Whether flattened cell (L, i, j) emits triangles: a split level-1 cell emits its quads (the
+// level-0 leaves), a leaf of level ≥ 1 its configuration.
+bool leaf(int L, int i, int j, int c) {
+  return split[c] == 0u && (L == top_level || is_split(L + 1, i / 2, j / 2));
+}
+
+void mark(ivec2 p) {
+  int words = (width + 31) / 32;
+  atomicOr(bits[p.y * words + p.x / 32], 1u << uint(p.x % 32));
+}
+#endif
+
+#ifdef LV_COUNT
+void main() {
+  int c = int(gl_GlobalInvocationID.x);
+  if (c >= cells_total) return;
+  ivec3 cl = cell_of(c, 1);
+  int L = cl.x, i = cl.y, j = cl.z;
+  ivec4 b = cell_box(L, i, j);
+  uint n = 0u;
+  if (L == 1 && split[c] != 0u) {
+    for (int y = b.y; y <= b.w; ++y)
+      for (int x = b.x; x <= b.z; ++x) mark(ivec2(x, y));
+    n = 2u * uint((b.z - b.x) * (b.w - b.y));
+  } else if (leaf(L, i, j, c)) {
+    uint config = config_of(L, i, j, b);
+    int half_ = 1 << (L - 1);
+    mark(b.xy), mark(ivec2(b.z, b.y)), mark(ivec2(b.x, b.w)), mark(b.zw);
+    if ((config & kSplitTop) != 0u) mark(ivec2(b.x + half_, b.y));
+    if ((config & kSplitBottom) != 0u) mark(ivec2(b.x + half_, b.w));
+    if ((config & kSplitLeft) != 0u) mark(ivec2(b.x, b.y + half_));
+    if ((config & kSplitRight) != 0u) mark(ivec2(b.z, b.y + half_));
+    n = 2u + uint(bitCount(config));
+  }
+  tri_count[c] = n;
+}
+#endif
+
+#if defined(LV_SCAN_CHUNKS) || defined(LV_SCAN_SUMS) || defined(LV_SCAN_WRITE)
+// Exclusive prefix sums in three passes: chunks of 256 values summed, the sums scanned by one
+// invocation (the total to control[scan_total]), the chunks rewritten. Values: scan_in[k], or
+// its bit count (the vertex bitmap's words) when scan_popcount is 1. In place is allowed.
+layout(std430, binding = 14) buffer ScanIn { uint scan_in[]; };
+layout(std430, binding = 15) buffer ScanOut { uint scan_out[]; };
+uniform int scan_n;
+uniform int scan_popcount;
+uniform int scan_total;
+const int kChunk = 256;
+uint scan_value(int k) { return scan_popcount == 1 ? uint(bitCount(scan_in[k])) : scan_in[k]; }
+#endif
+
+#ifdef LV_SCAN_CHUNKS
+void main() {
+  int chunk = int(gl_GlobalInvocationID.x);
+  if (chunk * kChunk >= scan_n) return;
+  uint s = 0u;
+  for (int k = chunk * kChunk; k < min(scan_n, (chunk + 1) * kChunk); ++k) s += scan_value(k);
+  scan_sums[chunk] = s;
+}
+#endif
+
+#ifdef LV_SCAN_SUMS
+void main() {
+  if (gl_GlobalInvocationID.x != 0u) return;
+  uint s = 0u;
+  for (int chunk = 0; chunk * kChunk < scan_n; ++chunk) {
+    uint v = scan_sums[chunk];
+    scan_sums[chunk] = s;
+    s += v;
+  }
+  control[scan_total] = s;
+}
+#endif
+
+#ifdef LV_SCAN_WRITE
+void main() {
+  int chunk = int(gl_GlobalInvocationID.x);
+  if (chunk * kChunk >= scan_n) return;
+  uint s = scan_sums[chunk];
+  for (int k = chunk * kChunk; k < min(scan_n, (chunk + 1) * kChunk); ++k) {
+    uint v = scan_value(k);
+    scan_out[k] = s;
+    s += v;
+  }
+}
+#endif
+
+#if defined(LV_TRIANGLES) || defined(LV_CLOSE)
+// The rank of vertex texel p among the vertices in texel order (row-major).
+uint rank(ivec2 p) {
+  int words = (width + 31) / 32;
+  int k = p.y * words + p.x / 32;
+  uint below = (1u << uint(p.x % 32)) - 1u;
+  return word_rank[k] + uint(bitCount(bits[k] & below));
+}
+
+bool has(ivec2 p) {
+  int words = (width + 31) / 32;
+  return (bits[p.y * words + p.x / 32] & (1u << uint(p.x % 32))) != 0u;
+}
+#endif
+
+#ifdef LV_TRIANGLES
+void main() {
+  int c = int(gl_GlobalInvocationID.x);
+  if (c >= cells_total) return;
+  uint n = tri_count[c];
+  if (n == 0u) return;
+  uint first = tri_offset[c];
+  ivec3 cl = cell_of(c, 1);
+  int L = cl.x, i = cl.y, j = cl.z;
+  ivec4 b = cell_box(L, i, j);
+  ivec2 tri[18];
+  uint out_ = 3u * first;
+  if (L == 1 && split[c] != 0u) {
+    for (int y = b.y; y < b.w; ++y)
+      for (int x = b.x; x < b.z; ++x) {
+        int k = cell_triangles(ivec4(x, y, x + 1, y + 1), 0, 0u, tri);
+        for (int t = 0; t < 3 * k; t += 3) {
+          uint r0 = rank(tri[t]), r1 = rank(tri[t + 1]), r2 = rank(tri[t + 2]);
+          indices[out_] = r0;
+          indices[out_ + 1u] = standard == 1 ? r1 : r2;
+          indices[out_ + 2u] = standard == 1 ? r2 : r1;
+          out_ += 3u;
+        }
+      }
+    return;
+  }
+  int k = cell_triangles(b, 1 << (L - 1), config_of(L, i, j, b), tri);
+  for (int t = 0; t < 3 * k; t += 3) {
+    uint r0 = rank(tri[t]), r1 = rank(tri[t + 1]), r2 = rank(tri[t + 2]);
+    indices[out_] = r0;
+    indices[out_ + 1u] = standard == 1 ? r1 : r2;
+    indices[out_ + 2u] = standard == 1 ? r2 : r1;
+    out_ += 3u;
+  }
+}
+#endif
+
+#ifdef LV_VERTICES
+void main() {
+  int words = (width + 31) / 32;
+  int k = int(gl_GlobalInvocationID.x);
+  if (k >= words * height) return;
+  int row = k / words, col0 = (k % words) * 32;
+  uint r = word_rank[k];
+  for (uint w = bits[k]; w != 0u; w &= w - 1u) {
+    int col = col0 + findLSB(w);
+    vec3 eye = live_grid_point(0, ivec2(col, row));
+    vec3 world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
+    positions[3u * r] = world.x;
+    positions[3u * r + 1u] = world.y;
+    positions[3u * r + 2u] = world.z;
+    texel_ids[r] = uint(row * width + col);
+    ++r;
+  }
+}
+#endif
+
+#ifdef LV_CLOSE
+// control[kStats + 2]: grid vertices (the vertex scan's total), [kStats + 3]: grid triangles
+// (the triangle scan's total); this pass adds the closing after them.
+void main() {
+  if (gl_GlobalInvocationID.x != 0u) return;
+  uint nv = control[kStats + 2u], nt = control[kStats + 3u];
+  int perimeter = 2 * (width - 1) + 2 * (height - 1);
+  uint first = 0u, prev = 0u, n = 0u;
+  uint out_ = 3u * nt;
+  uint apex = nv;
+  if (type == 0) {
+    positions[3u * apex] = live_apex.x;
+    positions[3u * apex + 1u] = live_apex.y;
+    positions[3u * apex + 2u] = live_apex.z;
+  }
+  for (int p = 0; p <= perimeter; ++p) {
+    uint cur;
+    if (p < perimeter) {
+      ivec2 t = live_ring_texel(p);
+      if (!has(t)) continue;
+      cur = rank(t);
+      if (type == 1) {
+        // The ring vertex's near-plane copy, nv + its position in the ring.
+        vec3 eye = live_segment(live_ndc(t), 0.0);
+        vec3 world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
+        uint q = nv + n;
+        positions[3u * q] = world.x;
+        positions[3u * q + 1u] = world.y;
+        positions[3u * q + 2u] = world.z;
+      }
+      if (n == 0u) {
+        first = cur;
+        prev = cur;
+        n = 1u;
+        continue;
+      }
+    } else {
+      cur = first;
+    }
+    // The ring edge prev -> cur: edge k = n - 1 (cur is ring vertex n, or the first again).
+    uint k = n - 1u;
+    if (type == 0) {
+      indices[out_] = cur, indices[out_ + 1u] = prev, indices[out_ + 2u] = apex;
+      out_ += 3u;
+    } else {
+      uint ring_n = uint(0);
+      uint cur_n = nv + k;
+      uint next_n = p < perimeter ? nv + k + 1u : nv;
+      // cap: nv + the ring's size, known at the end: written below.
+      indices[out_] = cur, indices[out_ + 1u] = prev, indices[out_ + 2u] = cur_n;
+      indices[out_ + 3u] = cur, indices[out_ + 4u] = cur_n, indices[out_ + 5u] = next_n;
+      indices[out_ + 6u] = next_n, indices[out_ + 7u] = cur_n, indices[out_ + 8u] = ring_n;
+      out_ += 9u;
+    }
+    prev = cur;
+    if (p < perimeter) ++n;
+  }
+  uint closing_vertices = type == 0 ? 1u : n + 1u;
+  if (type == 1) {
+    uint cap = nv + n;
+    positions[3u * cap] = live_cap.x;
+    positions[3u * cap + 1u] = live_cap.y;
+    positions[3u * cap + 2u] = live_cap.z;
+    for (uint t = 3u * nt + 8u; t < out_; t += 9u) indices[t] = cap;
+  }
+  uint triangles = nt + (out_ - 3u * nt) / 3u;
+  control[kDraw + 0u] = 3u * triangles;  // count
+  control[kDraw + 1u] = 1u;              // instances
+  control[kDraw + 2u] = 0u;              // first index
+  control[kDraw + 3u] = 0u;              // base vertex
+  control[kDraw + 4u] = 0u;              // base instance
+  uint splitting = 0u;  // fix-up rounds that split a leaf (AdaptiveGrid::fixup_rounds)
+  for (int r = 1; r <= rounds; ++r)
+    if (control[r] != 0u) ++splitting;
+  control[kStats] = splitting;
+  control[kStats + 1u] = control[uint(rounds)] == 0u ? 1u : 0u;  // converged
+  control[kStats + 4u] = nv + closing_vertices;
+  control[kStats + 5u] = triangles;
+}
+#endif

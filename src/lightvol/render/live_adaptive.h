@@ -1,0 +1,58 @@
+// The adaptive live volume's GPU side (LiveVolume with LiveOptions::max_error; docs/rendering.md,
+// "Live volumes"): compute passes (shaders/live_adaptive.comp) that tessellate the shadow map at
+// a bound E every frame, as `lightvol build --adaptive --tessellation quadtree` does on the CPU
+// (the same quadtree: pyramid, 2:1 balance, fix-up rounds, 16 edge-split configurations, the
+// closing through the border vertices), into a vertex and an index buffer sized once for the
+// largest tessellation, and the indirect draw command that draws exactly what was made. No
+// read-back and no allocation per frame. Internal to the render stage.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <lightvol/core/mesh.h>
+#include <lightvol/core/result.h>
+#include <lightvol/gl/context.h>
+#include <lightvol/light/light.h>
+#include <lightvol/render/live_volume.h>
+
+namespace lightvol::detail {
+
+class LiveAdaptive {
+ public:
+  // Compiles the passes. `bound`: E in world units (finite, ≥ 0); `rounds`: the most fix-up
+  // rounds a frame runs (1..63).
+  static Result<std::unique_ptr<LiveAdaptive>> create(double bound, int rounds);
+  ~LiveAdaptive();
+
+  // Sizes the buffers for W × H maps of `light` (spot or directional; window or linear depth
+  // with a projection whose depth row sees eye z only). Errors name what is not supported.
+  Status resize(const Light& light, int width, int height);
+
+  // Runs the passes. `bind` sets the live_* uniforms and shadow_maps samplers (LiveVolume::bind)
+  // on the program in use.
+  void generate(const std::function<void(const gl::Program&)>& bind) const;
+  // Attribute 0: the positions (xyz floats); the element buffer: the triangles.
+  GLuint vertex_array() const;
+  // Draws what generate made: glDrawElementsIndirect with the GPU's count (vertex array bound).
+  void draw() const;
+  // The largest volume a map of this size can give.
+  std::uint64_t max_vertices() const;
+  std::uint64_t max_triangles() const;
+  double bound() const;
+
+  // The mesh the last generate made, and its statistics.
+  Result<LiveMesh> read_back() const;
+
+ private:
+  LiveAdaptive() = default;
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+// Why `light` cannot have an adaptive live volume, or "".
+std::string live_adaptive_problem(const Light& light);
+
+}  // namespace lightvol::detail

@@ -1,0 +1,362 @@
+// The adaptive live volume (LiveOptions::max_error; render/live_adaptive.h): the compute passes
+// make build's quadtree (`--adaptive --tessellation quadtree`) at the same bound, triangle for
+// triangle; the read-back volume is closed, passes the light check and meets the bound at every
+// texel (rays cast against it); it draws the CPU-built volume's airlight; bad options are refused.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <lightvol/check/check.h>
+#include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_volume.h>
+#include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/volume/adaptive_volume.h>
+
+#include "support/adaptive_support.h"
+#include "support/analytic_scene.h"
+#include "support/gl_test_context.h"
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+
+using namespace gl;
+
+// `linear` (a linear-depth map of `light_linear`) as the window depth of the same light's
+// projection, rounded to float as a depth pass stores it.
+DepthImage to_window(const Light& light, const DepthImage& linear) {
+  DepthImage map = linear;
+  const Mat4d& p = light.projection;
+  for (float& d : map.values) {
+    const double z = -static_cast<double>(d);
+    const double ndc = (p(2, 2) * z + p(2, 3)) / (p(3, 2) * z + p(3, 3));
+    d = static_cast<float>(std::clamp(0.5 * ndc + 0.5, 0.0, 1.0));
+  }
+  return map;
+}
+
+// tests/tessellate/adaptive_grid_test.cpp's plateaus whose fix-up rounds cascade across the
+// map, one level-3 cell a round (n / 8 − 1 rounds at E = 0.001, directional linear).
+DepthImage cascading_steps(int n) {
+  return test::make_depth(n, n, [](int c, int r) {
+    const int pc = c / 2 * 2, pr = r % 16 / 2 * 2;
+    if (pc < 2) return 0.7f;
+    if (pc % 8 == 0 && pr == 4) return 0.5009f;
+    if (pc % 8 == 2 && pr == 2) return 0.4996f;
+    return 0.5f;
+  });
+}
+
+struct Case {
+  std::string name;
+  Light light;
+  DepthImage map;
+};
+
+Light with(const std::string& json, DepthEncoding encoding, bool flip_y) {
+  Light light = test::light_from_json(json);
+  light.depth = encoding;
+  light.flip_y = flip_y;
+  return light;
+}
+
+// The adaptive tests' scenes (sloped floor, boxes, one-texel bars, a sphere): every level of the
+// quadtree, fix-up rounds, clipped cells on maps whose sides are not 2^k + 1.
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  const std::string spot = test::spot_json("linear"), dir = test::directional_json("linear");
+  const auto add = [&](const std::string& name, const std::string& json, DepthEncoding e,
+                       bool flip_y, const DepthImage& linear) {
+    const Light light = with(json, e, flip_y);
+    out.push_back({name, light, e == DepthEncoding::window ? to_window(light, linear) : linear});
+  };
+  add("spot linear 65x65", spot, DepthEncoding::linear, false, test::adaptive_scene(65, 65, 8.0));
+  add("spot window 97x81", spot, DepthEncoding::window, false, test::adaptive_scene(97, 81, 8.0));
+  add("spot linear 40x96 flip_y", test::spot_json("linear", 40.0 / 96), DepthEncoding::linear, true,
+      test::adaptive_scene(40, 96, 6.0));
+  add("directional linear 97x81", dir, DepthEncoding::linear, false,
+      test::adaptive_scene(97, 81, 7.0));
+  add("directional window 64x33 flip_y", dir, DepthEncoding::window, true,
+      test::adaptive_scene(64, 33, 7.0));
+  {
+    const Light light = test::light_from_json(test::spot_json("window"));
+    out.push_back({"spot window scene 65x65", light, test::window_scene(65, 65)});
+  }
+  {
+    const Light light = test::light_from_json(test::directional_json("linear"));
+    out.push_back({"directional cascading steps 96x96", light, cascading_steps(96)});
+  }
+  return out;
+}
+
+// The CPU's quadtree volume at `e` (build --adaptive --tessellation quadtree).
+Mesh cpu_volume(const Case& c, double e, AdaptiveReport* report) {
+  AdaptiveOptions o;
+  o.tessellation = Tessellation::quadtree;
+  o.max_error = e;
+  Result<Mesh> mesh = build_adaptive_volume(c.light, c.map, {}, o, "map", report);
+  EXPECT_TRUE(mesh) << mesh.error().message;
+  return mesh ? std::move(*mesh) : Mesh{};
+}
+
+// The CPU quadtree's grid at `e`.
+AdaptiveGrid cpu_grid(const Case& c, double e) {
+  Result<TexelDepths> texels = TexelDepths::create(c.light, c.map, 0, "map");
+  EXPECT_TRUE(texels) << texels.error().message;
+  const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
+  const bool standard =
+      Unprojector(c.light, c.map.width, c.map.height, 0, Space::world).standard_winding();
+  return pyramid.tessellate(e, standard);
+}
+
+// Triangles as sorted lists of vertex-index triples, each rotated to start at its smallest index
+// (the winding kept).
+std::vector<std::array<std::uint32_t, 3>> triangle_set(const std::vector<std::uint32_t>& idx,
+                                                       std::size_t count) {
+  std::vector<std::array<std::uint32_t, 3>> out;
+  for (std::size_t t = 0; t < count; ++t) {
+    std::array<std::uint32_t, 3> a = {idx[3 * t], idx[3 * t + 1], idx[3 * t + 2]};
+    std::rotate(a.begin(), std::min_element(a.begin(), a.end()), a.end());
+    out.push_back(a);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+struct Live {
+  TextureHandle texture;
+  std::unique_ptr<LiveVolume> volume;
+};
+
+Live make_live(const Case& c, double e) {
+  Live live;
+  live.texture = upload_shadow_map(c.light, c.map);
+  LiveOptions options;
+  options.max_error = e;
+  Result<std::unique_ptr<LiveVolume>> made =
+      LiveVolume::create(c.light, {live.texture.id(), c.map.width, c.map.height}, options);
+  EXPECT_TRUE(made) << made.error().message;
+  if (made) live.volume = std::move(*made);
+  return live;
+}
+
+// Bounds relative to each scene's own depth range: coarse, medium, fine.
+std::vector<double> bounds(const Case& c) {
+  if (c.name.find("cascading") != std::string::npos) return {0.001};
+  return c.light.depth == DepthEncoding::window && c.light.type == LightType::spot
+             ? std::vector<double>{0.2, 0.02, 0.002}
+             : std::vector<double>{0.5, 0.05, 0.005};
+}
+
+TEST(LiveAdaptive, MakesBuildsQuadtreeTriangleForTriangle) {
+  REQUIRE_GL_CONTEXT();
+  for (const Case& c : cases()) {
+    for (const double e : bounds(c)) {
+      SCOPED_TRACE(c.name + " E = " + std::to_string(e));
+      const AdaptiveGrid grid = cpu_grid(c, e);
+      AdaptiveReport report;
+      const Mesh cpu = cpu_volume(c, e, &report);
+      Live live = make_live(c, e);
+      ASSERT_TRUE(live.volume);
+      Result<LiveMesh> gpu = live.volume->read_mesh();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      std::printf("  %-32s E %-6g triangles GPU %zu CPU %zu, fix-up rounds %d/%d\n", c.name.c_str(),
+                  e, gpu->mesh.num_triangles(), cpu.num_triangles(), gpu->fixup_rounds,
+                  grid.fixup_rounds);
+      EXPECT_TRUE(gpu->converged);
+      EXPECT_EQ(gpu->fixup_rounds, grid.fixup_rounds);
+      EXPECT_EQ(gpu->grid_triangles, grid.num_triangles());
+      EXPECT_EQ(gpu->vertex_texels, grid.vertices);
+      ASSERT_EQ(gpu->mesh.num_vertices(), cpu.num_vertices());
+      ASSERT_EQ(gpu->mesh.num_triangles(), cpu.num_triangles());
+      // The same triangles over the same vertices (both number the grid's vertices in texel
+      // order, then the closing's).
+      EXPECT_TRUE(triangle_set(gpu->mesh.indices, gpu->grid_triangles) ==
+                  triangle_set(grid.indices, grid.num_triangles()));
+      EXPECT_TRUE(triangle_set(gpu->mesh.indices, gpu->mesh.num_triangles()) ==
+                  triangle_set(cpu.indices, cpu.num_triangles()));
+      // Positions: float on the GPU against double rounded to float (live_volume.h).
+      double scale = 0, worst = 0;
+      for (std::size_t i = 0; i < cpu.positions.size(); ++i) {
+        scale = std::max(scale, static_cast<double>(std::abs(cpu.positions[i])));
+        worst = std::max(worst,
+                         static_cast<double>(std::abs(gpu->mesh.positions[i] - cpu.positions[i])));
+      }
+      EXPECT_LE(worst, 2e-6 * scale);
+    }
+  }
+}
+
+TEST(LiveAdaptive, IsClosedPassesTheLightCheckAndMeetsTheBoundAtEveryTexel) {
+  REQUIRE_GL_CONTEXT();
+  for (const Case& c : cases()) {
+    for (const double e : bounds(c)) {
+      SCOPED_TRACE(c.name + " E = " + std::to_string(e));
+      Live live = make_live(c, e);
+      ASSERT_TRUE(live.volume);
+      Result<LiveMesh> gpu = live.volume->read_mesh();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      const CheckReport check = check_volume_linear(gpu->mesh, &c.light);
+      EXPECT_TRUE(check.valid()) << check.first_failure();
+      EXPECT_NE(check.proof, NestingProof::none);
+      // Every texel's ray cast against the volume (tests/support/adaptive_support.h), with the
+      // adaptive volume tests' allowance for float positions.
+      const test::RayErrors r = test::ray_errors(gpu->mesh, c.light, c.map);
+      EXPECT_EQ(r.missed, 0);
+      EXPECT_LE(r.max_error, e * (1 + 1e-4) + 5e-5);
+    }
+  }
+}
+
+TEST(LiveAdaptive, FollowsTheMapFromFrameToFrame) {
+  REQUIRE_GL_CONTEXT();
+  const Light light = test::light_from_json(test::spot_json("linear"));
+  const DepthImage first = test::adaptive_scene(65, 65, 8.0);
+  DepthImage second = first;
+  for (int r = 10; r < 20; ++r)
+    for (int col = 40; col < 55; ++col) second.values[static_cast<std::size_t>(r) * 65 + col] = 3;
+  const Case a{"first", light, first}, b{"second", light, second};
+  Live live = make_live(a, 0.05);
+  ASSERT_TRUE(live.volume);
+  Result<LiveMesh> one = live.volume->read_mesh();
+  ASSERT_TRUE(one) << one.error().message;
+  // The same texture, new contents: no call to the live volume.
+  const TextureHandle replacement = upload_shadow_map(light, second);
+  std::vector<float> rows(second.values.size());
+  for (int t = 0; t < 65; ++t)
+    std::copy_n(second.values.begin() + (64 - t) * 65, 65, rows.begin() + t * 65);
+  glBindTexture(GL_TEXTURE_2D, live.texture.id());
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 65, 65, GL_RED, GL_FLOAT, rows.data());
+  glBindTexture(GL_TEXTURE_2D, 0);
+  Result<LiveMesh> two = live.volume->read_mesh();
+  ASSERT_TRUE(two) << two.error().message;
+  EXPECT_EQ(two->grid_triangles, cpu_grid(b, 0.05).num_triangles());
+  EXPECT_NE(two->grid_triangles, one->grid_triangles);
+  EXPECT_EQ(one->grid_triangles, cpu_grid(a, 0.05).num_triangles());
+}
+
+TEST(LiveAdaptive, SaysWhenTheRoundsAllowedDoNotConverge) {
+  REQUIRE_GL_CONTEXT();
+  const Case c{"steps", test::light_from_json(test::directional_json("linear")),
+               cascading_steps(96)};
+  EXPECT_EQ(cpu_grid(c, 0.001).fixup_rounds, 11);
+  const TextureHandle texture = upload_shadow_map(c.light, c.map);
+  for (const int rounds : {11, 12}) {
+    LiveOptions options;
+    options.max_error = 0.001;
+    options.max_rounds = rounds;
+    Result<std::unique_ptr<LiveVolume>> live =
+        LiveVolume::create(c.light, {texture.id(), 96, 96}, options);
+    ASSERT_TRUE(live) << live.error().message;
+    Result<LiveMesh> gpu = (*live)->read_mesh();
+    ASSERT_TRUE(gpu) << gpu.error().message;
+    // 11 rounds split; the 12th finds nothing more to split (converged).
+    EXPECT_EQ(gpu->fixup_rounds, 11) << rounds;
+    EXPECT_EQ(gpu->converged, rounds == 12) << rounds;
+  }
+}
+
+// The render tests' medium (tests/render/gl_volume_test.cpp).
+Medium test_medium() {
+  Medium m;
+  m.scattering = 0.06;
+  m.absorption = 0.02;
+  m.intensity = 20;
+  m.phase = {PhaseType::hg, 0.4, 0};
+  return m;
+}
+
+TEST(LiveAdaptive, DrawsTheAirlightOfTheCpuBuiltAdaptiveVolume) {
+  REQUIRE_GL_CONTEXT();
+  const test::Box box{{-0.7, 1.0, -0.9}, {0.2, 1.5, 0.1}};
+  struct ImageCase {
+    const char* name;
+    std::string json;
+    DepthEncoding encoding;
+    Vec3d eye, target;
+  };
+  const ImageCase image_cases[] = {
+      {"spot window outside",
+       test::spot_json("linear"),
+       DepthEncoding::window,
+       {6, 3, 6},
+       {0, 1, 0}},
+      {"spot linear inside",
+       test::spot_json("linear"),
+       DepthEncoding::linear,
+       {1.5, 0.6, 1.5},
+       {-1, 0.3, -1}},
+      {"directional window outside",
+       test::directional_json("linear"),
+       DepthEncoding::window,
+       {7, 4, 5},
+       {0, 0.5, 0}},
+      {"directional linear inside",
+       test::directional_json("linear"),
+       DepthEncoding::linear,
+       {2, 1, 2},
+       {-1, 0.5, -2}},
+  };
+  for (const ImageCase& ic : image_cases) {
+    SCOPED_TRACE(ic.name);
+    const Light light = with(ic.json, ic.encoding, false);
+    Light linear = light;
+    linear.depth = DepthEncoding::linear;
+    const DepthImage linear_map = test::scene_shadow_map(linear, 96, 80, box);
+    const Case c{ic.name, light,
+                 ic.encoding == DepthEncoding::window ? to_window(light, linear_map) : linear_map};
+    const RenderScene scene =
+        test::make_render_scene(test::make_camera(ic.eye, ic.target, 64, 48), light, test_medium());
+    Result<std::unique_ptr<GlVolumeRenderer>> mesh_renderer = GlVolumeRenderer::create(scene);
+    Result<std::unique_ptr<GlVolumeRenderer>> live_renderer = GlVolumeRenderer::create(scene);
+    ASSERT_TRUE(mesh_renderer && live_renderer);
+    const double e = 0.01;
+    AdaptiveReport report;
+    (*mesh_renderer)->set_volume(cpu_volume(c, e, &report));
+    const Image reference = (*mesh_renderer)->render();
+    Live live = make_live(c, e);
+    ASSERT_TRUE(live.volume);
+    EXPECT_FALSE((*live_renderer)->set_volume(*live.volume, LiveDraw::vertex_stage));
+    ASSERT_TRUE((*live_renderer)->set_volume(*live.volume, LiveDraw::two_pass));
+    const Image image = (*live_renderer)->render();
+    const double l2 = compare_images(image, reference).relative_l2;
+    std::printf("  %-28s %zu triangles, relative L2 %.2e\n", ic.name, report.triangles, l2);
+    EXPECT_LE(l2, 0.005);
+    double sum = 0;
+    for (const double v : reference.values) sum += v;
+    EXPECT_GT(sum, 0);
+  }
+}
+
+TEST(LiveAdaptive, RefusesWhatItCannotDo) {
+  REQUIRE_GL_CONTEXT();
+  const Light spot = test::light_from_json(test::spot_json("linear"));
+  const DepthImage map = test::adaptive_scene(33, 33, 8.0);
+  const TextureHandle texture = upload_shadow_map(spot, map);
+  const GlShadowMap gl_map{texture.id(), 33, 33};
+  const auto message = [&](const Light& light, double e, int rounds) {
+    LiveOptions o;
+    o.max_error = e;
+    o.max_rounds = rounds;
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, gl_map, o);
+    return live ? std::string() : live.error().message;
+  };
+  EXPECT_EQ(message(spot, -1, 32),
+            "live volume: max_error: expected a finite number >= 0, got -1.000000");
+  EXPECT_NE(message(spot, std::nan(""), 32).find("max_error: expected a finite number"),
+            std::string::npos);
+  EXPECT_EQ(message(spot, 0.1, 0), "live volume: max_rounds: expected 1 to 63, got 0");
+  Light radial = spot;
+  radial.depth = DepthEncoding::radial;
+  EXPECT_NE(message(radial, 0.1, 32).find("the light's \"depth\" is \"radial\""),
+            std::string::npos);
+  EXPECT_EQ(message(spot, 0.1, 32), "");
+}
+
+}  // namespace
+}  // namespace lightvol
