@@ -47,6 +47,8 @@ struct RenderOptions {
   std::string compare_path;
   int frames = 0;
   bool quiet = false;
+  bool adaptive = false;  // live: the adaptive volume at --max-error
+  double max_error = -1;
 };
 
 double median(std::vector<double> v) {
@@ -66,6 +68,11 @@ std::string conflicting_flags(const RenderOptions& o) {
     return "render: --method " + o.method + " needs --shadow-map DEPTH (the light's shadow map(s))";
   if (o.method == "live" && !o.mesh_path.empty())
     return "render: --method live makes the volume from --shadow-map on the GPU; it takes no MESH";
+  if (o.adaptive && o.method != "live")
+    return "--adaptive: applies with --method live only (--method volume draws the MESH given)";
+  if (o.adaptive && o.max_error < 0)
+    return "--adaptive: needs --max-error E (world units along the texel rays)";
+  if (!o.adaptive && o.max_error >= 0) return "--max-error: applies with --adaptive only";
   if (o.samples < 1) return "--samples: must be >= 1, got " + std::to_string(o.samples);
   if (o.interleave < 1) return "--interleave: must be >= 1, got " + std::to_string(o.interleave);
   if (o.frames < 0) return "--frames: must be >= 0, got " + std::to_string(o.frames);
@@ -144,7 +151,10 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
       textures.push_back(upload_shadow_map(scene.light, map));
       on_gpu.push_back({textures.back().id(), map.width, map.height});
     }
-    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(scene.light, on_gpu);
+    LiveOptions live_options;
+    if (o.adaptive) live_options.max_error = o.max_error;
+    Result<std::unique_ptr<LiveVolume>> live =
+        LiveVolume::create(scene.light, on_gpu, live_options);
     if (!live) return live.error();
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     if (!renderer) return renderer.error();
@@ -257,6 +267,12 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option(
       "--shadow-map", o->shadow_maps,
       "live, raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
+  cmd->add_flag("--adaptive", o->adaptive,
+                "live: the adaptive volume (build --adaptive --tessellation quadtree's quadtree), "
+                "made by compute shaders each frame; spot and directional lights");
+  cmd->add_option("--max-error", o->max_error,
+                  "Error bound of --adaptive, in world units along each texel ray")
+      ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
       ->capture_default_str();

@@ -9,7 +9,11 @@
 // read-back of the image); ratios come from the same run. Runs as it is where a GPU is present
 // (EGL's device platform): the renderer line says which one ran.
 //
+// Then the adaptive live volume (LiveOptions::max_error) against the static one: generation alone
+// and whole frames, and their ratios.
+//
 //   live_bench [WIDTH HEIGHT FRAMES MAP...]   (defaults 1024 768 5 1024 2048)
+//   LIVE_BENCH_ADAPTIVE_ONLY=1 live_bench ...  (the adaptive table only)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -40,6 +44,9 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 }  // namespace
+
+// The bound of the adaptive rows (the Sponza table's adaptive E, docs/performance.md).
+constexpr double kAdaptiveError = 0.01;
 
 int main(int argc, char** argv) {
   const int width = argc > 1 ? std::atoi(argv[1]) : 1024;
@@ -75,7 +82,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "live_bench: %s\n", message.c_str());
     return 2;
   };
+  // LIVE_BENCH_ADAPTIVE_ONLY=1: the adaptive table only (the first one builds on the CPU).
+  const char* adaptive_only = std::getenv("LIVE_BENCH_ADAPTIVE_ONLY");
   for (const int size : maps) {
+    if (adaptive_only && std::string(adaptive_only) == "1") break;
     const DepthImage map = test::scene_shadow_map(light, size, size);
     // One renderer per way of drawing, so that each round draws all of them back to back.
     std::unique_ptr<GlVolumeRenderer> renderers[3];
@@ -135,12 +145,65 @@ int main(int argc, char** argv) {
                  compare_images(two_pass_image, prebuilt_image).relative_l2));
     std::fflush(stdout);
   }
+  // The adaptive live volume against the static one (both two passes: generate, then draw).
+  std::printf("\nadaptive, E = %g (LiveOptions::max_error; the Sponza table's adaptive bound)\n",
+              kAdaptiveError);
+  std::printf("%-5s %9s %9s | %8s %8s | %8s %8s | %8s %8s | %8s\n", "map", "static", "adaptive",
+              "gen st", "gen ad", "frame st", "frame ad", "gen a/s", "frame a/s", "rel. L2");
+  for (const int size : maps) {
+    const DepthImage map = test::scene_shadow_map(light, size, size);
+    const gl::TextureHandle texture = upload_shadow_map(light, map);
+    Result<std::unique_ptr<LiveVolume>> live_static =
+        LiveVolume::create(light, {texture.id(), size, size});
+    if (!live_static) return fail(live_static.error().message);
+    LiveOptions options;
+    options.max_error = kAdaptiveError;
+    Result<std::unique_ptr<LiveVolume>> live_adaptive =
+        LiveVolume::create(light, {texture.id(), size, size}, options);
+    if (!live_adaptive) return fail(live_adaptive.error().message);
+    std::unique_ptr<GlVolumeRenderer> renderers[2];
+    for (auto& r : renderers) {
+      Result<std::unique_ptr<GlVolumeRenderer>> made = GlVolumeRenderer::create(scene);
+      if (!made) return fail(made.error().message);
+      r = std::move(*made);
+    }
+    if (Status s = renderers[0]->set_volume(**live_static); !s) return fail(s.error().message);
+    if (Status s = renderers[1]->set_volume(**live_adaptive); !s) return fail(s.error().message);
+    const Image static_image = renderers[0]->render(), adaptive_image = renderers[1]->render();
+    Result<LiveMesh> made = (*live_adaptive)->read_mesh();  // once, outside the timed rounds
+    if (!made) return fail(made.error().message);
+    std::vector<double> gen_s, gen_a, frame_s, frame_a, gen_ratio, frame_ratio;
+    for (int i = 0; i < frames; ++i) {
+      double a = 0, b = 0;
+      renderers[0]->render(&a);
+      renderers[1]->render(&b);
+      auto start = std::chrono::steady_clock::now();
+      (*live_static)->generate();
+      gl::glFinish();
+      const double gs = seconds_since(start);
+      start = std::chrono::steady_clock::now();
+      (*live_adaptive)->generate();
+      gl::glFinish();
+      const double ga = seconds_since(start);
+      gen_s.push_back(gs), gen_a.push_back(ga), frame_s.push_back(a), frame_a.push_back(b);
+      gen_ratio.push_back(ga / gs), frame_ratio.push_back(b / a);
+    }
+    std::printf("%-5d %9llu %9zu | %8.1f %8.1f | %8.1f %8.1f | %8.2f %8.2f | %8.1e\n", size,
+                static_cast<unsigned long long>((*live_static)->num_triangles()),
+                made->mesh.num_triangles(), 1e3 * median(gen_s), 1e3 * median(gen_a),
+                1e3 * median(frame_s), 1e3 * median(frame_a), median(gen_ratio),
+                median(frame_ratio), compare_images(adaptive_image, static_image).relative_l2);
+    std::fflush(stdout);
+  }
   std::printf(
       "\nms per frame (FPS): live, the volume made from the shadow map texture in the volume "
       "pass's vertex stage and drawn (LiveDraw::vertex_stage); 2-pass, made once per vertex by "
       "transform feedback, then drawn as a mesh (LiveDraw::two_pass); generate, that first pass "
       "alone; prebuilt, build's mesh drawn from buffers uploaded once; CPU+upl., "
       "build_static_volume, the upload and the prebuilt draw. rel. L2: the larger of the two live "
-      "images' differences from the prebuilt one.\n");
+      "images' differences from the prebuilt one. Adaptive table: gen st / gen ad, the static and "
+      "adaptive live volumes' generation alone; frame st / frame ad, generation, volume pass and "
+      "resolve; a/s, adaptive over static (median of the rounds' ratios); rel. L2, the adaptive "
+      "image against the static one.\n");
   return 0;
 }

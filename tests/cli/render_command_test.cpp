@@ -183,6 +183,37 @@ TEST(RenderCommand, LiveMakesTheVolumeOnTheGpuAndDrawsBuildsAirlight) {
   EXPECT_GT(number_after(live.out, "time per frame: "), 0) << live.out;
 }
 
+TEST(RenderCommand, LiveAdaptiveDrawsTheAirlightOfBuildsQuadtreeVolume) {
+  REQUIRE_GL_CONTEXT();
+  test::TempDir tmp;
+  const std::string dir = tmp.path();
+  write_scene(dir, {6, 3, 6}, {0, 1, 0});
+  const std::string args = common_args(dir);
+  test::CommandResult built = test::run_lightvol(
+      "build '" + dir + "/shadow.exr' --light '" + dir + "/light.json' --adaptive --tessellation " +
+      "quadtree --max-error 0.01 --out '" + dir + "/adaptive.ply'");
+  ASSERT_EQ(built.exit_code, 0) << built.err;
+  test::CommandResult vol = test::run_lightvol("render '" + dir + "/adaptive.ply' " + args +
+                                               " --out '" + dir + "/volume.exr'");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  test::CommandResult live = test::run_lightvol(
+      "render " + args + " --method live --adaptive --max-error 0.01 --shadow-map '" + dir +
+      "/shadow.exr' --out '" + dir + "/live.exr' --compare '" + dir + "/volume.exr' --frames 2");
+  ASSERT_EQ(live.exit_code, 0) << live.err;
+  // The same triangles (tests/render/live_adaptive_test), drawn by the same passes.
+  EXPECT_LT(number_after(live.out, "relative L2 "), 1e-4) << live.out;
+  test::CommandResult r =
+      test::run_lightvol("render " + args + " --method live --adaptive " + "--shadow-map '" + dir +
+                         "/shadow.exr' --out '" + dir + "/x.exr'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            "lightvol: --adaptive: needs --max-error E (world units along the texel rays)\n");
+  r = test::run_lightvol("render '" + dir + "/adaptive.ply' " + args + " --max-error 0.01 --out '" +
+                         dir + "/x.exr'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "lightvol: --max-error: applies with --adaptive only\n");
+}
+
 TEST(RenderCommand, RejectsBadInputNamingTheFile) {
   test::TempDir tmp;
   write_scene(tmp.path(), {6, 3, 6}, {0, 1, 0});
