@@ -76,6 +76,14 @@ const uint kStats = 160u;  // control[kStats + ...]: rounds used, converged, gri
 const uint kDraw = 192u;
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 
+// This invocation's index: dispatches of more than kMaxGroupsX groups run as rows of that many
+// (a dimension holds at most 65535 groups).
+const uint kMaxGroupsX = 32768u;
+int invocation() {
+  return int(gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x +
+             gl_GlobalInvocationID.x);
+}
+
 int cell_index(int L, int i, int j) { return offset[L] + j * nx[L] + i; }
 
 bool in_level(int L, int i, int j) {
@@ -154,7 +162,7 @@ int cell_triangles(ivec4 b, int half_, uint config, out ivec2 tri[18]) {
 
 #ifdef LV_TEXELS
 void main() {
-  int v = int(gl_GlobalInvocationID.x);
+  int v = invocation();
   if (v >= width * height) return;
   int col = v % width, row = v / width;
   int texture_row = flip_y == 1 ? row : height - 1 - row;
@@ -194,7 +202,7 @@ double texel_error(int x, int y, double dp, double w0) {
 void main() {
   int L = level;
   int bands = ((1 << L) + kBandRows) / kBandRows;
-  int task = int(gl_GlobalInvocationID.x);
+  int task = invocation();
   if (task >= nx[L] * ny[L] * bands) return;
   int cell = task / bands, band = task - cell * bands;
   int i = cell % nx[L], j = cell / nx[L];
@@ -255,7 +263,7 @@ void main() {
 #ifdef LV_BALANCE
 void main() {
   int L = level;
-  int cell = int(gl_GlobalInvocationID.x);
+  int cell = invocation();
   if (cell >= nx[L] * ny[L]) return;
   int i = cell % nx[L], j = cell / nx[L];
   int c = cell_index(L, i, j);
@@ -277,16 +285,16 @@ void main() {
 
 #ifdef LV_CONTROL
 void main() {
-  if (gl_GlobalInvocationID.x != 0u) return;
+  if (invocation() != 0) return;
   bool run = round_ == 1 || control[round_ - 1] != 0u;
   int cells2 = cells_total - offset[min(2, top_level + 1)];
-  control[64u] = run ? uint((cells2 + 63) / 64) : 0u;
-  control[65u] = 1u;
-  control[66u] = 1u;
-  for (int L = 2; L <= top_level; ++L) {
+  for (int L = 1; L <= top_level; ++L) {
+    // L = 1: the test (cells of levels 2..top); L >= 2: the balance of level L.
     uint k = 64u + 3u * uint(L - 1);
-    control[k] = run ? uint((nx[L] * ny[L] + 63) / 64) : 0u;
-    control[k + 1u] = 1u;
+    uint groups = uint(((L == 1 ? cells2 : nx[L] * ny[L]) + 63) / 64);
+    uint x = min(groups, kMaxGroupsX);
+    control[k] = run ? x : 0u;
+    control[k + 1u] = run ? (groups + x - 1u) / x : 0u;
     control[k + 2u] = 1u;
   }
 }
@@ -346,7 +354,7 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
 
 void main() {
   int first = offset[min(2, top_level + 1)];
-  int c = first + int(gl_GlobalInvocationID.x);
+  int c = first + invocation();
   if (c >= cells_total || top_level < 2) return;
   ivec3 cl = cell_of(c, 2);
   int L = cl.x, i = cl.y, j = cl.z;
@@ -389,7 +397,7 @@ void mark(ivec2 p) {
 
 #ifdef LV_COUNT
 void main() {
-  int c = int(gl_GlobalInvocationID.x);
+  int c = invocation();
   if (c >= cells_total) return;
   ivec3 cl = cell_of(c, 1);
   int L = cl.x, i = cl.y, j = cl.z;
@@ -428,7 +436,7 @@ uint scan_value(int k) { return scan_popcount == 1 ? uint(bitCount(scan_in[k])) 
 
 #ifdef LV_SCAN_CHUNKS
 void main() {
-  int chunk = int(gl_GlobalInvocationID.x);
+  int chunk = invocation();
   if (chunk * kChunk >= scan_n) return;
   uint s = 0u;
   for (int k = chunk * kChunk; k < min(scan_n, (chunk + 1) * kChunk); ++k) s += scan_value(k);
@@ -438,7 +446,7 @@ void main() {
 
 #ifdef LV_SCAN_SUMS
 void main() {
-  if (gl_GlobalInvocationID.x != 0u) return;
+  if (invocation() != 0) return;
   uint s = 0u;
   for (int chunk = 0; chunk * kChunk < scan_n; ++chunk) {
     uint v = scan_sums[chunk];
@@ -451,7 +459,7 @@ void main() {
 
 #ifdef LV_SCAN_WRITE
 void main() {
-  int chunk = int(gl_GlobalInvocationID.x);
+  int chunk = invocation();
   if (chunk * kChunk >= scan_n) return;
   uint s = scan_sums[chunk];
   for (int k = chunk * kChunk; k < min(scan_n, (chunk + 1) * kChunk); ++k) {
@@ -479,7 +487,7 @@ bool has(ivec2 p) {
 
 #ifdef LV_TRIANGLES
 void main() {
-  int c = int(gl_GlobalInvocationID.x);
+  int c = invocation();
   if (c >= cells_total) return;
   uint n = tri_count[c];
   if (n == 0u) return;
@@ -517,7 +525,7 @@ void main() {
 #ifdef LV_VERTICES
 void main() {
   int words = (width + 31) / 32;
-  int k = int(gl_GlobalInvocationID.x);
+  int k = invocation();
   if (k >= words * height) return;
   int row = k / words, col0 = (k % words) * 32;
   uint r = word_rank[k];
@@ -538,7 +546,7 @@ void main() {
 // control[kStats + 2]: grid vertices (the vertex scan's total), [kStats + 3]: grid triangles
 // (the triangle scan's total); this pass adds the closing after them.
 void main() {
-  if (gl_GlobalInvocationID.x != 0u) return;
+  if (invocation() != 0) return;
   uint nv = control[kStats + 2u], nt = control[kStats + 3u];
   int perimeter = 2 * (width - 1) + 2 * (height - 1);
   uint first = 0u, prev = 0u, n = 0u;

@@ -79,7 +79,14 @@ constexpr GLuint kControlSize = 256;
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
 
-GLuint groups(std::uint64_t invocations) { return static_cast<GLuint>((invocations + 63) / 64); }
+// Dispatches enough groups of 64 for `invocations`, as rows of at most kMaxGroupsX groups
+// (shaders/live_adaptive.comp's invocation()).
+constexpr std::uint64_t kMaxGroupsX = 32768;
+void dispatch(std::uint64_t invocations) {
+  const std::uint64_t groups = std::max<std::uint64_t>((invocations + 63) / 64, 1);
+  const std::uint64_t x = std::min(groups, kMaxGroupsX);
+  glDispatchCompute(static_cast<GLuint>(x), static_cast<GLuint>((groups + x - 1) / x), 1);
+}
 
 // The largest float ≤ b, as a double: a value rounded up to float exceeds b iff it exceeds this.
 double float_floor(double b) {
@@ -277,25 +284,23 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       static_cast<std::uint64_t>(s.width) * static_cast<std::uint64_t>(s.height);
 
   bind(use(kTexels));
-  glDispatchCompute(groups(texels), 1, 1);
+  dispatch(texels);
   barrier();
   // The pyramid, thresholded at E: level by level from the finest.
   const Program& own = use(kOwn);
   for (int level = 1; level <= p.top; ++level) {
     const std::uint64_t bands = static_cast<std::uint64_t>(((1 << level) + kBandRows) / kBandRows);
     glUniform1i(own.uniform("level"), level);
-    glDispatchCompute(groups(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
-                             static_cast<std::uint32_t>(p.ny[level]) * bands),
-                      1, 1);
+    dispatch(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
+             static_cast<std::uint32_t>(p.ny[level]) * bands);
     barrier();
   }
   const Program& balance = use(kBalance);
   glUniform1i(balance.uniform("round_"), 0);
   for (int level = 2; level <= p.top; ++level) {
     glUniform1i(balance.uniform("level"), level);
-    glDispatchCompute(groups(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
-                             static_cast<std::uint32_t>(p.ny[level])),
-                      1, 1);
+    dispatch(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
+             static_cast<std::uint32_t>(p.ny[level]));
     barrier();
   }
   // The fix-up rounds: each one's dispatch sizes written by the GPU (zero once a round split
@@ -304,7 +309,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   for (int round = 1; round <= s.rounds && p.top >= 2; ++round) {
     const Program& control = use(kControl);
     glUniform1i(control.uniform("round_"), round);
-    glDispatchCompute(1, 1, 1);
+    dispatch(1);
     barrier();
     const Program& test = use(kTest);
     glUniform1i(test.uniform("round_"), round);
@@ -322,7 +327,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   // Emission: counts and the vertex bitmap, the two scans, the triangles and vertices, the
   // closing and the draw command.
   use(kCount);
-  glDispatchCompute(groups(s.cells), 1, 1);
+  dispatch(s.cells);
   barrier();
   const auto scan = [&](Binding in, Binding out, std::uint64_t n, bool popcount, GLuint total) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kScanIn, s.buffers[in].id());
@@ -333,21 +338,21 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       glUniform1i(program.uniform("scan_n"), static_cast<GLint>(n));
       glUniform1i(program.uniform("scan_popcount"), popcount ? 1 : 0);
       glUniform1i(program.uniform("scan_total"), static_cast<GLint>(total));
-      glDispatchCompute(pass == kScanSums ? 1 : groups(chunks), 1, 1);
+      dispatch(pass == kScanSums ? 1 : chunks);
       barrier();
     }
   };
   scan(kCounts, kOffsets, s.cells, false, kStats + 3);
   scan(kBits, kRanks, s.words, true, kStats + 2);
   use(kTriangles);
-  glDispatchCompute(groups(s.cells), 1, 1);
+  dispatch(s.cells);
   bind(use(kVertices));
-  glDispatchCompute(groups(s.words), 1, 1);
+  dispatch(s.words);
   barrier();
   const Program& close = use(kClose);
   bind(close);
   glUniform1i(close.uniform("rounds"), s.rounds);
-  glDispatchCompute(1, 1, 1);
+  dispatch(1);
   glMemoryBarrier(GL_ELEMENT_ARRAY_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT |
                   GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT |
                   GL_BUFFER_UPDATE_BARRIER_BIT);
