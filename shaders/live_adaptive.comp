@@ -38,13 +38,26 @@ layout(std430, binding = 0) readonly buffer Params {
   double bound;          // E, for the fix-up's triangle tests
   double pyramid_bound;  // the largest float <= E: a value rounded up to float exceeds E iff
                          // the double exceeds this
-  int width, height, flip_y, encoding;  // encoding: 0 window, 1 linear
-  int uniform_flag, top_in_params, standard, type;
-  int cells_total, p_pad0, p_pad1, p_pad2;
-  int nx[16];
-  int ny[16];
-  int offset[17];  // first cell of level L (1..top) in split[]; offset[top + 1] = cells_total
+  // The integers, as doubles: every member of the block 8-byte aligned (llvmpipe misread an int
+  // at an offset of 4 mod 8 in this block, in some invocations).
+  double p_width, p_height, p_flip_y, p_encoding;  // encoding: 0 window, 1 linear
+  double p_uniform_flag, p_standard, p_type, p_cells_total;
+  double p_nx[16];
+  double p_ny[16];
+  double p_offset[17];  // first cell of level L (1..top) in split[]; [top + 1]: cells_total
 };
+
+#define width int(p_width)
+#define height int(p_height)
+#define flip_y int(p_flip_y)
+#define encoding int(p_encoding)
+#define uniform_flag int(p_uniform_flag)
+#define standard int(p_standard)
+#define type int(p_type)
+#define cells_total int(p_cells_total)
+#define nx_at(L) int(p_nx[L])
+#define ny_at(L) int(p_ny[L])
+#define offset_at(L) int(p_offset[L])
 
 layout(std430, binding = 1) buffer Depths { double depth[]; };
 layout(std430, binding = 2) buffer Scales { double scale[]; };
@@ -84,10 +97,10 @@ int invocation() {
              gl_GlobalInvocationID.x);
 }
 
-int cell_index(int L, int i, int j) { return offset[L] + j * nx[L] + i; }
+int cell_index(int L, int i, int j) { return offset_at(L) + j * nx_at(L) + i; }
 
 bool in_level(int L, int i, int j) {
-  return L >= 1 && L <= top_level && i >= 0 && j >= 0 && i < nx[L] && j < ny[L];
+  return L >= 1 && L <= top_level && i >= 0 && j >= 0 && i < nx_at(L) && j < ny_at(L);
 }
 
 uint split_at(int L, int i, int j) { return in_level(L, i, j) ? split[cell_index(L, i, j)] : 0u; }
@@ -104,9 +117,9 @@ double d_at(int x, int y) { return depth[y * width + x]; }
 // The level and coordinates of flattened cell c (levels from `first` on).
 ivec3 cell_of(int c, int first) {
   int L = first;
-  while (L < top_level && c >= offset[L + 1]) ++L;
-  int k = c - offset[L];
-  return ivec3(L, k % nx[L], k / nx[L]);
+  while (L < top_level && c >= offset_at(L + 1)) ++L;
+  int k = c - offset_at(L);
+  return ivec3(L, k % nx_at(L), k / nx_at(L));
 }
 
 // Configuration of a leaf: the edges whose same-level neighbour is split and whose midpoint lies
@@ -203,9 +216,9 @@ void main() {
   int L = level;
   int bands = ((1 << L) + kBandRows) / kBandRows;
   int task = invocation();
-  if (task >= nx[L] * ny[L] * bands) return;
+  if (task >= nx_at(L) * ny_at(L) * bands) return;
   int cell = task / bands, band = task - cell * bands;
-  int i = cell % nx[L], j = cell / nx[L];
+  int i = cell % nx_at(L), j = cell / nx_at(L);
   int c = cell_index(L, i, j);
   if (split[c] != 0u) return;
   if (L > 1 && (is_split(L - 1, 2 * i, 2 * j) || is_split(L - 1, 2 * i + 1, 2 * j) ||
@@ -264,8 +277,8 @@ void main() {
 void main() {
   int L = level;
   int cell = invocation();
-  if (cell >= nx[L] * ny[L]) return;
-  int i = cell % nx[L], j = cell / nx[L];
+  if (cell >= nx_at(L) * ny_at(L)) return;
+  int i = cell % nx_at(L), j = cell / nx_at(L);
   int c = cell_index(L, i, j);
   uint mark = uint(round_) + 1u;
   if (round_ > 0 && fail[c] == uint(round_)) {
@@ -287,11 +300,11 @@ void main() {
 void main() {
   if (invocation() != 0) return;
   bool run = round_ == 1 || control[round_ - 1] != 0u;
-  int cells2 = cells_total - offset[min(2, top_level + 1)];
+  int cells2 = cells_total - offset_at(min(2, top_level + 1));
   for (int L = 1; L <= top_level; ++L) {
     // L = 1: the test (cells of levels 2..top); L >= 2: the balance of level L.
     uint k = 64u + 3u * uint(L - 1);
-    uint groups = uint(((L == 1 ? cells2 : nx[L] * ny[L]) + 63) / 64);
+    uint groups = uint(((L == 1 ? cells2 : nx_at(L) * ny_at(L)) + 63) / 64);
     uint x = min(groups, kMaxGroupsX);
     control[k] = run ? x : 0u;
     control[k + 1u] = run ? (groups + x - 1u) / x : 0u;
@@ -353,7 +366,7 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
 }
 
 void main() {
-  int first = offset[min(2, top_level + 1)];
+  int first = offset_at(min(2, top_level + 1));
   int c = first + invocation();
   if (c >= cells_total || top_level < 2) return;
   ivec3 cl = cell_of(c, 2);

@@ -23,13 +23,13 @@ struct Params {
   double w0_c = 1, w0_dc = 0, w0_dr = 0, w1 = 0, uniform_scale = 0;
   double pz = 0, pzc = 0, pw = 0, pwc = 0, near_d = 0, far_d = 0;
   double bound = 0, pyramid_bound = 0;
-  std::int32_t width = 0, height = 0, flip_y = 0, encoding = 0;
-  std::int32_t uniform_flag = 0, top = 0, standard = 1, type = 0;
-  std::int32_t cells_total = 0, pad[3] = {};
-  std::int32_t nx[16] = {}, ny[16] = {}, offset[17] = {};
+  // Integers as doubles (shaders/live_adaptive.comp: every member 8-byte aligned).
+  double width = 0, height = 0, flip_y = 0, encoding = 0;
+  double uniform_flag = 0, standard = 1, type = 0, cells_total = 0;
+  double nx[16] = {}, ny[16] = {}, offset[17] = {};
 };
 static_assert(offsetof(Params, width) == 33 * sizeof(double));
-static_assert(offsetof(Params, nx) == 33 * sizeof(double) + 12 * 4);
+static_assert(sizeof(Params) == (33 + 8 + 16 + 16 + 17) * sizeof(double));
 
 // The passes, in shaders/live_adaptive.comp's order.
 enum Pass {
@@ -118,7 +118,8 @@ struct LiveAdaptive::State {
   BufferHandle buffers[kBuffers];
   VertexArrayHandle vao;
   Params params;
-  int width = 0, height = 0;
+  int width = 0, height = 0, top = 0;
+  std::uint64_t nx[16] = {}, ny[16] = {};  // cells per level, across and down
   std::uint64_t cells = 0, words = 0, max_vertices = 0, max_triangles = 0;
   std::uint64_t max_indices = 0, max_grid_vertices = 0;
 };
@@ -206,18 +207,20 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
   top = std::max(top, 1);
   if (top > 15)
     return Error{"live volume: maps of more than 32769 texels a side are not supported"};
-  p.top = top;
-  std::int64_t cells = 0;
+  s.top = top;
+  std::uint64_t cells = 0;
   for (int level = 1; level <= top; ++level) {
-    p.nx[level] = (cw + (1 << level) - 1) >> level;
-    p.ny[level] = (ch + (1 << level) - 1) >> level;
-    p.offset[level] = static_cast<std::int32_t>(cells);
-    cells += std::int64_t{p.nx[level]} * p.ny[level];
+    s.nx[level] = static_cast<std::uint64_t>((cw + (1 << level) - 1) >> level);
+    s.ny[level] = static_cast<std::uint64_t>((ch + (1 << level) - 1) >> level);
+    p.nx[level] = static_cast<double>(s.nx[level]);
+    p.ny[level] = static_cast<double>(s.ny[level]);
+    p.offset[level] = static_cast<double>(cells);
+    cells += s.nx[level] * s.ny[level];
   }
-  p.offset[top + 1] = static_cast<std::int32_t>(cells);
-  p.cells_total = static_cast<std::int32_t>(cells);
+  p.offset[top + 1] = static_cast<double>(cells);
+  p.cells_total = static_cast<double>(cells);
   s.width = width, s.height = height;
-  s.cells = static_cast<std::uint64_t>(cells);
+  s.cells = cells;
   s.words = static_cast<std::uint64_t>((width + 31) / 32) * static_cast<std::uint64_t>(height);
   const std::uint64_t texels =
       static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
@@ -262,7 +265,6 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
 
 void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) const {
   const State& s = *state_;
-  const Params& p = s.params;
   for (int b = 0; b < kBuffers; ++b)
     if (b != kScanIn && b != kScanOut && b != kUnused)
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, s.buffers[b].id());
@@ -277,7 +279,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   };
   const auto use = [&](Pass pass) -> const Program& {
     s.programs[pass].use();
-    glUniform1i(s.programs[pass].uniform("top_level"), p.top);
+    glUniform1i(s.programs[pass].uniform("top_level"), s.top);
     return s.programs[pass];
   };
   const std::uint64_t texels =
@@ -288,25 +290,23 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   barrier();
   // The pyramid, thresholded at E: level by level from the finest.
   const Program& own = use(kOwn);
-  for (int level = 1; level <= p.top; ++level) {
+  for (int level = 1; level <= s.top; ++level) {
     const std::uint64_t bands = static_cast<std::uint64_t>(((1 << level) + kBandRows) / kBandRows);
     glUniform1i(own.uniform("level"), level);
-    dispatch(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
-             static_cast<std::uint32_t>(p.ny[level]) * bands);
+    dispatch(s.nx[level] * s.ny[level] * bands);
     barrier();
   }
   const Program& balance = use(kBalance);
   glUniform1i(balance.uniform("round_"), 0);
-  for (int level = 2; level <= p.top; ++level) {
+  for (int level = 2; level <= s.top; ++level) {
     glUniform1i(balance.uniform("level"), level);
-    dispatch(std::uint64_t{static_cast<std::uint32_t>(p.nx[level])} *
-             static_cast<std::uint32_t>(p.ny[level]));
+    dispatch(s.nx[level] * s.ny[level]);
     barrier();
   }
   // The fix-up rounds: each one's dispatch sizes written by the GPU (zero once a round split
   // nothing).
   glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[kControlBuf].id());
-  for (int round = 1; round <= s.rounds && p.top >= 2; ++round) {
+  for (int round = 1; round <= s.rounds && s.top >= 2; ++round) {
     const Program& control = use(kControl);
     glUniform1i(control.uniform("round_"), round);
     dispatch(1);
@@ -317,7 +317,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
     barrier();
     const Program& rebalance = use(kBalance);
     glUniform1i(rebalance.uniform("round_"), round);
-    for (int level = 2; level <= p.top; ++level) {
+    for (int level = 2; level <= s.top; ++level) {
       glUniform1i(rebalance.uniform("level"), level);
       glDispatchComputeIndirect(static_cast<GLintptr>((64 + 3 * (level - 1)) * sizeof(GLuint)));
       barrier();
