@@ -3,7 +3,10 @@
 // and the indirect draw command that draws them. The quadtree is `lightvol build --adaptive
 // --tessellation quadtree`'s (src/lightvol/tessellate/): the same cells, the same measures in
 // double precision, the same 2:1 balance, the same fix-up rounds and the same 16 edge-split
-// configurations, so the same triangles.
+// configurations, so the same triangles. (Without `precise`, which made the double arithmetic
+// several times slower on llvmpipe: there the quadtree is the CPU's in every test; a GPU that
+// fuses multiply-adds may round a measure in its last bit differently, which can only change a
+// cell whose measure lies within that rounding of E.)
 //
 // The host prepends "#version 450 core", "#define LIGHTVOL_LIVE_COMMON", one "#define LV_<PASS>"
 // and shaders/airlight.glsl (for live_grid_point, live_segment and live_ring_texel), then this
@@ -20,7 +23,8 @@
 //                leaf, later rounds those whose parent or neighbour split in the round before).
 //   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
 //   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
-//   LV_TRIANGLES per cell: its triangles, as indices of vertex ranks.
+//   LV_TRIANGLES per emitting cell (listed by LV_COUNT): its triangles, as indices of vertex
+//                ranks.
 //   LV_VERTICES  per bitmap word: its vertices' world positions and texel ids.
 //   LV_CLOSE     one invocation: the border ring's closing (spot fan, directional walls and cap),
 //                the draw command and the statistics.
@@ -87,6 +91,8 @@ const int kBandRows = 16;
 const uint kStats = 160u;  // control[kStats + ...]: rounds used, converged, grid vertices, grid
                            // triangles, closing triangles
 const uint kDraw = 192u;
+const uint kEmitting = kStats + 6u;  // cells that emit triangles (LV_COUNT)
+const uint kTriangleArgs = 100u;     // LV_TRIANGLES' dispatch size (LV_SCAN_SUMS)
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 
 // This invocation's index: dispatches of more than kMaxGroupsX groups run as rows of that many
@@ -179,25 +185,25 @@ void main() {
   if (v >= width * height) return;
   int col = v % width, row = v / width;
   int texture_row = flip_y == 1 ? row : height - 1 - row;
-  precise double stored = double(texelFetch(shadow_maps[0], ivec2(col, texture_row), 0).r);
-  precise double d;
+  double stored = double(texelFetch(shadow_maps[0], ivec2(col, texture_row), 0).r);
+  double d;
   if (encoding == 0) {
     d = clamp(stored, 0.0LF, 1.0LF);
   } else {
-    precise double z = -clamp(stored, near_d, far_d);
+    double z = -clamp(stored, near_d, far_d);
     d = clamp(0.5LF * ((pz * z + pzc) / (pw * z + pwc) + 1.0LF), 0.0LF, 1.0LF);
   }
   depth[v] = d;
   if (uniform_flag == 0) {
-    precise double x = 2.0LF * (double(col) + 0.5LF) / double(width) - 1.0LF;
-    precise double y_down = 2.0LF * (double(row) + 0.5LF) / double(height) - 1.0LF;
-    precise double y = flip_y == 1 ? y_down : -y_down;
-    precise double h0[4];
+    double x = 2.0LF * (double(col) + 0.5LF) / double(width) - 1.0LF;
+    double y_down = 2.0LF * (double(row) + 0.5LF) / double(height) - 1.0LF;
+    double y = flip_y == 1 ? y_down : -y_down;
+    double h0[4];
     for (int k = 0; k < 4; ++k) h0[k] = m[4 * k] * x + m[4 * k + 1] * y - m[4 * k + 2] + m[4 * k + 3];
-    precise double gx = h1[0] * h0[3] - h0[0] * h1[3];
-    precise double gy = h1[1] * h0[3] - h0[1] * h1[3];
-    precise double gz = h1[2] * h0[3] - h0[2] * h1[3];
-    precise double len = sqrt(gx * gx + gy * gy + gz * gz);
+    double gx = h1[0] * h0[3] - h0[0] * h1[3];
+    double gy = h1[1] * h0[3] - h0[1] * h1[3];
+    double gz = h1[2] * h0[3] - h0[2] * h1[3];
+    double len = sqrt(gx * gx + gy * gy + gz * gz);
     scale[v] = len / abs(h0[3] + d * h1[3]);
   }
 }
@@ -206,9 +212,9 @@ void main() {
 #ifdef LV_OWN
 // TexelDepths::error at texel (x, y) for the plane's depth dp, with the denominator's w0 given.
 double texel_error(int x, int y, double dp, double w0) {
-  precise double e = abs(dp - d_at(x, y));
+  double e = abs(dp - d_at(x, y));
   if (uniform_flag == 1) return e;  // times uniform_scale by the caller
-  precise double r = e * scale[y * width + x] / abs(w0 + dp * w1);
+  double r = e * scale[y * width + x] / abs(w0 + dp * w1);
   return r;
 }
 
@@ -227,18 +233,18 @@ void main() {
     return;
   }
   ivec4 b = cell_box(L, i, j);
-  precise double worst = 0.0LF;
+  double worst = 0.0LF;
   if (L == 1 && b.z - b.x == 2 && b.w - b.y == 2) {
     // A whole level-1 cell: five texels, each halfway along an edge or the diagonal.
     int x = b.x, y = b.y;
-    precise double da = d_at(x, y), db = d_at(x + 2, y), dc = d_at(x, y + 2),
+    double da = d_at(x, y), db = d_at(x + 2, y), dc = d_at(x, y + 2),
                    dd = d_at(x + 2, y + 2);
     ivec2 p[5] = ivec2[5](ivec2(x + 1, y), ivec2(x, y + 1), ivec2(x + 1, y + 1),
                           ivec2(x + 2, y + 1), ivec2(x + 1, y + 2));
-    precise double dp[5] = double[5](0.5LF * (da + db), 0.5LF * (da + dc), 0.5LF * (db + dc),
+    double dp[5] = double[5](0.5LF * (da + db), 0.5LF * (da + dc), 0.5LF * (db + dc),
                                      0.5LF * (db + dd), 0.5LF * (dc + dd));
     for (int k = 0; k < 5; ++k) {
-      precise double w0 = w0_c + double(p[k].x) * w0_dc + double(p[k].y) * w0_dr;
+      double w0 = w0_c + double(p[k].x) * w0_dc + double(p[k].y) * w0_dr;
       worst = max(worst, texel_error(p[k].x, p[k].y, dp[k], w0));
     }
     if (uniform_flag == 1) worst *= uniform_scale;
@@ -246,24 +252,24 @@ void main() {
     return;
   }
   int wx = b.z - b.x, wy = b.w - b.y;
-  precise double da = d_at(b.x, b.y), db = d_at(b.z, b.y), dc = d_at(b.x, b.w),
+  double da = d_at(b.x, b.y), db = d_at(b.z, b.y), dc = d_at(b.x, b.w),
                  dd = d_at(b.z, b.w);
-  precise double g1x = (db - da) / double(wx), g1y = (dc - da) / double(wy);
-  precise double g2x = (dd - dc) / double(wx), g2y = (dd - db) / double(wy);
+  double g1x = (db - da) / double(wx), g1y = (dc - da) / double(wy);
+  double g2x = (dd - dc) / double(wx), g2y = (dd - db) / double(wy);
   int y_begin = b.y + band * kBandRows, y_end = min(b.y + (band + 1) * kBandRows, b.w + 1);
   for (int y = y_begin; y < y_end; ++y) {
     int s = y - b.y;
     int xs = b.x + (wx == wy ? wy - s : (wx * (wy - s)) / wy);
-    precise double base1 = da + g1y * double(s), base2 = dd + g2y * double(y - b.w);
-    precise double w0y = w0_c + 0.0LF * w0_dc + double(y) * w0_dr;
+    double base1 = da + g1y * double(s), base2 = dd + g2y * double(y - b.w);
+    double w0y = w0_c + 0.0LF * w0_dc + double(y) * w0_dr;
     for (int x = b.x; x <= b.z; ++x) {
-      precise double dp =
+      double dp =
           x <= xs ? base1 + g1x * double(x - b.x) : base2 + g2x * double(x - b.z);
-      precise double w0 = w0y + w0_dc * double(x);
+      double w0 = w0y + w0_dc * double(x);
       worst = max(worst, texel_error(x, y, dp, w0));
     }
     // A texel above the bound decides the cell: stop the band (and the other bands of the cell).
-    precise double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
+    double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
     if (scaled > pyramid_bound) {
       split[c] = 1u;
       return;
@@ -327,13 +333,13 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
     c = t;
     area2 = -area2;
   }
-  precise double da = d_at(a.x, a.y), db = d_at(b.x, b.y), dc = d_at(c.x, c.y);
-  precise double inv = 1.0LF / double(area2);
-  precise double gx = ((db - da) * double(c.y - a.y) - (dc - da) * double(b.y - a.y)) * inv;
-  precise double gy = ((dc - da) * double(b.x - a.x) - (db - da) * double(c.x - a.x)) * inv;
+  double da = d_at(a.x, a.y), db = d_at(b.x, b.y), dc = d_at(c.x, c.y);
+  double inv = 1.0LF / double(area2);
+  double gx = ((db - da) * double(c.y - a.y) - (dc - da) * double(b.y - a.y)) * inv;
+  double gy = ((dc - da) * double(b.x - a.x) - (db - da) * double(c.x - a.x)) * inv;
   ivec2 v[3] = ivec2[3](a, b, c);
   int y0 = min(a.y, min(b.y, c.y)), y1 = max(a.y, max(b.y, c.y));
-  precise double worst = 0.0LF;
+  double worst = 0.0LF;
   for (int y = y0; y <= y1; ++y) {
     int lo = -2147483647, hi = 2147483647;
     bool empty = false;
@@ -350,16 +356,16 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
       }
     }
     if (empty || lo > hi) continue;
-    precise double base = da + gy * double(y - a.y) + gx * double(lo - a.x);
-    precise double w0 = w0_c + double(lo) * w0_dc + double(y) * w0_dr;
+    double base = da + gy * double(y - a.y) + gx * double(lo - a.x);
+    double w0 = w0_c + double(lo) * w0_dc + double(y) * w0_dr;
     for (int x = lo; x <= hi; ++x) {
-      precise double dp = base + gx * double(x - lo);
-      precise double e = abs(dp - d_at(x, y));
+      double dp = base + gx * double(x - lo);
+      double e = abs(dp - d_at(x, y));
       if (uniform_flag == 0)
         e = e * scale[y * width + x] / abs(w0 + w0_dc * double(x - lo) + dp * w1);
       worst = max(worst, e);
     }
-    precise double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
+    double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
     if (scaled > bound) return true;
   }
   return false;
@@ -431,6 +437,9 @@ void main() {
     n = 2u + uint(bitCount(config));
   }
   tri_count[c] = n;
+  // The emitting cells, listed (in any order: each writes at its own offset) in fail[], which the
+  // rounds no longer need, so that LV_TRIANGLES runs over them alone.
+  if (n > 0u) fail[atomicAdd(control[kEmitting], 1u)] = uint(c);
 }
 #endif
 
@@ -467,6 +476,12 @@ void main() {
     s += v;
   }
   control[scan_total] = s;
+  if (scan_total == int(kStats) + 3) {  // the triangle scan: size LV_TRIANGLES' dispatch
+    uint groups = (control[kEmitting] + 63u) / 64u, x = min(groups, kMaxGroupsX);
+    control[kTriangleArgs] = x;
+    control[kTriangleArgs + 1u] = x == 0u ? 1u : (groups + x - 1u) / x;
+    control[kTriangleArgs + 2u] = 1u;
+  }
 }
 #endif
 
@@ -500,10 +515,10 @@ bool has(ivec2 p) {
 
 #ifdef LV_TRIANGLES
 void main() {
-  int c = invocation();
-  if (c >= cells_total) return;
+  int listed = invocation();
+  if (listed >= int(control[kEmitting])) return;
+  int c = int(fail[listed]);
   uint n = tri_count[c];
-  if (n == 0u) return;
   uint first = tri_offset[c];
   ivec3 cl = cell_of(c, 1);
   int L = cl.x, i = cl.y, j = cl.z;

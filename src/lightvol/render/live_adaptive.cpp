@@ -73,8 +73,9 @@ enum Binding {
   kBuffers = 17
 };
 
-constexpr GLuint kStats = 160;        // control[kStats + ...] (shaders/live_adaptive.comp)
-constexpr GLuint kDrawCommand = 192;  // control[kDrawCommand..+4]: the indirect draw command
+constexpr GLuint kStats = 160;         // control[kStats + ...] (shaders/live_adaptive.comp)
+constexpr GLuint kTriangleArgs = 100;  // LV_TRIANGLES' dispatch size, written by the GPU
+constexpr GLuint kDrawCommand = 192;   // control[kDrawCommand..+4]: the indirect draw command
 constexpr GLuint kControlSize = 256;
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
@@ -345,7 +346,9 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   scan(kCounts, kOffsets, s.cells, false, kStats + 3);
   scan(kBits, kRanks, s.words, true, kStats + 2);
   use(kTriangles);
-  dispatch(s.cells);
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[kControlBuf].id());
+  glDispatchComputeIndirect(static_cast<GLintptr>(kTriangleArgs * sizeof(GLuint)));
+  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   bind(use(kVertices));
   dispatch(s.words);
   barrier();
