@@ -7,6 +7,7 @@
 // times. One table.
 //   node tests/bench/godrays_peer_bench.mjs PATH/TO/lightvol [--frames N] [--demo-size N]
 //        [--map N] [--omni-map N]
+// KEEP=1 keeps the work folder (maps, volumes, references and the peer's images as PFM).
 // The peer and its peers (three 0.182.0, postprocessing 6.39.6) are installed with npm into a
 // scratch folder outside the repository (PEER_DIR, default /tmp/lightvol-peer), where its page is
 // generated too; nothing of it enters the source tree.
