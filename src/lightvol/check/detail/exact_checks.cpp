@@ -1080,14 +1080,33 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
   const double threshold = long_face_ratio * (sample.empty() ? 0.0 : sample[sample.size() / 2]);
 
   std::vector<std::uint32_t> short_faces, long_faces;  // long: also every face around a hub
+  // In blocks on both cores, then joined in face order.
+  struct Split {
+    std::vector<std::uint32_t> short_faces, long_faces;
+    Box world = Box::empty();
+  };
+  constexpr std::size_t kBlock = 1 << 16;
+  std::vector<Split> blocks((nt + kBlock - 1) / kBlock);
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t k) {
+    Split& out = blocks[k];
+    for (std::size_t f = k * kBlock; f < std::min(nt, (k + 1) * kBlock); ++f) {
+      if (s.degenerate[f]) continue;
+      const Box b = geo.box(f);
+      out.world.add(b);
+      const double extent = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+      (group[f] != kNone || extent > threshold ? out.long_faces : out.short_faces)
+          .push_back(static_cast<std::uint32_t>(f));
+    }
+  });
   Box world = Box::empty();
-  for (std::size_t f = 0; f < nt; ++f) {
-    if (s.degenerate[f]) continue;
-    const Box b = geo.box(f);
-    world.add(b);
-    const double extent = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
-    (group[f] != kNone || extent > threshold ? long_faces : short_faces)
-        .push_back(static_cast<std::uint32_t>(f));
+  std::size_t shorts = 0, longs = 0;
+  for (const Split& b : blocks)
+    world.add(b.world), shorts += b.short_faces.size(), longs += b.long_faces.size();
+  short_faces.reserve(shorts), long_faces.reserve(longs);
+  for (Split& b : blocks) {
+    short_faces.insert(short_faces.end(), b.short_faces.begin(), b.short_faces.end());
+    long_faces.insert(long_faces.end(), b.long_faces.begin(), b.long_faces.end());
+    b = Split();
   }
   const std::uint32_t no_hub = static_cast<std::uint32_t>(hubs.size());
   for (std::uint32_t& g : group)
