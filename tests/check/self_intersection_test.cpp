@@ -275,6 +275,43 @@ TEST(ExactSelfIntersections, FoldedSharedEdgeAndCrossingFansAreFound) {
   EXPECT_FALSE(detail::exact_does_self_intersect(sound));
 }
 
+// Fans around a vertex, seen from above: every face turns the same way in both, but the second
+// winds twice around the vertex (seven steps of 720°/7), so its faces overlap. The engine takes a
+// star as embedded (and skips its pairs) only when it winds once; the pairs are CGAL's either way.
+Mesh fan(int steps, double turns) {
+  Mesh m;
+  const std::uint32_t v = add_vertex(m, 0, 0, 0);
+  std::vector<std::uint32_t> ring;
+  for (int k = 0; k < steps; ++k) {
+    const double a = 2 * 3.14159265358979 * turns * k / steps, r = 1 + 0.125 * k;
+    ring.push_back(add_vertex(m, r * std::cos(a), r * std::sin(a), 0.0625 * k));
+  }
+  for (int k = 0; k < steps; ++k) add_face(m, v, ring[k], ring[(k + 1) % steps]);
+  return m;
+}
+
+TEST(ExactSelfIntersections, FanWindingTwiceIsTestedPairByPair) {
+  const Mesh once = fan(7, 1), twice = fan(7, 2);
+  const Outcome a = expect_same_as_cgal(once, "fan winding once");
+  EXPECT_TRUE(a.ran);
+  EXPECT_FALSE(a.intersecting);
+  EXPECT_FALSE(detail::exact_does_self_intersect(once));
+  const Outcome b = expect_same_as_cgal(twice, "fan winding twice");
+  EXPECT_TRUE(b.ran);
+  EXPECT_TRUE(b.intersecting);
+  EXPECT_TRUE(detail::exact_does_self_intersect(twice));
+  // Flat (all in one plane, a neighbour opposite another): embedded, nothing to report.
+  Mesh plane = fan(8, 1);
+  for (std::size_t i = 2; i < plane.positions.size(); i += 3) plane.positions[i] = 0;
+  const Outcome c = expect_same_as_cgal(plane, "flat fan");
+  EXPECT_TRUE(c.ran);
+  EXPECT_FALSE(c.intersecting);
+  // Folded: one neighbour pulled across, so that one face turns the other way.
+  Mesh folded = plane;
+  folded.positions[3 * 3 + 0] *= -0.25f, folded.positions[3 * 3 + 1] *= -0.25f;
+  expect_same_as_cgal(folded, "folded fan");
+}
+
 // Volumes as build makes them (a spot map with occluders, hubs at the apex, depth steps), sound and
 // then with a vertex pushed through the floor.
 TEST(ExactSelfIntersections, BuiltVolumesGiveCgalsVerdicts) {

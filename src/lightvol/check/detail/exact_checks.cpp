@@ -79,10 +79,31 @@ struct Geometry {
   }
 };
 
+// An allocator whose resize leaves new elements uninitialized (every one is written before it is
+// read): large arrays are not zeroed first.
+template <class T>
+struct NoInit : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoInit<U>;
+  };
+  NoInit() = default;
+  template <class U>
+  NoInit(const NoInit<U>&) {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
 // Faces around each vertex, in face order (compressed rows).
 struct VertexFaces {
   std::vector<std::uint32_t> first;  // nv + 1
-  std::vector<std::uint32_t> faces;
+  std::vector<std::uint32_t, NoInit<std::uint32_t>> faces;
   std::size_t degree(std::uint32_t v) const { return first[v + 1] - first[v]; }
 };
 
@@ -121,10 +142,52 @@ VertexFaces vertex_faces(const Geometry& g, std::size_t nv, std::size_t nt) {
 // Are the faces around v one fan (connected through the edges at v)? The mesh is edge-manifold
 // and oriented, so each face (v, x, y) links x to y and every neighbour starts and ends at most
 // one link: walk forward from the first face, then backward, and count.
+// Up to this degree, the fans around a vertex are walked in arrays on the stack (linear searches).
+constexpr std::size_t kSmallFan = 32;
+
+// The faces around v (degree d ≤ kSmallFan) as links (x, y): face (v, x, y).
+void fan_links(const Geometry& g, const std::uint32_t* faces, std::size_t d, std::uint32_t v,
+               std::uint32_t (*links)[2]) {
+  for (std::size_t i = 0; i < d; ++i) {
+    const Tri t = g.tri(faces[i]);
+    const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+    links[i][0] = t[(k + 1) % 3];
+    links[i][1] = t[(k + 2) % 3];
+  }
+}
+
+// The first slot (in face order) whose link's end `side` (0: x, 1: y) is `key`, or kNone.
+std::uint32_t find_link(const std::uint32_t (*links)[2], std::size_t d, int side,
+                        std::uint32_t key) {
+  for (std::size_t i = 0; i < d; ++i)
+    if (links[i][side] == key) return static_cast<std::uint32_t>(i);
+  return kNone;
+}
+
 bool one_fan(const Geometry& g, const VertexFaces& vf, std::uint32_t v) {
   const std::uint32_t* begin = vf.faces.data() + vf.first[v];
   const std::size_t d = vf.degree(v);
   if (d <= 1) return true;
+  if (d <= kSmallFan) {  // the same walks as below, on the stack
+    std::uint32_t links[kSmallFan][2];
+    fan_links(g, begin, d, v, links);
+    std::size_t seen = 1;
+    std::uint32_t i = 0;
+    for (;;) {
+      const std::uint32_t next = find_link(links, d, 0, links[i][1]);
+      if (next == kNone || next == 0 || seen > d) break;
+      ++seen, i = next;
+    }
+    if (seen < d) {
+      i = 0;
+      for (;;) {
+        const std::uint32_t prev = find_link(links, d, 1, links[i][0]);
+        if (prev == kNone || prev == 0 || seen > d) break;
+        ++seen, i = prev;
+      }
+    }
+    return seen == d;
+  }
   std::vector<std::pair<std::uint32_t, std::uint32_t>> links(d);  // (x, y) of each face
   for (std::size_t i = 0; i < d; ++i) {
     const Tri t = g.tri(begin[i]);
@@ -159,6 +222,85 @@ bool one_fan(const Geometry& g, const VertexFaces& vf, std::uint32_t v) {
     }
   }
   return seen == d;
+}
+
+// Is the star of v (its faces) embedded, so that any two of its faces meet only along the edge or
+// at the vertex they share? Sufficient (exact) condition: the faces around v make one closed fan
+// (v, a_0, a_1), (v, a_1, a_2), …, (v, a_{d-1}, a_0) whose projections along some direction n are
+// triangles of one orientation winding once around v. The projection is then one-to-one on the
+// star (the triangles lie in the wedges between the rays to a_i, which cover the plane once), so
+// faces meet only where their projections do: along a shared edge or at v. Each projected
+// orientation is the exact orientation of (v, a_i, a_{i+1}, v + n); n (the fan's area normal, in
+// floating point) only chooses the direction. Winding once: no step from a_i to a_{i+1}
+// (0 < i < d - 1) passes a_0's ray, and no a_i (i > 0) lies on it. False when undecided (large or
+// open fans, a face repeating a vertex, neighbours collinear in projection other than opposite):
+// the pairs around v are then tested one by one.
+bool flat_star(const Geometry& g, const VertexFaces& vf, std::uint32_t v) {
+  const std::size_t d = vf.degree(v);
+  if (d < 3 || d > kSmallFan) return false;
+  std::uint32_t links[kSmallFan][2];
+  fan_links(g, vf.faces.data() + vf.first[v], d, v, links);
+  std::uint32_t ring[kSmallFan];  // a_0, a_1, … in fan order
+  std::uint32_t i = 0;
+  for (std::size_t k = 0; k < d; ++k) {
+    if (links[i][0] == v || links[i][1] == v || links[i][0] == links[i][1]) return false;
+    ring[k] = links[i][0];
+    const std::uint32_t next = find_link(links, d, 0, links[i][1]);
+    if (next == kNone || (next == 0) != (k + 1 == d)) return false;
+    i = next;
+  }
+  const float* pv = g.pos + 3 * std::size_t{v};
+  double rel[kSmallFan][3];
+  double scale = 0;
+  for (std::size_t k = 0; k < d; ++k) {
+    const float* pa = g.pos + 3 * std::size_t{ring[k]};
+    for (int c = 0; c < 3; ++c) rel[k][c] = double{pa[c]} - pv[c];
+    scale = std::max({scale, std::abs(rel[k][0]), std::abs(rel[k][1]), std::abs(rel[k][2])});
+  }
+  double n[3] = {0, 0, 0};
+  for (std::size_t k = 0; k < d; ++k) {
+    const double* a = rel[k];
+    const double* b = rel[(k + 1) % d];
+    n[0] += a[1] * b[2] - a[2] * b[1];
+    n[1] += a[2] * b[0] - a[0] * b[2];
+    n[2] += a[0] * b[1] - a[1] * b[0];
+  }
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0) || !(scale > 0) || !std::isfinite(len)) return false;
+  const Point pt = g.point(v);
+  const Point up(pt.x() + n[0] / len * scale, pt.y() + n[1] / len * scale,
+                 pt.z() + n[2] / len * scale);
+  Point a[kSmallFan];
+  for (std::size_t k = 0; k < d; ++k) a[k] = g.point(ring[k]);
+  const CGAL::Orientation side = CGAL::orientation(pt, a[0], a[1], up);
+  if (side == CGAL::COPLANAR) return false;
+  for (std::size_t k = 1; k < d; ++k)
+    if (CGAL::orientation(pt, a[k], a[(k + 1) % d], up) != side) return false;
+  // Opposite in projection (a_k collinear with v and a_0 in projection, on the other side of v):
+  // a clear negative dot product of the projected directions; anything else is refused.
+  const double nx = n[0] / len, ny = n[1] / len, nz = n[2] / len;
+  const auto opposite = [&](std::size_t k) {
+    const double* p = rel[0];
+    const double* q = rel[k];
+    const double pn = p[0] * nx + p[1] * ny + p[2] * nz, qn = q[0] * nx + q[1] * ny + q[2] * nz;
+    const double px = p[0] - pn * nx, py = p[1] - pn * ny, pz = p[2] - pn * nz;
+    const double qx = q[0] - qn * nx, qy = q[1] - qn * ny, qz = q[2] - qn * nz;
+    const double dot = px * qx + py * qy + pz * qz;
+    const double pp = std::sqrt(px * px + py * py + pz * pz),
+                 qq = std::sqrt(qx * qx + qy * qy + qz * qz);
+    return dot < -0.5 * pp * qq;
+  };
+  // o[k]: orientation of (v, a_0, a_k, up), for 0 < k < d.
+  CGAL::Orientation o[kSmallFan];
+  for (std::size_t k = 1; k < d; ++k) {
+    o[k] = CGAL::orientation(pt, a[0], a[k], up);
+    if (o[k] == CGAL::COPLANAR && !opposite(k)) return false;
+  }
+  // The step a_k → a_{k+1} passes a_0's ray when a_0 lies strictly inside the wedge:
+  // orientation(v, a_k, a_0) = side and orientation(v, a_0, a_{k+1}) = side.
+  for (std::size_t k = 1; k + 1 < d; ++k)
+    if (o[k] == -side && o[k + 1] == side) return false;
+  return true;
 }
 
 // ---- The exact pair test (CGAL's do_faces_intersect, on vertex indices) -------------------------
@@ -445,39 +587,61 @@ class FaceTree {
         return group != o.group ? group < o.group : key != o.key ? key < o.key : item < o.item;
       }
     };
-    std::vector<Key> keys(n);
     double scale[3];
     for (int k = 0; k < 3; ++k) {
       const double extent = double{world.hi[k]} - world.lo[k];
       scale[k] = extent > 0 ? 2097151.0 / extent : 0;
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                          const std::uint32_t f = faces[i];
-                          const Box b = boxes ? (*boxes)[i] : geo.box(f);
-                          std::uint64_t code = 0;
-                          for (int k = 0; k < 3; ++k) {
-                            const double c = 0.5 * (double{b.lo[k]} + b.hi[k]) - world.lo[k];
-                            const double q = std::clamp(c * scale[k], 0.0, 2097151.0);
-                            code |= spread_bits(static_cast<std::uint64_t>(q)) << k;
+    const auto morton = [&](std::size_t i) {
+      const Box b = boxes ? (*boxes)[i] : geo.box(faces[i]);
+      std::uint64_t code = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double c = 0.5 * (double{b.lo[k]} + b.hi[k]) - world.lo[k];
+        const double q = std::clamp(c * scale[k], 0.0, 2097151.0);
+        code |= spread_bits(static_cast<std::uint64_t>(q)) << k;
+      }
+      return code;
+    };
+    if (group == nullptr && boxes == nullptr) {
+      // One 64-bit key an item: the Morton code's leading bits, then the item (ties in input
+      // order, as below).
+      int item_bits = 1;
+      while (item_bits < 63 && (std::uint64_t{1} << item_bits) < n) ++item_bits;
+      std::vector<std::uint64_t, NoInit<std::uint64_t>> packed(n);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                            packed[i] = (morton(i) >> (item_bits - 1)) << item_bits | i;
+                        });
+      tbb::parallel_sort(packed.begin(), packed.end());
+      faces_.resize(n);
+      const std::uint64_t item_mask = (std::uint64_t{1} << item_bits) - 1;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                            faces_[i] = faces[packed[i] & item_mask];
+                        });
+    } else {
+      std::vector<Key> keys(n);
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, n, 1 << 14),
+          [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i)
+              keys[i] = {morton(i), group ? (*group)[faces[i]] : 0, static_cast<std::uint32_t>(i)};
+          });
+      tbb::parallel_sort(keys.begin(), keys.end());
+      faces_.resize(n);
+      if (group) groups_.resize(n);
+      if (boxes) boxes_.resize(n);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            faces_[i] = faces[keys[i].item];
+                            if (group) groups_[i] = keys[i].group;
+                            if (boxes) boxes_[i] = (*boxes)[keys[i].item];
                           }
-                          keys[i] = {code, group ? (*group)[f] : 0, static_cast<std::uint32_t>(i)};
-                        }
-                      });
-    tbb::parallel_sort(keys.begin(), keys.end());
-    faces_.resize(n);
-    groups_.resize(n);
-    if (boxes) boxes_.resize(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                          faces_[i] = faces[keys[i].item];
-                          groups_[i] = keys[i].group;
-                          if (boxes) boxes_[i] = (*boxes)[keys[i].item];
-                        }
-                      });
-    keys = {};
+                        });
+    }
     leaves_ = (n + kLeaf - 1) / kLeaf;
     p_ = 1;
     while (p_ < leaves_) p_ *= 2;
@@ -505,7 +669,7 @@ class FaceTree {
 
   std::size_t size() const { return faces_.size(); }
   std::uint32_t face(std::size_t i) const { return faces_[i]; }
-  std::uint32_t group(std::size_t i) const { return groups_[i]; }
+  std::uint32_t group(std::size_t i) const { return groups_.empty() ? 0 : groups_[i]; }
   Box box(std::size_t i) const { return boxes_.empty() ? geo_.box(faces_[i]) : boxes_[i]; }
 
   // Visits the items at sorted positions ≥ from in every leaf reached: `enter(box, first, last)`
@@ -533,15 +697,17 @@ class FaceTree {
     }
   }
 
-  // Visits the items after position i (as traverse(i + 1, ...)), walking up from i's leaf and
-  // into the right siblings of its ancestors: the ancestors' large boxes are not tested again for
-  // each query, as a walk from the root would.
+  std::size_t leaves() const { return leaves_; }
+  const Box& leaf_box(std::size_t j) const { return nodes_[p_ + j]; }
+
+  // The leaves after leaf j whose boxes `enter` accepts (with every ancestor's on the way down):
+  // walking up from j and into the right siblings of its ancestors. `visit(first, last)` gets the
+  // sorted positions of each leaf reached.
   template <class Enter, class Visit>
-  void traverse_after(std::size_t i, Enter&& enter, Visit&& visit) const {
+  void leaves_after(std::size_t j, Enter&& enter, Visit&& visit) const {
     const std::size_t n = faces_.size();
-    for (std::size_t j = i + 1; j < std::min(n, (i / kLeaf + 1) * kLeaf); ++j) visit(j);
     std::size_t stack[128];
-    for (std::size_t k = p_ + i / kLeaf; k > 1; k /= 2) {
+    for (std::size_t k = p_ + j; k > 1; k /= 2) {
       if (k & 1) continue;  // a right child: its sibling holds earlier positions
       int top = 0;
       stack[top++] = k + 1;
@@ -550,9 +716,9 @@ class FaceTree {
         const int level = 63 - __builtin_clzll(m);
         const std::size_t span = p_ >> level;
         const std::size_t first = (m - (std::size_t{1} << level)) * span * kLeaf;
-        if (first >= n || !enter(nodes_[m], first, std::min(n, first + span * kLeaf))) continue;
+        if (first >= n || !enter(nodes_[m])) continue;
         if (m >= p_) {
-          for (std::size_t j = first; j < std::min(n, first + kLeaf); ++j) visit(j);
+          visit(first, std::min(n, first + kLeaf));
         } else {
           stack[top++] = 2 * m + 1;
           stack[top++] = 2 * m;
@@ -569,6 +735,45 @@ class FaceTree {
   std::size_t leaves_ = 0, p_ = 1;
 };
 
+// The faces of one leaf of a FaceTree, their boxes held by coordinate (8 lanes; empty lanes never
+// overlap) so that one face is tested against a whole leaf at once.
+struct Leaf {
+  static constexpr std::size_t L = FaceTree::kLeaf;
+  std::size_t count = 0;
+  std::uint32_t face[L];
+  Tri tri[L];
+  float lo[3][L], hi[3][L];
+  void load(const Geometry& g, const FaceTree& tree, std::size_t first, std::size_t last) {
+    count = last - first;
+    for (std::size_t b = 0; b < L; ++b) {
+      if (b >= count) {
+        for (int k = 0; k < 3; ++k)
+          lo[k][b] = std::numeric_limits<float>::infinity(),
+          hi[k][b] = -std::numeric_limits<float>::infinity();
+        continue;
+      }
+      face[b] = tree.face(first + b);
+      tri[b] = g.tri(face[b]);
+      const float* p0 = g.pos + 3 * std::size_t{tri[b][0]};
+      const float* p1 = g.pos + 3 * std::size_t{tri[b][1]};
+      const float* p2 = g.pos + 3 * std::size_t{tri[b][2]};
+      for (int k = 0; k < 3; ++k)
+        lo[k][b] = std::min({p0[k], p1[k], p2[k]}), hi[k][b] = std::max({p0[k], p1[k], p2[k]});
+    }
+  }
+  // Bit b: item b's box meets item a's box of `other`.
+  unsigned overlaps(const Leaf& other, std::size_t a) const {
+    const float x0 = other.lo[0][a], x1 = other.hi[0][a], y0 = other.lo[1][a], y1 = other.hi[1][a],
+                z0 = other.lo[2][a], z1 = other.hi[2][a];
+    int hit[L];
+    for (std::size_t b = 0; b < L; ++b)
+      hit[b] = (lo[0][b] <= x1) & (x0 <= hi[0][b]) & (lo[1][b] <= y1) & (y0 <= hi[1][b]) &
+               (lo[2][b] <= z1) & (z0 <= hi[2][b]);
+    unsigned mask = 0;
+    for (std::size_t b = 0; b < L; ++b) mask |= static_cast<unsigned>(hit[b]) << b;
+    return mask;
+  }
+};
 // Pieces of a long face: the triangle cut by slabs across its longest axis into pieces of about
 // `target`, and each piece again across its next longest (at most kMaxPieces pieces a face). Each
 // piece's box is rounded outward to float and grown by far more than the cuts' rounding, so that
@@ -660,6 +865,7 @@ struct Search {
   std::size_t nt;
   std::vector<char> degenerate, is_hub;  // per face, per vertex
   Collector* out;
+  const std::vector<char>* flat;  // per vertex: flat_star
 
   bool shares_hub(std::uint32_t f, std::uint32_t g) const {
     const Tri t = geo.tri(f), u = geo.tri(g);
@@ -667,7 +873,11 @@ struct Search {
       if (is_hub[a] && (a == u[0] || a == u[1] || a == u[2])) return true;
     return false;
   }
-  void test(std::uint32_t f, std::uint32_t g) {
+  void test(std::uint32_t f, std::uint32_t g) { test(f, geo.tri(f), g, geo.tri(g)); }
+  // A pair sharing a vertex whose star is embedded (flat_star) meets only along what it shares.
+  void test(std::uint32_t f, const Tri& t, std::uint32_t g, const Tri& u) {
+    for (std::uint32_t a : t)
+      if ((a == u[0] || a == u[1] || a == u[2]) && (*flat)[a]) return;
     if (faces_intersect(geo, f, g)) out->add(f, g);
   }
 };
@@ -824,7 +1034,13 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
   Collector collector;
   collector.limit = limit;
 
-  Search s{geo, nt, std::vector<char>(nt, 0), std::vector<char>(nv, 0), &collector};
+  std::vector<char> flat(nv, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1 << 12),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t v = r.begin(); v != r.end(); ++v)
+                        flat[v] = flat_star(geo, vf, static_cast<std::uint32_t>(v));
+                    });
+  Search s{geo, nt, std::vector<char>(nt, 0), std::vector<char>(nv, 0), &collector, &flat};
 
   // Degenerate faces: (f, f), and out of every other pair (CGAL's self_intersections).
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 1 << 14),
@@ -864,14 +1080,33 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
   const double threshold = long_face_ratio * (sample.empty() ? 0.0 : sample[sample.size() / 2]);
 
   std::vector<std::uint32_t> short_faces, long_faces;  // long: also every face around a hub
+  // In blocks on both cores, then joined in face order.
+  struct Split {
+    std::vector<std::uint32_t> short_faces, long_faces;
+    Box world = Box::empty();
+  };
+  constexpr std::size_t kBlock = 1 << 16;
+  std::vector<Split> blocks((nt + kBlock - 1) / kBlock);
+  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t k) {
+    Split& out = blocks[k];
+    for (std::size_t f = k * kBlock; f < std::min(nt, (k + 1) * kBlock); ++f) {
+      if (s.degenerate[f]) continue;
+      const Box b = geo.box(f);
+      out.world.add(b);
+      const double extent = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
+      (group[f] != kNone || extent > threshold ? out.long_faces : out.short_faces)
+          .push_back(static_cast<std::uint32_t>(f));
+    }
+  });
   Box world = Box::empty();
-  for (std::size_t f = 0; f < nt; ++f) {
-    if (s.degenerate[f]) continue;
-    const Box b = geo.box(f);
-    world.add(b);
-    const double extent = std::max({b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]});
-    (group[f] != kNone || extent > threshold ? long_faces : short_faces)
-        .push_back(static_cast<std::uint32_t>(f));
+  std::size_t shorts = 0, longs = 0;
+  for (const Split& b : blocks)
+    world.add(b.world), shorts += b.short_faces.size(), longs += b.long_faces.size();
+  short_faces.reserve(shorts), long_faces.reserve(longs);
+  for (Split& b : blocks) {
+    short_faces.insert(short_faces.end(), b.short_faces.begin(), b.short_faces.end());
+    long_faces.insert(long_faces.end(), b.long_faces.begin(), b.long_faces.end());
+    b = Split();
   }
   const std::uint32_t no_hub = static_cast<std::uint32_t>(hubs.size());
   for (std::uint32_t& g : group)
@@ -881,17 +1116,33 @@ std::vector<Pair> intersecting_pairs(const Geometry& geo, const VertexFaces& vf,
   {
     const FaceTree tree(geo, short_faces, nullptr, nullptr, world);
     short_faces = {};
+    // Leaf by leaf: the faces of a leaf against each other, then against those of every later
+    // leaf whose box meets the leaf's (the leaves' boxes are walked once per leaf, not per face).
     tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, tree.size(), 256),
+        tbb::blocked_range<std::size_t>(0, tree.leaves(), 32),
         [&](const tbb::blocked_range<std::size_t>& r) {
           if (collector.full()) return;
-          for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const std::uint32_t f = tree.face(i);
-            const Box fb = geo.box(f);
-            tree.traverse_after(
-                i, [&](const Box& b, std::size_t, std::size_t) { return fb.overlaps(b); },
-                [&](std::size_t j) {
-                  if (fb.overlaps(tree.box(j))) s.test(f, tree.face(j));
+          Leaf here, there;
+          for (std::size_t j = r.begin(); j != r.end(); ++j) {
+            const std::size_t first = j * FaceTree::kLeaf;
+            here.load(geo, tree, first, std::min(tree.size(), first + FaceTree::kLeaf));
+            for (std::size_t a = 0; a < here.count; ++a) {
+              unsigned mask = here.overlaps(here, a) >> (a + 1) << (a + 1);
+              for (; mask != 0; mask &= mask - 1) {
+                const int b = __builtin_ctz(mask);
+                s.test(here.face[a], here.tri[a], here.face[b], here.tri[b]);
+              }
+            }
+            const Box leaf = tree.leaf_box(j);
+            tree.leaves_after(
+                j, [&](const Box& b) { return leaf.overlaps(b); },
+                [&](std::size_t mfirst, std::size_t mlast) {
+                  there.load(geo, tree, mfirst, mlast);
+                  for (std::size_t a = 0; a < here.count; ++a)
+                    for (unsigned mask = there.overlaps(here, a); mask != 0; mask &= mask - 1) {
+                      const int b = __builtin_ctz(mask);
+                      s.test(here.face[a], here.tri[a], there.face[b], there.tri[b]);
+                    }
                 });
           }
         });
