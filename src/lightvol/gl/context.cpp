@@ -225,8 +225,10 @@ Result<GLuint> compile_shader(GLenum stage, const std::string& source, const std
   std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
   glGetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
   glDeleteShader(shader);
-  return Error{name + ": " + (stage == GL_VERTEX_SHADER ? "vertex" : "fragment") +
-               " shader does not compile: " + log.c_str()};
+  const char* kind = stage == GL_VERTEX_SHADER    ? "vertex"
+                     : stage == GL_COMPUTE_SHADER ? "compute"
+                                                  : "fragment";
+  return Error{name + ": " + kind + " shader does not compile: " + log.c_str()};
 }
 
 }  // namespace
@@ -255,6 +257,28 @@ Result<Program> Program::compile(const std::string& vertex_source,
   glLinkProgram(id);
   glDeleteShader(*vs);
   glDeleteShader(*fs);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(id, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    GLint length = 0;
+    glGetProgramiv(id, GL_INFO_LOG_LENGTH, &length);
+    std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
+    glGetProgramInfoLog(id, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    return Error{name + ": program does not link: " + log.c_str()};
+  }
+  return program;
+}
+
+Result<Program> Program::compile_compute(const std::string& compute_source,
+                                         const std::string& name) {
+  Result<GLuint> cs = compile_shader(GL_COMPUTE_SHADER, compute_source, name);
+  if (!cs) return cs.error();
+  Program program;
+  program.handle_ = ProgramHandle(glCreateProgram());
+  const GLuint id = program.handle_.id();
+  glAttachShader(id, *cs);
+  glLinkProgram(id);
+  glDeleteShader(*cs);
   GLint ok = GL_FALSE;
   glGetProgramiv(id, GL_LINK_STATUS, &ok);
   if (ok != GL_TRUE) {

@@ -113,7 +113,10 @@ namespace lightvol::gl {
   X(PFNGLGETBUFFERSUBDATAPROC, glGetBufferSubData)                   \
   X(PFNGLTRANSFORMFEEDBACKVARYINGSPROC, glTransformFeedbackVaryings) \
   X(PFNGLBEGINTRANSFORMFEEDBACKPROC, glBeginTransformFeedback)       \
-  X(PFNGLENDTRANSFORMFEEDBACKPROC, glEndTransformFeedback)
+  X(PFNGLENDTRANSFORMFEEDBACKPROC, glEndTransformFeedback)           \
+  X(PFNGLDISPATCHCOMPUTEPROC, glDispatchCompute)                     \
+  X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                         \
+  X(PFNGLUNIFORM1UIPROC, glUniform1ui)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
@@ -192,6 +195,9 @@ class Program {
   static Result<Program> compile(const std::string& vertex_source,
                                  const std::string& fragment_source, const std::string& name,
                                  const std::vector<std::string>& feedback = {});
+  // A compute program from one GLSL source (with its own "#version 450 core").
+  static Result<Program> compile_compute(const std::string& compute_source,
+                                         const std::string& name);
   GLuint id() const { return handle_.id(); }
   void use() const { glUseProgram(handle_.id()); }
   // Uniform location by name (-1 when the linker dropped it; setting -1 is a no-op in GL).
