@@ -89,6 +89,10 @@ Result<RenderScene> load_render_scene(const RenderOptions& o, Progress& progress
   if (scene.medium.profile.enabled() && scene.light.type != LightType::spot)
     return Error{o.medium_path + ": key 'profile': applies to spot lights only, " + o.light_path +
                  " is a " + std::string(to_string(scene.light.type)) + " light"};
+  if (scene.medium.density.varying() && o.method != "reference" && o.method != "volume" &&
+      o.method != "raymarch")
+    return Error{o.medium_path + ": key 'density': --method " + o.method +
+                 " renders homogeneous media only (volume, reference and raymarch take a density)"};
   progress.begin("reading " + o.depth_path);
   Result<DepthImage> depth = read_depth_image(o.depth_path, {o.channel});
   if (!depth) return depth.error();
