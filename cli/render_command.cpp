@@ -183,6 +183,8 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
     mo.samples = o.samples;
     mo.interleave = o.interleave;
     mo.method = o.method == "radial" ? MarchMethod::radial : MarchMethod::raymarch;
+    mo.opacity.size = o.opacity_size;
+    mo.opacity.layers = o.opacity_layers;
     Result<std::unique_ptr<GlMarcher>> marcher =
         o.shadow_maps.empty() ? GlMarcher::create(scene, {}, {}, mo)
                               : GlMarcher::create(scene, maps.images(), maps.sources(), mo);

@@ -9,6 +9,7 @@
 
 #include <lightvol/airlight/density.h>
 #include <lightvol/render/gl_density.h>
+#include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/render/reference.h>
 #include <lightvol/volume/static_volume.h>
@@ -194,6 +195,32 @@ TEST(GlDensity, VolumeMatchesTheReferenceWithinTwoPercent) {
     // Measured (llvmpipe, automatic tile 1 here): 1.2e-3, 8.6e-4, 1.9e-4.
     EXPECT_LT(d.relative_l2, 0.02) << c.name;
     EXPECT_GT(from_flat.relative_l2, 0.1) << c.name;
+  }
+}
+
+// The seed's method, N steps against the shadow map and the opacity map, converges to the same
+// reference (its error is the steps' and the shadow map's aliasing at the lit edges).
+TEST(GlDensity, RaymarchConvergesToTheReference) {
+  REQUIRE_GL_CONTEXT();
+  for (const Case& c : kCases) {
+    Mesh volume;
+    const RenderScene scene = scene_of(c, noise(0.5, 0.8), &volume);
+    const Image ref = render_reference(volume, scene);
+    const DepthImage shadow = test::scene_shadow_map(scene.light, kMap, kMap);
+    double previous = 1e30;
+    for (int samples : {64, 1024}) {
+      MarchOptions mo;
+      mo.samples = samples;
+      Result<std::unique_ptr<GlMarcher>> marcher =
+          GlMarcher::create(scene, {shadow}, {"shadow"}, mo);
+      ASSERT_TRUE(marcher) << marcher.error().message;
+      const ImageDifference d = compare_images((*marcher)->render(), ref);
+      std::printf("  %-24s raymarch %4d steps vs reference: relative L2 %.2e\n", c.name, samples,
+                  d.relative_l2);
+      EXPECT_LT(d.relative_l2, previous) << c.name;
+      previous = d.relative_l2;
+    }
+    EXPECT_LT(previous, 0.02) << c.name;
   }
 }
 

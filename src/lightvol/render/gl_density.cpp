@@ -258,6 +258,27 @@ double light_bounds_exit(const Light& light, const Vec3d& origin, const Vec3d& d
   return t1 > t0 ? t1 : 0;
 }
 
+double light_reach(const RenderScene& scene) {
+  const Camera& cam = scene.camera;
+  const Light& light = scene.light;
+  const auto light_distance = [&](const Vec3d& x) {
+    return light.is_perspective() ? length(x - light.position)
+                                  : dot(x - light.position, light.direction) - light.near;
+  };
+  double reach = 0;
+  for (int row = 0; row < cam.height; ++row)
+    for (int col = 0; col < cam.width; ++col) {
+      const Ray ray = pixel_ray(cam, col, row);
+      const double need = std::min(scene.surface[static_cast<std::size_t>(row) * cam.width + col],
+                                   light_bounds_exit(light, ray.origin, ray.direction));
+      if (!(need > 0)) continue;
+      // Distance (and depth) from the light is convex along the ray: the ends bound it.
+      reach = std::max(
+          {reach, light_distance(ray.origin), light_distance(ray.origin + need * ray.direction)});
+    }
+  return 1.001 * reach;
+}
+
 // ---- the opacity map ----------------------------------------------------------------------------
 
 struct GlOpacityMap::State {
@@ -391,21 +412,12 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
   s.cols_x = (w + tile - 1) / tile;
   s.cols_y = (h + tile - 1) / tile;
   std::vector<float> t1(static_cast<std::size_t>(s.cols_x) * s.cols_y, 0.0f);
-  double reach = 0;  // the farthest any of those points is from the light (its depth, directional)
-  const auto light_distance = [&](const Vec3d& x) {
-    return light.is_perspective() ? length(x - light.position)
-                                  : dot(x - light.position, light.direction) - light.near;
-  };
   // Each column reaches the farthest point any pixel it is interpolated into needs.
   for (int row = 0; row < h; ++row) {
     const int gl_row = cam.view.flip_y ? row : h - 1 - row;  // GL row 0 is NDC y = −1
     for (int col = 0; col < w; ++col) {
-      const Ray ray = pixel_ray(cam, col, row);
       const double need_here = need[static_cast<std::size_t>(row) * w + col];
       if (!(need_here > 0)) continue;
-      // Distance (and depth) from the light is convex along the ray: the ends bound it.
-      reach = std::max({reach, light_distance(ray.origin),
-                        light_distance(ray.origin + need_here * ray.direction)});
       const double qx = (col + 0.5) / tile - 0.5, qy = (gl_row + 0.5) / tile - 0.5;
       const int x0 = std::clamp(static_cast<int>(std::floor(qx)), 0, s.cols_x - 1);
       const int y0 = std::clamp(static_cast<int>(std::floor(qy)), 0, s.cols_y - 1);
@@ -418,7 +430,7 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
     }
   }
   Result<std::unique_ptr<GlOpacityMap>> opacity =
-      GlOpacityMap::create(light, scene.medium, options.opacity, 1.001 * reach);
+      GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene));
   if (!opacity) return opacity.error();
   s.opacity = std::move(*opacity);
   Result<Program> build = Program::compile_compute(

@@ -97,4 +97,9 @@ class GlDensityGrid {
 // far around the light); 0 when it misses them.
 double light_bounds_exit(const Light& light, const Vec3d& origin, const Vec3d& direction);
 
+// The farthest from the light (directional: the deepest below its near plane) that any pixel ray
+// of `scene` gets before its surface or the light's bounds, with 0.1 % to spare: the opacity map's
+// reach for that camera.
+double light_reach(const RenderScene& scene);
+
 }  // namespace lightvol
