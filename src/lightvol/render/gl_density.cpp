@@ -193,24 +193,12 @@ const char* const kGlslOpacityLookup = kOpacityLookupSource.c_str();
 
 namespace {
 
-int automatic_tile(const RenderScene& scene, const std::vector<double>& need, int slices) {
+// One column per pixel while the grid stays within 2^25 samples (256 MB); coarser beyond. (Columns
+// wider than a pixel interpolate D across rays, which is poor where D is steep across them: rays
+// passing close to a point light, docs/design.md §6.)
+int automatic_tile(const RenderScene& scene, int slices) {
   const Camera& cam = scene.camera;
-  // One pixel's width in world units at the median distance the pixels need.
-  std::vector<double> lit;
-  for (double t : need)
-    if (t > 0 && std::isfinite(t)) lit.push_back(t);
-  if (lit.empty()) return 1;
-  std::nth_element(lit.begin(), lit.begin() + static_cast<std::ptrdiff_t>(lit.size() / 2),
-                   lit.end());
-  const double median = lit[lit.size() / 2];
-  const Ray a = pixel_ray(cam, cam.width / 2, cam.height / 2);
-  const Ray b = pixel_ray(cam, cam.width / 2, cam.height / 2 + (cam.height > 1 ? 1 : 0));
-  const double pixel = cam.view.is_perspective() ? median * length(a.direction - b.direction)
-                                                 : length(a.origin - b.origin);
   int tile = 1;
-  const double wavelength = scene.medium.density.finest_wavelength();
-  if (pixel > 0) tile = static_cast<int>(std::floor(0.25 * wavelength / pixel));
-  tile = std::clamp(tile, 1, 16);
   // At most 2^25 samples (256 MB).
   const auto samples = [&](int t) {
     return static_cast<double>((cam.width + t - 1) / t) * ((cam.height + t - 1) / t) * slices;
@@ -407,7 +395,7 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
       const Ray ray = pixel_ray(cam, col, row);
       need[i] = std::min(scene.surface[i], light_bounds_exit(light, ray.origin, ray.direction));
     }
-  s.options.tile = options.tile > 0 ? options.tile : automatic_tile(scene, need, options.slices);
+  s.options.tile = options.tile > 0 ? options.tile : automatic_tile(scene, options.slices);
   const int tile = s.options.tile;
   s.cols_x = (w + tile - 1) / tile;
   s.cols_y = (h + tile - 1) / tile;
