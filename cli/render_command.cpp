@@ -49,6 +49,11 @@ struct RenderOptions {
   bool quiet = false;
   bool adaptive = false;  // live: the adaptive volume at --max-error
   double max_error = -1;
+  // media of varying density
+  int grid_tile = 0;
+  int grid_slices = 128;
+  int opacity_size = 64;
+  int opacity_layers = 64;
 };
 
 double median(std::vector<double> v) {
@@ -76,6 +81,14 @@ std::string conflicting_flags(const RenderOptions& o) {
   if (o.samples < 1) return "--samples: must be >= 1, got " + std::to_string(o.samples);
   if (o.interleave < 1) return "--interleave: must be >= 1, got " + std::to_string(o.interleave);
   if (o.frames < 0) return "--frames: must be >= 0, got " + std::to_string(o.frames);
+  if (o.grid_tile < 0 || o.grid_tile > 256)
+    return "--grid-tile: must be in [0, 256], got " + std::to_string(o.grid_tile);
+  if (o.grid_slices < 2 || o.grid_slices > 4096)
+    return "--grid-slices: must be in [2, 4096], got " + std::to_string(o.grid_slices);
+  if (o.opacity_size < 2 || o.opacity_size > 1024)
+    return "--opacity-size: must be in [2, 1024], got " + std::to_string(o.opacity_size);
+  if (o.opacity_layers < 2 || o.opacity_layers > 4096)
+    return "--opacity-layers: must be in [2, 4096], got " + std::to_string(o.opacity_layers);
   if (o.frames > 0 && o.method == "reference")
     return "--frames: times GPU work; --method reference runs on the CPU";
   return "";
@@ -96,6 +109,10 @@ Result<RenderScene> load_render_scene(const RenderOptions& o, Progress& progress
   if (scene.medium.profile.enabled() && scene.light.type != LightType::spot)
     return Error{o.medium_path + ": key 'profile': applies to spot lights only, " + o.light_path +
                  " is a " + std::string(to_string(scene.light.type)) + " light"};
+  if (scene.medium.density.varying() && o.method != "reference" && o.method != "volume" &&
+      o.method != "raymarch")
+    return Error{o.medium_path + ": key 'density': --method " + o.method +
+                 " renders homogeneous media only (volume, reference and raymarch take a density)"};
   progress.begin("reading " + o.depth_path);
   Result<DepthImage> depth = read_depth_image(o.depth_path, {o.channel});
   if (!depth) return depth.error();
@@ -137,7 +154,12 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
   progress.begin("rendering " + o.method + " on " + (*context)->renderer());
   Image image;
   if (o.method == "volume") {
-    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+    GlVolumeOptions vo;
+    vo.density.tile = o.grid_tile;
+    vo.density.slices = o.grid_slices;
+    vo.density.opacity.size = o.opacity_size;
+    vo.density.opacity.layers = o.opacity_layers;
+    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene, vo);
     if (!renderer) return renderer.error();
     (*renderer)->set_volume(volume);
     image = render_frames(**renderer, o.frames, frame_seconds);
@@ -171,6 +193,8 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
     mo.samples = o.samples;
     mo.interleave = o.interleave;
     mo.method = o.method == "radial" ? MarchMethod::radial : MarchMethod::raymarch;
+    mo.opacity.size = o.opacity_size;
+    mo.opacity.layers = o.opacity_layers;
     Result<std::unique_ptr<GlMarcher>> marcher =
         o.shadow_maps.empty() ? GlMarcher::create(scene, {}, {}, mo)
                               : GlMarcher::create(scene, maps.images(), maps.sources(), mo);
@@ -287,6 +311,18 @@ void add_render_command(CLI::App& app, Runner* run) {
                   "Print relative L2, max abs error and PSNR against this .exr");
   cmd->add_option("--frames", o->frames,
                   "Render K more frames and print the median GPU time per frame");
+  cmd->add_option("--grid-tile", o->grid_tile,
+                  "density, volume: pixels per in-scattering column side (0: automatic)")
+      ->capture_default_str();
+  cmd->add_option("--grid-slices", o->grid_slices,
+                  "density, volume: samples along each in-scattering column")
+      ->capture_default_str();
+  cmd->add_option("--opacity-size", o->opacity_size,
+                  "density, volume and raymarch: opacity map columns per side (per face)")
+      ->capture_default_str();
+  cmd->add_option("--opacity-layers", o->opacity_layers,
+                  "density, volume and raymarch: opacity map layers along the light's depth")
+      ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "No progress lines");
   cmd->callback([o, run] { *run = [o] { return run_render(*o); }; });
 }

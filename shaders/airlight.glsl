@@ -20,6 +20,9 @@
 //   LIGHTVOL_SURFACE_VERTEX, LIGHTVOL_SURFACE_FRAGMENT  for hosts without a distance buffer: draw
 //       the scene with the depth test on into an R32F target cleared to 3e38; each fragment writes
 //       its distance along the pixel's ray, the `surface` texture pass 1 reads.
+//   LIGHTVOL_DENSITY  (with the volume and resolve fragment stages, OpenGL 4.5 only) a medium of
+//       varying density: pass 1 also writes each fragment's signed D(t), read from the per-frame
+//       grid lightvol's GlDensityGrid makes, to a second R32F target that pass 2 adds.
 //   LIGHTVOL_LIVE_VOLUME_VERTEX  pass 1's vertex stage for a live volume (docs/engines.md): the
 //       static volume of a light made from its shadow map(s) as it is drawn, with no vertex
 //       attributes. Vertex gl_VertexID is vertex gl_VertexID of `lightvol build`'s static volume
@@ -299,12 +302,54 @@ uniform sampler2D surface;
 uniform int baseline;
 uniform int panels;
 uniform float facing_sign;
+#ifdef LIGHTVOL_DENSITY
+// Media of varying density (OpenGL 4.5 only; docs/design.md 6): a per-frame grid of columns, one
+// per grid_tile x grid_tile pixels, each holding D(t) = F(t) - F_hom(t) and its derivative at
+// grid_slices distances uniform on [0, grid_t1[column]]: the heterogeneous cumulative in-scattering
+// along the column's ray minus the homogeneous one that this fragment computes exactly. Each
+// fragment adds its signed D(t) (bilinear across columns, cubic Hermite across slices) to a
+// second target.
+layout(std430, binding = 4) readonly buffer DensityGrid { vec2 grid_d[]; };
+layout(std430, binding = 5) readonly buffer DensityColumns { float grid_t1[]; };
+uniform ivec2 grid_columns;
+uniform int grid_tile;
+uniform int grid_slices;
+layout(location = 1) out float varying_part;
+float grid_column(int column, float t) {
+  float t1 = grid_t1[column];
+  if (!(t1 > 0.0)) return 0.0;
+  float k = clamp(t / t1, 0.0, 1.0) * float(grid_slices - 1);
+  int k0 = min(int(k), grid_slices - 2);
+  vec2 a = grid_d[column * grid_slices + k0];
+  vec2 b = grid_d[column * grid_slices + k0 + 1];
+  float u = k - float(k0), h = t1 / float(grid_slices - 1);
+  float u2 = u * u, u3 = u2 * u;
+  return (2.0 * u3 - 3.0 * u2 + 1.0) * a.x + (u3 - 2.0 * u2 + u) * h * a.y +
+         (3.0 * u2 - 2.0 * u3) * b.x + (u3 - u2) * h * b.y;
+}
+float grid_lookup(float t) {
+  vec2 q = clamp(gl_FragCoord.xy / float(grid_tile) - 0.5, vec2(0.0), vec2(grid_columns - 1));
+  ivec2 i = ivec2(q);
+  ivec2 j = min(i + 1, grid_columns - 1);
+  vec2 f = q - vec2(i);
+  float d00 = grid_column(i.y * grid_columns.x + i.x, t);
+  float d10 = grid_column(i.y * grid_columns.x + j.x, t);
+  float d01 = grid_column(j.y * grid_columns.x + i.x, t);
+  float d11 = grid_column(j.y * grid_columns.x + j.x, t);
+  float y0 = d00 + f.x * (d10 - d00);
+  float y1 = d01 + f.x * (d11 - d01);
+  return y0 + f.y * (y1 - y0);
+}
+#endif
 void main() {
   vec3 origin, dir;
   pixel_ray(origin, dir);
   float t_surface = texelFetch(surface, ivec2(gl_FragCoord.xy), 0).r;
   float t = clamp(dot(world - origin, dir), 0.0, t_surface);
   float s = (gl_FrontFacing ? -1.0 : 1.0) * facing_sign;
+#ifdef LIGHTVOL_DENSITY
+  varying_part = s * grid_lookup(t);
+#endif
   if (light_type == 1) {
     float rate = sigma_t * (1.0 + dot(dir, light_direction));
     float x = rate * t;
@@ -324,6 +369,9 @@ void main() {
 layout(location = 0) out float airlight;
 uniform sampler2D accumulated;
 uniform int baseline;
+#ifdef LIGHTVOL_DENSITY
+uniform sampler2D accumulated_density;  // the volume pass's signed sum of D(t)
+#endif
 void main() {
   vec2 a = texelFetch(accumulated, ivec2(gl_FragCoord.xy), 0).rg;
   vec3 origin, dir;
@@ -332,6 +380,9 @@ void main() {
     float k = dot(dir, light_direction);
     float z = dot(origin - light_position, light_direction) - light_near;
     airlight = sigma_s * intensity * phase(-k) * exp(-sigma_t * z) * a.r;
+#ifdef LIGHTVOL_DENSITY
+    airlight += texelFetch(accumulated_density, ivec2(gl_FragCoord.xy), 0).r;
+#endif
     return;
   }
   float h, s0;
@@ -341,6 +392,9 @@ void main() {
   if (baseline == 1 && a.g != 0.0)
     base = angular_integral(0.5 * atan(h, s0), 0.25 * PI, sigma_t * h, profile_enabled == 1 ? 32 : 8);
   airlight = c * (a.r + a.g * base);
+#ifdef LIGHTVOL_DENSITY
+  airlight += texelFetch(accumulated_density, ivec2(gl_FragCoord.xy), 0).r;
+#endif
 }
 #endif
 

@@ -1,5 +1,6 @@
 // The airlight maths of docs/design.md §6 against direct numerical integration, and the medium and
 // camera descriptions' parsing.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -159,9 +160,108 @@ TEST(Medium, ParsesAllKeys) {
   EXPECT_EQ(p->profile.outer_deg, 25);
 }
 
+TEST(Medium, ParsesANoiseDensity) {
+  Result<Medium> m = parse_medium(
+      R"({"scattering": 0.05, "density": {"type": "noise", "seed": 4294967295, "frequency": 0.7,
+          "octaves": 5, "lacunarity": 2.5, "gain": 0.4, "offset": 0.8, "scale": 0.6}})",
+      "m.json");
+  ASSERT_TRUE(m) << m.error().message;
+  EXPECT_EQ(m->density.type, DensityType::noise);
+  EXPECT_EQ(m->density.noise.seed, 4294967295u);
+  EXPECT_EQ(m->density.noise.frequency, 0.7);
+  EXPECT_EQ(m->density.noise.octaves, 5);
+  EXPECT_EQ(m->density.noise.lacunarity, 2.5);
+  EXPECT_EQ(m->density.noise.gain, 0.4);
+  EXPECT_EQ(m->density.noise.offset, 0.8);
+  EXPECT_EQ(m->density.noise.scale, 0.6);
+  EXPECT_DOUBLE_EQ(m->density.finest_wavelength(), 1 / (0.7 * std::pow(2.5, 4)));
+  Result<Medium> d = parse_medium(R"({"scattering": 0.05, "density": {"type": "noise"}})", "d");
+  ASSERT_TRUE(d) << d.error().message;
+  EXPECT_TRUE(d->density.varying());
+  EXPECT_EQ(d->density.noise.octaves, NoiseDensity{}.octaves);
+  Result<Medium> h = parse_medium(R"({"scattering": 0.05})", "h");
+  ASSERT_TRUE(h) << h.error().message;
+  EXPECT_FALSE(h->density.varying());
+}
+
+// The documented field: in range, continuous across lattice planes, zero amplitude constant,
+// different seeds different fields, max(0, ·) clamping.
+TEST(Density, NoiseIsTheDocumentedFbm) {
+  NoiseDensity n;
+  n.seed = 7;
+  n.frequency = 1.3;
+  double lo = 1, hi = -1, mean = 0;
+  const int count = 20000;
+  for (int i = 0; i < count; ++i) {
+    const Vec3d x{0.37 * i, -0.11 * i + 3, 0.023 * i - 50};
+    const double b = noise_fbm(n, x);
+    lo = std::min(lo, b);
+    hi = std::max(hi, b);
+    mean += b / count;
+  }
+  EXPECT_GE(lo, -1.0);
+  EXPECT_LT(hi, 1.0);
+  EXPECT_LT(lo, -0.4);  // the field does vary
+  EXPECT_GT(hi, 0.4);
+  EXPECT_NEAR(mean, 0.0, 0.05);
+  // Continuous across a lattice plane (x = 2 in noise coordinates), on either side of zero.
+  for (double plane : {2.0, -3.0}) {
+    const double a = value_noise({plane - 1e-9, 0.3, 0.7}, 5);
+    const double b = value_noise({plane + 1e-9, 0.3, 0.7}, 5);
+    EXPECT_NEAR(a, b, 1e-7);
+  }
+  // At a lattice point the noise is the hashed value itself: a different seed, a different value.
+  EXPECT_NE(value_noise({1, 2, 3}, 1), value_noise({1, 2, 3}, 2));
+  // One octave with gain 0: the fBm is the first octave alone.
+  NoiseDensity single = n;
+  single.gain = 0;
+  EXPECT_EQ(noise_fbm(single, {0.4, 0.5, 0.6}), value_noise(Vec3d{0.4, 0.5, 0.6} * 1.3, 7));
+  Density d;
+  d.type = DensityType::noise;
+  d.noise = n;
+  d.noise.offset = 1.0;
+  d.noise.scale = 0.0;
+  EXPECT_EQ(d({1.5, -2, 3}), 1.0);
+  d.noise.offset = 0.0;
+  d.noise.scale = 1.0;
+  for (int i = 0; i < 100; ++i) EXPECT_GE(d({0.1 * i, 0.2, 0.3}), 0.0);
+  EXPECT_EQ(d.max_density(), 1.0);
+  EXPECT_EQ(Density{}({4, 5, 6}), 1.0);
+}
+
 TEST(Medium, RejectsBadInputNamingFileAndKey) {
   const std::pair<const char*, const char*> cases[] = {
-      {R"({"scattering": 0.1, "density": 2})", "m.json: key 'density': unknown key"},
+      {R"({"scattering": 0.1, "densty": 2})", "m.json: key 'densty': unknown key"},
+      {R"({"scattering": 0.1, "density": 2})", "m.json: key 'density': expected an object"},
+      {R"({"scattering": 0.1, "density": {}})", "m.json: key 'density.type': missing"},
+      {R"({"scattering": 0.1, "density": {"type": "perlin"}})",
+       "m.json: key 'density.type': expected \"noise\""},
+      {R"({"scattering": 0.1, "density": {"type": "vdb", "file": "a.vdb"}})",
+       "m.json: key 'density.type': OpenVDB densities"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "octave": 3}})",
+       "m.json: key 'density.octave': unknown key"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "scale": -0.5}})",
+       "m.json: key 'density.scale': must be >= 0, got -0.5"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "offset": -1}})",
+       "m.json: key 'density.offset': must be >= 0, got -1"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "frequency": 0}})",
+       "m.json: key 'density.frequency': must be > 0, got 0"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "octaves": 2.5}})",
+       "m.json: key 'density.octaves': must be an integer in [1, 12], got 2.5"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "octaves": 13}})",
+       "m.json: key 'density.octaves': must be an integer in [1, 12], got 13"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "seed": -1}})",
+       "m.json: key 'density.seed': must be an integer in [0, 4294967295], got -1"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "seed": 4294967296}})",
+       "m.json: key 'density.seed': must be an integer in [0, 4294967295]"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "gain": 1.5}})",
+       "m.json: key 'density.gain': must be in [0, 1], got 1.5"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "lacunarity": 0.5}})",
+       "m.json: key 'density.lacunarity': must be in [1, 16], got 0.5"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "scale": "big"}})",
+       "m.json: key 'density.scale': expected a number"},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "scale": NaN}})",
+       "m.json: not valid JSON"},
       {R"({"absorption": 0.1})", "m.json: key 'scattering': missing"},
       {R"({"scattering": -1})", "m.json: key 'scattering': must be >= 0"},
       {R"({"scattering": 0.1, "phase": {"type": "hg", "g": 1.2}})",

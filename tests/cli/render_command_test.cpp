@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -226,7 +227,7 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: " + dir +
                        "/bad_medium.json: key 'sigma': unknown key (known: "
-                       "scattering, absorption, intensity, phase, profile)\n");
+                       "scattering, absorption, intensity, phase, profile, density)\n");
   r = test::run_lightvol("render " + common_args(dir) + " --out '" + dir + "/x.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: render: --method volume needs the light volume MESH\n");
@@ -251,6 +252,68 @@ TEST(RenderCommand, RejectsBadInputNamingTheFile) {
                          "/x.exr' --method reference --compare '" + dir + "/shadow.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: " + dir + "/shadow.exr: image is 128x128, the render is 64x48\n");
+}
+
+// A noise fog end to end: volume within 2 % of the reference through --compare, raymarch renders
+// it, and every bad density is refused with one line, exit 2 and no output file.
+TEST(RenderCommand, RendersANoiseDensity) {
+  REQUIRE_GL_CONTEXT();
+  test::TempDir tmp;
+  const std::string dir = tmp.path();
+  write_scene(dir, {6, 3, 6}, {0, 1, 0});
+  std::ofstream(dir + "/fog.json")
+      << R"({"scattering": 0.15, "absorption": 0.05, "intensity": 20, "phase": {"type": "hg", "g": 0.3},
+            "density": {"type": "noise", "seed": 5, "frequency": 0.3, "octaves": 2, "offset": 0.5, "scale": 0.8}})";
+  const std::string args = "--light '" + dir + "/light.json' --camera '" + dir +
+                           "/camera.json' --depth '" + dir + "/camdepth.exr' --quiet";
+  test::CommandResult ref =
+      test::run_lightvol("render '" + dir + "/volume.ply' " + args + " --medium '" + dir +
+                         "/fog.json' --method reference --out '" + dir + "/reference.exr'");
+  ASSERT_EQ(ref.exit_code, 0) << ref.err;
+  test::CommandResult vol = test::run_lightvol(
+      "render '" + dir + "/volume.ply' " + args + " --medium '" + dir + "/fog.json' --out '" + dir +
+      "/volume.exr' --compare '" + dir + "/reference.exr'");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  EXPECT_LT(number_after(vol.out, "relative L2 "), 0.02) << vol.out;
+  // The homogeneous medium of the same coefficients is far from it: the density is rendered.
+  test::CommandResult flat = test::run_lightvol(
+      "render '" + dir + "/volume.ply' " + args + " --medium '" + dir + "/medium.json' --out '" +
+      dir + "/flat.exr' --compare '" + dir + "/reference.exr'");
+  ASSERT_EQ(flat.exit_code, 0) << flat.err;
+  EXPECT_GT(number_after(flat.out, "relative L2 "), 0.1) << flat.out;
+  test::CommandResult march = test::run_lightvol(
+      "render " + args + " --medium '" + dir + "/fog.json' --method raymarch --samples 256 " +
+      "--shadow-map '" + dir + "/shadow.exr' --out '" + dir + "/march.exr' --compare '" + dir +
+      "/reference.exr'");
+  ASSERT_EQ(march.exit_code, 0) << march.err;
+  EXPECT_LT(number_after(march.out, "relative L2 "), 0.1) << march.out;
+
+  const std::pair<const char*, std::string> bad[] = {
+      {R"({"scattering": 0.1, "density": {"type": "noise", "scale": -1}})",
+       "key 'density.scale': must be >= 0, got -1"},
+      {R"({"scattering": 0.1, "density": {"type": "cloud"}})",
+       "key 'density.type': expected \"noise\", got \"cloud\""},
+      {R"({"scattering": 0.1, "density": {"type": "noise", "seeds": 1}})",
+       "key 'density.seeds': unknown key (known: type, seed, frequency, octaves, lacunarity, gain, "
+       "offset, scale)"},
+  };
+  for (const auto& [text, why] : bad) {
+    std::ofstream(dir + "/bad.json") << text;
+    test::CommandResult r =
+        test::run_lightvol("render '" + dir + "/volume.ply' " + args + " --medium '" + dir +
+                           "/bad.json' --out '" + dir + "/bad.exr'");
+    EXPECT_EQ(r.exit_code, 2) << text;
+    EXPECT_EQ(r.err, "lightvol: " + dir + "/bad.json: " + why + "\n");
+    EXPECT_FALSE(std::filesystem::exists(dir + "/bad.exr"));
+  }
+  test::CommandResult radial =
+      test::run_lightvol("render " + args + " --medium '" + dir +
+                         "/fog.json' --method radial --out '" + dir + "/bad.exr'");
+  EXPECT_EQ(radial.exit_code, 2);
+  EXPECT_EQ(radial.err, "lightvol: " + dir +
+                            "/fog.json: key 'density': --method radial renders homogeneous media "
+                            "only (volume, reference and raymarch take a density)\n");
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.exr"));
 }
 
 }  // namespace

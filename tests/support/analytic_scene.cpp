@@ -112,24 +112,37 @@ double brute_force_airlight(const RenderScene& scene, int width, int height, int
   const Medium& m = scene.medium;
   const double st = m.extinction();
   const double ds = end / steps;
-  double sum = 0;
+  const bool varying = m.density.varying();
+  // Midpoint sums of ρ: the eye-side optical depth as the march goes, the light side per sample.
+  const auto optical_depth = [&](Vec3d from, Vec3d to) {
+    if (!varying) return st * length(to - from);
+    constexpr int kLightSteps = 200;
+    double sum = 0;
+    for (int k = 0; k < kLightSteps; ++k)
+      sum += m.density(from + ((k + 0.5) / kLightSteps) * (to - from));
+    return st * sum * length(to - from) / kLightSteps;
+  };
+  double sum = 0, tau_eye = 0;
   for (int i = 0; i < steps; ++i) {
     const double s = (i + 0.5) * ds;
     const Vec3d x = ray.origin + s * ray.direction;
+    const double rho = varying ? m.density(x) : 1.0;
+    const double tau_here = varying ? tau_eye + 0.5 * st * rho * ds : st * s;
+    tau_eye += st * rho * ds;
     if (!scene_lit(scene.light, width, height, x, box)) continue;
     double radiance = 0;
     if (scene.light.is_perspective()) {
       const Vec3d to_x = x - scene.light.position;
       const double d = length(to_x);
       const double cos_theta = dot((1.0 / d) * to_x, -1.0 * ray.direction);
-      radiance = m.intensity * std::exp(-st * d) / (d * d) * m.phase(cos_theta) *
-                 m.profile(dot(to_x, scene.light.direction) / d);
+      radiance = m.intensity * std::exp(-optical_depth(scene.light.position, x)) / (d * d) *
+                 m.phase(cos_theta) * m.profile(dot(to_x, scene.light.direction) / d);
     } else {
       const double z = dot(x - scene.light.position, scene.light.direction) - scene.light.near;
-      radiance = m.intensity * std::exp(-st * z) *
+      radiance = m.intensity * std::exp(-optical_depth(x - z * scene.light.direction, x)) *
                  m.phase(dot(scene.light.direction, -1.0 * ray.direction));
     }
-    sum += m.scattering * radiance * std::exp(-st * s) * ds;
+    sum += m.scattering * rho * radiance * std::exp(-tau_here) * ds;
   }
   return sum;
 }

@@ -36,7 +36,9 @@ RenderScene make_render_scene(const Camera& camera, const Light& light, const Me
                               const Box& box = {});
 
 // Brute-force airlight of one pixel: midpoint rule with `steps` samples along the ray up to the
-// surface (or `max_t`), each weighted by scene_lit. Direct from docs/design.md §6's integrand.
+// surface (or `max_t`), each weighted by scene_lit. Direct from docs/design.md §6's integrand;
+// with a varying density, ρ and both optical depths by midpoint sums too (200 steps toward the
+// light per sample).
 double brute_force_airlight(const RenderScene& scene, int width, int height, int col, int row,
                             int steps, double max_t, const Box& box = {});
 

@@ -57,13 +57,73 @@ namespace {
 
 using nlohmann::json;
 
+// A number of `reader` at `key` within [lo, hi] (an integer when `integer`), else an error naming
+// the key.
+Result<double> bounded_number(const KeyReader& reader, const char* key, double lo, double hi,
+                              bool integer, const std::string& range) {
+  Result<double> x = reader.number(key);
+  if (!x) return x.error();
+  if (!(*x >= lo && *x <= hi) || (integer && std::floor(*x) != *x))
+    return reader.error(key, "must be " + range + ", got " + format_number(*x));
+  return *x;
+}
+
+// The medium's "density" object (docs/design.md §6).
+Result<Density> parse_density(const KeyReader& keys) {
+  Result<KeyReader> object = keys.object("density");
+  if (!object) return object.error();
+  const KeyReader& d = *object;
+  Result<std::string> type = d.string("type");
+  if (!type) return type.error();
+  if (*type == "vdb")
+    return d.error("type", "OpenVDB densities (\"vdb\") are not supported yet; use \"noise\"");
+  if (*type != "noise") return d.error("type", "expected \"noise\", got " + quote_text(*type));
+  if (Status s =
+          d.only({"type", "seed", "frequency", "octaves", "lacunarity", "gain", "offset", "scale"});
+      !s)
+    return s.error();
+  Density density;
+  density.type = DensityType::noise;
+  NoiseDensity& n = density.noise;
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Field {
+    const char* key;
+    double lo, hi;
+    bool integer;
+    const char* range;
+  };
+  for (const Field& f :
+       {Field{"seed", 0, 4294967295.0, true, "an integer in [0, 4294967295]"},
+        Field{"frequency", 0, inf, false, "> 0"},
+        Field{"octaves", 1, 12, true, "an integer in [1, 12]"},
+        Field{"lacunarity", 1, 16, false, "in [1, 16]"}, Field{"gain", 0, 1, false, "in [0, 1]"},
+        Field{"offset", 0, inf, false, ">= 0"}, Field{"scale", 0, inf, false, ">= 0"}}) {
+    if (!d.has(f.key)) continue;
+    Result<double> x = bounded_number(d, f.key, f.lo, f.hi, f.integer, f.range);
+    if (!x) return x.error();
+    if (std::string_view(f.key) == "frequency" && !(*x > 0))
+      return d.error(f.key, "must be > 0, got " + format_number(*x));
+    const std::string_view key = f.key;
+    if (key == "seed") n.seed = static_cast<std::uint32_t>(*x);
+    if (key == "frequency") n.frequency = *x;
+    if (key == "octaves") n.octaves = static_cast<int>(*x);
+    if (key == "lacunarity") n.lacunarity = *x;
+    if (key == "gain") n.gain = *x;
+    if (key == "offset") n.offset = *x;
+    if (key == "scale") n.scale = *x;
+  }
+  return density;
+}
+
 }  // namespace
 
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source) {
   Result<json> root = parse_json_object(json_text, source, "a medium");
   if (!root) return root.error();
   const KeyReader keys(*root, source);
-  if (Status s = keys.only({"scattering", "absorption", "intensity", "phase", "profile"}); !s)
+  if (Status s =
+          keys.only({"scattering", "absorption", "intensity", "phase", "profile", "density"});
+      !s)
     return s.error();
   Medium medium;
   if (!keys.has("scattering")) return keys.error("scattering", "missing");
@@ -121,6 +181,11 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
       return keys.error("profile", "needs 0 <= inner_deg < outer_deg <= 90, got " +
                                        format_number(medium.profile.inner_deg) + " and " +
                                        format_number(medium.profile.outer_deg));
+  }
+  if (keys.has("density")) {
+    Result<Density> density = parse_density(keys);
+    if (!density) return density.error();
+    medium.density = *density;
   }
   return medium;
 }

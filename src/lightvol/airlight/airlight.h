@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include <lightvol/airlight/density.h>
 #include <lightvol/core/math.h>
 #include <lightvol/core/result.h>
 #include <lightvol/light/light.h>
@@ -54,14 +55,19 @@ struct Medium {
   double intensity = 1.0;    // I: W/sr for spot and omni lights, W/m² for directional lights
   Phase phase;
   SpotProfile profile;  // spot lights only
+  Density density;  // ρ(x) scales σs and σa at x; constant (ρ ≡ 1) unless "density" is given
 
-  double extinction() const { return scattering + absorption; }  // σt
+  double extinction() const { return scattering + absorption; }  // σt (where ρ = 1)
 };
 
 // Parses {"scattering", "absorption", "intensity", "phase": {"type": "isotropic"|"hg"|"schlick",
-// "g" | "k"}, "profile": {"inner_deg", "outer_deg"}}. All keys optional except "scattering";
-// defaults as above. Errors name `source` and the key: unknown keys, negative coefficients,
-// |g| or |k| ≥ 1, a parameter of another phase type, not 0 ≤ inner_deg < outer_deg ≤ 90.
+// "g" | "k"}, "profile": {"inner_deg", "outer_deg"}, "density": {"type": "noise", "seed",
+// "frequency", "octaves", "lacunarity", "gain", "offset", "scale"}}. All keys optional except
+// "scattering" (and the density's "type"); defaults as above and in density.h. Errors name
+// `source` and the key: unknown keys, negative coefficients, |g| or |k| ≥ 1, a parameter of another
+// phase type, not 0 ≤ inner_deg < outer_deg ≤ 90, an unknown density type, a seed that is not an
+// integer in [0, 2³²), octaves not an integer in [1, 12], frequency ≤ 0, lacunarity outside
+// [1, 16], gain outside [0, 1], a negative offset or scale.
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source);
 Result<Medium> load_medium(const std::string& path);
 

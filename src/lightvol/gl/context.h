@@ -118,7 +118,8 @@ namespace lightvol::gl {
   X(PFNGLDISPATCHCOMPUTEINDIRECTPROC, glDispatchComputeIndirect)     \
   X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                         \
   X(PFNGLDRAWELEMENTSINDIRECTPROC, glDrawElementsIndirect)           \
-  X(PFNGLCLEARBUFFERDATAPROC, glClearBufferData)
+  X(PFNGLCLEARBUFFERDATAPROC, glClearBufferData)                     \
+  X(PFNGLUNIFORM1UIPROC, glUniform1ui)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)

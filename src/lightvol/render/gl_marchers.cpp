@@ -5,6 +5,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/gl/context.h>
+#include <lightvol/render/gl_density.h>
 #include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
 
@@ -112,9 +113,33 @@ void main() {
   float offset = (float(p.x + interleave * p.y) + 0.5) / float(interleave * interleave);
   float dt = (t1 - t0) / float(samples);
   float sum = 0.0;
+#ifdef LIGHTVOL_DENSITY
+  // The eye-side optical depth up to the bounds (a quarter as many midpoint steps), then along.
+  float tau_e = 0.0;
+  int before = max(samples / 4, 8);
+  for (int k = 0; k < before; ++k)
+    tau_e += sigma_t * density(origin + ((float(k) + 0.5) * t0 / float(before)) * dir);
+  tau_e *= t0 / float(before);
+#endif
   for (int k = 0; k < samples; ++k) {
     float t = t0 + (float(k) + offset) * dt;
     vec3 x = origin + t * dir;
+#ifdef LIGHTVOL_DENSITY
+    float rho = density(x);
+    float te = tau_e + sigma_t * rho * offset * dt;
+    tau_e += sigma_t * rho * dt;
+    if (!lit(x)) continue;
+    float light_part;
+    if (light_type == 1) {
+      light_part = phase(-dot(dir, light_direction));
+    } else {
+      vec3 to_x = x - light_position;
+      float dist = length(to_x);
+      light_part = phase(dot(to_x / dist, -dir)) / (dist * dist) * profile(to_x);
+    }
+    sum += light_part * rho * exp(-light_optical_depth(x) - te);
+    continue;
+#endif
     if (!lit(x)) continue;
     float radiance;
     if (light_type == 1) {
@@ -196,7 +221,10 @@ void main() {
 }
 )";
 
-std::string with_common(const char* body) {
+std::string with_common(const char* body, bool density = false) {
+  if (density)
+    return std::string("#version 450 core\n#define LIGHTVOL_DENSITY\n") + kGlslCommon +
+           kGlslDensity + kGlslOpacityLookup + body;
   return std::string("#version 450 core\n") + kGlslCommon + body;
 }
 
@@ -216,6 +244,7 @@ struct GlMarcher::State {
   TextureHandle surface, shadow;
   VertexArrayHandle vao;
   bool light_behind = false;
+  std::unique_ptr<GlOpacityMap> opacity;  // media of varying density
 };
 
 GlMarcher::~GlMarcher() = default;
@@ -246,8 +275,11 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
   s.scene = scene;
   s.options = options;
   const bool march = options.method == MarchMethod::raymarch;
+  const bool varying = march && scene.medium.density.varying();
+  if (scene.medium.density.varying() && !march)
+    return Error{"radial: renders homogeneous media only"};
   Result<Program> first =
-      Program::compile(kFullscreenVs, with_common(march ? kMarchFs : kOcclusionFs),
+      Program::compile(kFullscreenVs, with_common(march ? kMarchFs : kOcclusionFs, varying),
                        march ? "raymarch" : "radial occlusion");
   if (!first) return first.error();
   s.first = std::move(*first);
@@ -306,6 +338,15 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
     glUniform3f(s.first.uniform("bounds_hi"), float(hi.x), float(hi.y), float(hi.z));
     glUniform1i(s.first.uniform("samples"), options.samples);
     glUniform1i(s.first.uniform("interleave"), options.interleave);
+    if (varying) {
+      Result<std::unique_ptr<GlOpacityMap>> opacity =
+          GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene));
+      if (!opacity) return opacity.error();
+      s.opacity = std::move(*opacity);
+      s.first.use();
+      set_density_uniforms(s.first, scene.medium.density);
+      s.opacity->bind(s.first);
+    }
     s.gather.use();
     glUniform1i(s.gather.uniform("source"), 0);
     glUniform1i(s.gather.uniform("width"), options.interleave);
@@ -336,10 +377,12 @@ Image GlMarcher::render(double* seconds) {
   const auto start = std::chrono::steady_clock::now();
   glDisable(GL_DEPTH_TEST);
   glDisable(GL_BLEND);
+  if (s.opacity) s.opacity->update();  // this frame's light-side optical depths
   glBindVertexArray(s.vao.id());
   // Pass 1: march (or the occlusion pre-pass) into a.
   s.a.bind();
   s.first.use();
+  if (s.opacity) s.opacity->bind(s.first);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);

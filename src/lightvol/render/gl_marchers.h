@@ -8,7 +8,9 @@
 //   marcher of the blog post "Volumetric lighting 1 – A naive approach". The shadow test
 //   interpolates the map's window depth over the same two triangles per texel quad as the static
 //   volume, so the marcher converges to the volume's exact airlight. Spot and directional lights
-//   take one map; omni lights six faces (+X −X +Y −Y +Z −Z).
+//   take one map; omni lights six faces (+X −X +Y −Y +Z −Z). In a medium of varying density (the
+//   seed's method) each step also samples ρ, accumulates the eye-side optical depth and reads the
+//   light-side one from the opacity map (gl_density.h).
 // radial — Mitchell 2007 (GPU Gems 3, ch. 13): an occlusion pre-pass from the camera depth (pixels
 //   whose surface lies beyond the light, weighted by the unshadowed glow around the light,
 //   σs·I·p(θ)·e^(−σt·D)/max(h, D/50), h the light's distance from the pixel ray) blurred
@@ -23,6 +25,7 @@
 
 #include <lightvol/core/result.h>
 #include <lightvol/depth/depth_image.h>
+#include <lightvol/render/gl_density.h>
 #include <lightvol/render/scene.h>
 
 namespace lightvol {
@@ -38,6 +41,8 @@ struct MarchOptions {
   double weight = 0.0;  // 0: 1/samples
   double decay = 0.97;
   double density = 0.9;
+  // raymarch in a medium of varying density: the light-side optical depths (gl_density.h)
+  OpacityMapOptions opacity;
 };
 
 class GlMarcher {

@@ -6,6 +6,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/render/detail/airlight_glsl.h>
+#include <lightvol/render/gl_density.h>
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/render/live_volume.h>
 
@@ -18,8 +19,9 @@ using namespace gl;
 // shaders/airlight.glsl, embedded at build time (cmake/embed_shader.cmake): the volume pass, the
 // resolve pass and the functions they share, compiled one stage at a time by a #define.
 namespace {
-std::string stage_source(const char* stage) {
-  return std::string("#version 450 core\n#define ") + stage + "\n" + detail::kAirlightGlsl;
+std::string stage_source(const char* stage, bool density = false) {
+  return std::string("#version 450 core\n#define ") + stage + "\n" +
+         (density ? "#define LIGHTVOL_DENSITY\n" : "") + detail::kAirlightGlsl;
 }
 const std::string kCommonSource = std::string("#define LIGHTVOL_COMMON\n") + detail::kAirlightGlsl;
 }  // namespace
@@ -153,6 +155,7 @@ struct GlVolumeRenderer::State {
   GLsizei index_count = 0;
   float view_projection[16] = {};
   float facing_sign = 1;
+  std::unique_ptr<GlDensityGrid> grid;  // media of varying density
 };
 
 GlVolumeRenderer::~GlVolumeRenderer() = default;
@@ -164,16 +167,25 @@ Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderS
   State& s = *r->state_;
   s.scene = scene;
   s.options = options;
-  Result<Program> volume = Program::compile(stage_source("LIGHTVOL_VOLUME_VERTEX"),
-                                            stage_source("LIGHTVOL_VOLUME_FRAGMENT"), "volume");
+  const bool varying = scene.medium.density.varying();
+  Result<Program> volume =
+      Program::compile(stage_source("LIGHTVOL_VOLUME_VERTEX"),
+                       stage_source("LIGHTVOL_VOLUME_FRAGMENT", varying), "volume");
   if (!volume) return volume.error();
   s.volume = std::move(*volume);
-  Result<Program> resolve = Program::compile(stage_source("LIGHTVOL_RESOLVE_VERTEX"),
-                                             stage_source("LIGHTVOL_RESOLVE_FRAGMENT"), "resolve");
+  Result<Program> resolve =
+      Program::compile(stage_source("LIGHTVOL_RESOLVE_VERTEX"),
+                       stage_source("LIGHTVOL_RESOLVE_FRAGMENT", varying), "resolve");
   if (!resolve) return resolve.error();
   s.resolve = std::move(*resolve);
+  if (varying) {
+    Result<std::unique_ptr<GlDensityGrid>> grid = GlDensityGrid::create(scene, options.density);
+    if (!grid) return grid.error();
+    s.grid = std::move(*grid);
+  }
   const int w = scene.camera.width, h = scene.camera.height;
-  Result<Framebuffer> acc = Framebuffer::create(w, h, {GL_RG32F}, false);
+  Result<Framebuffer> acc = varying ? Framebuffer::create(w, h, {GL_RG32F, GL_R32F}, false)
+                                    : Framebuffer::create(w, h, {GL_RG32F}, false);
   if (!acc) return acc.error();
   s.accumulate = std::move(*acc);
   Result<Framebuffer> out = Framebuffer::create(w, h, {GL_R32F}, false);
@@ -222,6 +234,7 @@ Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderS
   glUniformMatrix4fv(s.volume.uniform("view_projection"), 1, GL_TRUE, s.view_projection);
   s.resolve.use();
   glUniform1i(s.resolve.uniform("accumulated"), 0);
+  glUniform1i(s.resolve.uniform("accumulated_density"), 2);
   glUseProgram(0);
   if (std::string e = pending_error(); !e.empty())
     return Error{"OpenGL: setting up the volume renderer: " + e};
@@ -247,6 +260,7 @@ Status GlVolumeRenderer::set_volume(const LiveVolume& live, LiveDraw draw) {
   if (live.adaptive() && draw == LiveDraw::vertex_stage)
     return Error{
         "live volume: an adaptive live volume is drawn in two passes (LiveDraw::two_pass)"};
+  if (s.grid) return Error{"the live volume renders homogeneous media only"};
   if (s.live_program.id() == 0) {
     Result<Program> program =
         Program::compile(stage_source("LIGHTVOL_LIVE_VOLUME_VERTEX"),
@@ -278,6 +292,7 @@ Image GlVolumeRenderer::render(double* seconds) {
   const auto start = std::chrono::steady_clock::now();
   const bool in_vertex_stage = s.live && s.live_draw == LiveDraw::vertex_stage;
   if (s.live && !in_vertex_stage) s.live->generate();  // the live volume's vertices, once each
+  if (s.grid) s.grid->update();  // the opacity map and the in-scattering grid of this frame
   // Pass 1: every fragment of the volume, additive, no depth test, no clipping in depth.
   s.accumulate.bind();
   glClearColor(0, 0, 0, 0);
@@ -296,6 +311,7 @@ Image GlVolumeRenderer::render(double* seconds) {
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, s.table.id());
+  if (s.grid) s.grid->bind(program);
   if (in_vertex_stage) {
     s.live->bind(program, 2);
     glDrawElements(GL_TRIANGLES, s.live->index_count(), GL_UNSIGNED_INT, nullptr);
@@ -312,6 +328,11 @@ Image GlVolumeRenderer::render(double* seconds) {
   s.resolve.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.accumulate.color_texture(0));
+  if (s.grid) {
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, s.accumulate.color_texture(1));
+    glActiveTexture(GL_TEXTURE0);
+  }
   glBindVertexArray(s.empty_vao.id());
   glDrawArrays(GL_TRIANGLES, 0, 3);
   glFinish();

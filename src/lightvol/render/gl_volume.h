@@ -29,6 +29,7 @@
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/result.h>
 #include <lightvol/gl/context.h>
+#include <lightvol/render/gl_density.h>
 #include <lightvol/render/scene.h>
 
 namespace lightvol {
@@ -44,6 +45,8 @@ enum class LiveDraw { two_pass, vertex_stage };
 struct GlVolumeOptions {
   bool baseline = true;  // integrate fragments from the closest point to the light (see above)
   int panels = 2;  // Gauss–Legendre panels (8 nodes each) per fragment for quadrature phases
+  // Media of varying density: the per-frame in-scattering grid and opacity map (gl_density.h).
+  DensityGridOptions density;
 };
 
 // Renders light volumes of one scene. Needs a current gl::Context on this thread for its lifetime.

@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <lightvol/airlight/heterogeneous.h>
 #include <lightvol/core/check.h>
 #include <lightvol/render/reference.h>
 #include <lightvol/scene/bvh.h>
@@ -39,35 +40,46 @@ Image render_reference(const Mesh& volume, const RenderScene& scene) {
   image.height = cam.height;
   image.values.assign(scene.surface.size(), 0.0);
   const Bvh bvh(volume);
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height),
-                    [&](const tbb::blocked_range<int>& rows) {
-                      std::vector<RayHit> hits;
-                      for (int row = rows.begin(); row < rows.end(); ++row) {
-                        for (int col = 0; col < cam.width; ++col) {
-                          const std::size_t i = static_cast<std::size_t>(row) * cam.width + col;
-                          const Ray ray = pixel_ray(cam, col, row);
-                          hits.clear();
-                          bvh.intersect_all(ray.origin, ray.direction, 0.0, &hits);
-                          dedupe_hits(&hits);
-                          if (hits.empty()) continue;
-                          const RayAirlight la(scene.light, scene.medium, ray);
-                          const double surface = scene.surface[i];
-                          double sum = 0;
-                          // Hits beyond the surface all clamp to it and share one value.
-                          double at_surface = std::numeric_limits<double>::quiet_NaN();
-                          for (const RayHit& h : hits) {
-                            const double sign = h.facing > 0 ? 1.0 : -1.0;
-                            if (h.t >= surface) {
-                              if (std::isnan(at_surface)) at_surface = la(surface);
-                              sum += sign * at_surface;
-                            } else {
-                              sum += sign * la(h.t);
-                            }
-                          }
-                          image.values[i] = sum;
-                        }
-                      }
-                    });
+  const bool varying = scene.medium.density.varying();
+  const double step = varying ? reference_step(scene.medium) : 0;
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, cam.height), [&](const tbb::blocked_range<int>& rows) {
+        std::vector<RayHit> hits;
+        for (int row = rows.begin(); row < rows.end(); ++row) {
+          for (int col = 0; col < cam.width; ++col) {
+            const std::size_t i = static_cast<std::size_t>(row) * cam.width + col;
+            const Ray ray = pixel_ray(cam, col, row);
+            hits.clear();
+            bvh.intersect_all(ray.origin, ray.direction, 0.0, &hits);
+            dedupe_hits(&hits);
+            if (hits.empty()) continue;
+            const double surface = scene.surface[i];
+            if (varying) {
+              // The lit intervals, then quadrature along them (heterogeneous.h).
+              std::vector<std::pair<double, double>> crossings;
+              for (const RayHit& h : hits)
+                crossings.emplace_back(std::min(h.t, surface), h.facing > 0 ? 1.0 : -1.0);
+              image.values[i] = heterogeneous_airlight(scene.light, scene.medium, ray,
+                                                       lit_intervals(crossings), step);
+              continue;
+            }
+            const RayAirlight la(scene.light, scene.medium, ray);
+            double sum = 0;
+            // Hits beyond the surface all clamp to it and share one value.
+            double at_surface = std::numeric_limits<double>::quiet_NaN();
+            for (const RayHit& h : hits) {
+              const double sign = h.facing > 0 ? 1.0 : -1.0;
+              if (h.t >= surface) {
+                if (std::isnan(at_surface)) at_surface = la(surface);
+                sum += sign * at_surface;
+              } else {
+                sum += sign * la(h.t);
+              }
+            }
+            image.values[i] = sum;
+          }
+        }
+      });
   return image;
 }
 

@@ -10,6 +10,8 @@ namespace lightvol {
 // oriented outward) through a BVH and sums Σ sₙ·La(0, tₙ) in double precision: sₙ = +1 where the
 // ray leaves the volume, −1 where it enters, tₙ clamped to the pixel's surface distance. Hits with
 // t ≤ 0 (behind the eye) are ignored, as they contribute La(0, 0) = 0. Rows run in parallel (TBB).
+// A medium of varying density integrates the same lit intervals by quadrature instead
+// (airlight/heterogeneous.h), with panels of a quarter of the density's finest wavelength.
 Image render_reference(const Mesh& volume, const RenderScene& scene);
 
 }  // namespace lightvol
