@@ -669,8 +669,8 @@ void add_batch_command(CLI::App& app, Runner* run) {
       "build's flags.\n"
       "Paths are relative to the jobs file's folder. Blank lines and lines starting with # are "
       "skipped.\n"
-      "A job whose output and report (<out>.report.json) exist with the same content hash is "
-      "skipped.\n"
+      "A job whose output and report (<out>.report.json) exist with the same content hash, and "
+      "whose\noutput still has the size and hash its report recorded, is skipped.\n"
       "Results: one JSON line per job on stdout, in job order. Exit 0 when every job is ok or "
       "skipped,\n"
       "1 when a volume failed its checks, 2 when a job had bad input. See docs/batch.md.");
