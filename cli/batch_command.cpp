@@ -13,7 +13,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -26,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/jobs_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
 #include <lightvol/core/text_file.h>
@@ -76,7 +76,8 @@ Result<Shard> parse_shard(const std::string& text) {
   return s;
 }
 
-// One job line. A line that does not parse is still a job: it fails with `error`.
+// One job line (core/jobs_file.h), with build's flags parsed. A line that is not a job is still
+// one: it fails with `error`.
 struct Job {
   int line = 0;                 // 1-based line number in the jobs file
   std::size_t number = 0;       // 0-based among the jobs (lines that are not blank or comments)
@@ -91,63 +92,47 @@ std::string resolve(const fs::path& base, const std::string& path) {
   return (base / path).string();
 }
 
-// A job line, parsed: JSON, its keys, then `args` by build's own option definitions.
-Job parse_job(const std::string& text, const std::string& where, const fs::path& base) {
+// A flag of `app` that needs a value, given last in `args` with none: batch's own "--" (which
+// ends the flags of a job's line) would be its value (["--report"] used to write a file named
+// "--"). Also any option that took a "--" as its value once parsed. "" when there is none.
+std::string flag_without_value(const CLI::App& app, const std::vector<std::string>& args) {
+  if (!args.empty()) {
+    const std::string& last = args.back();
+    if (last.size() > 1 && last[0] == '-' && last != "--" && last.find('=') == std::string::npos)
+      if (const CLI::Option* option = app.get_option_no_throw(last);
+          option && option->get_items_expected_min() > 0)
+        return last;
+  }
+  for (const CLI::Option* option : app.get_options())
+    for (const std::string& value : option->results())
+      if (value == "--") return option->get_name();
+  return "";
+}
+
+// A job file's path as messages name it.
+std::string job_where(const std::string& jobs_path, int line) {
+  return jobs_path + ":" + std::to_string(line);
+}
+
+// A job line's `args` parsed by build's own option definitions, its paths resolved against
+// `base`; `where` ("<jobs file>:<line>") begins its errors.
+Job parse_job(const JobLine& line, const std::string& where, const fs::path& base) {
   Job job;
+  job.line = line.line;
+  job.number = line.number;
+  if (line.id) job.id = *line.id;
+  if (line.out) job.out = *line.out;
+  job.error = line.error;
+  if (!job.error.empty()) return job;
   auto bad = [&](const std::string& why) {
     job.error = where + ": " + why;
     return job;
   };
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    return bad("not valid JSON (at byte " + std::to_string(e.byte) + ")");
-  }
-  if (!j.is_object()) return bad("a job is a JSON object, e.g. {\"inputs\": [\"a.exr\"], ...}");
-  for (const auto& [key, value] : j.items())
-    if (key != "id" && key != "inputs" && key != "light" && key != "out" && key != "args")
-      return bad("key '" + key + "': unknown (a job has id, inputs, light, out, args)");
-  if (j.contains("id")) {
-    if (!j["id"].is_string()) return bad("key 'id': expected a string");
-    job.id = j["id"].get<std::string>();
-  }
-  auto strings = [&](const char* key, bool required, std::vector<std::string>* list) {
-    if (!j.contains(key)) return !required;
-    const nlohmann::json& v = j[key];
-    if (!v.is_array() || (required && v.empty())) return false;
-    for (const nlohmann::json& s : v) {
-      if (!s.is_string()) return false;
-      list->push_back(s.get<std::string>());
-    }
-    return true;
-  };
-  std::vector<std::string> inputs, args;
-  if (!strings("inputs", true, &inputs))
-    return bad("key 'inputs': expected a non-empty array of paths");
-  for (const char* key : {"light", "out"})
-    if (!j.contains(key) || !j[key].is_string() || j[key].get<std::string>().empty())
-      return bad(std::string("key '") + key + "': expected a path");
-  job.out = j["out"].get<std::string>();
-  if (!strings("args", false, &args)) return bad("key 'args': expected an array of strings");
-  // A NUL ends a path early ("v\u0000.ply" is "v"), a line break splits messages: no path or
-  // flag may hold a control character.
-  const std::pair<const char*, std::vector<std::string>> fields[] = {
-      {"inputs", inputs},
-      {"light", {j["light"].get<std::string>()}},
-      {"out", {j["out"].get<std::string>()}},
-      {"args", args}};
-  for (const auto& [key, values] : fields)
-    for (const std::string& value : values)
-      if (const std::string at = control_character_in(value); !at.empty())
-        return bad(std::string("key '") + key + "': " + at + "; paths and flags may not hold one");
-
   // build's command line: the flags first, then "--" and the inputs (a path may start with '-').
-  std::vector<std::string> argv = {"--light", j["light"].get<std::string>(), "--out",
-                                   j["out"].get<std::string>()};
-  argv.insert(argv.end(), args.begin(), args.end());
+  std::vector<std::string> argv = {"--light", line.light, "--out", *line.out};
+  argv.insert(argv.end(), line.args.begin(), line.args.end());
   argv.push_back("--");
-  argv.insert(argv.end(), inputs.begin(), inputs.end());
+  argv.insert(argv.end(), line.inputs.begin(), line.inputs.end());
   std::reverse(argv.begin(), argv.end());  // CLI11 takes them last first
   CLI::App build{"build"};
   build.name("build");
@@ -155,11 +140,15 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
   BuildCommandOptions& o = job.options;
   add_build_options(build, o);
   build.allow_extras();  // an unknown flag is named below
+  if (const std::string flag = flag_without_value(build, line.args); !flag.empty())
+    return bad("key 'args': " + flag + ": needs a value, and none follows it");
   try {
     build.parse(argv);
   } catch (const CLI::ParseError& e) {
     return bad("key 'args': " + std::string(e.what()));
   }
+  if (const std::string flag = flag_without_value(build, {}); !flag.empty())
+    return bad("key 'args': " + flag + ": needs a value, and none follows it");
   for (const std::string& extra : build.remaining())
     if (extra != "--")
       return bad("key 'args': " + extra + ": not a flag of build (see 'lightvol build --help')");
@@ -179,6 +168,39 @@ Job parse_job(const std::string& text, const std::string& where, const fs::path&
   return job;
 }
 
+// Every job of the jobs file at `jobs_path`, so that a job's number, and so its shard, is the same
+// in every shard; an output named by an earlier job fails the later one, whichever shards they
+// fall in. `written`: each output's identity, and its job's line.
+Result<std::vector<Job>> read_jobs(const std::string& jobs_path,
+                                   std::unordered_map<std::string, int>* written) {
+  Result<std::string> text = read_jobs_file(jobs_path);
+  if (!text) return text.error();
+  Result<std::vector<JobLine>> lines = parse_jobs_text(*text, jobs_path);
+  if (!lines) return lines.error();
+  *text = std::string();
+  const fs::path base = fs::path(jobs_path).parent_path();
+  std::vector<Job> all;
+  all.reserve(lines->size());
+  for (const JobLine& line : *lines) {
+    Job job = parse_job(line, job_where(jobs_path, line.line), base);
+    if (job.error.empty()) {
+      const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
+      std::string identity[2];
+      for (int k = 0; k < 2 && job.error.empty(); ++k) {
+        identity[k] = file_identity(*paths[k]);
+        if (const auto earlier = written->find(identity[k]); earlier != written->end())
+          job.error = job_where(jobs_path, line.line) + ": " + *paths[k] +
+                      ": also an output of line " + std::to_string(earlier->second) +
+                      "; give each job its own out (and report)";
+      }
+      if (job.error.empty())
+        for (const std::string& id : identity) written->emplace(id, line.line);
+    }
+    all.push_back(std::move(job));
+  }
+  return all;
+}
+
 // The files a job reads, in order, each with what names it in the job line: the depth inputs
 // ({face} expanded to six), the light, the medium.
 std::vector<std::pair<std::string, std::string>> input_files(const BuildCommandOptions& o) {
@@ -196,19 +218,54 @@ std::vector<std::pair<std::string, std::string>> input_files(const BuildCommandO
   return files;
 }
 
-// The bytes a job's description files (the light, the medium) hold, read once: hashed, then
-// parsed by the build (a pipe has no second reading, and the build is of what was hashed).
-struct DescriptionTexts {
-  std::string light, medium;
+// What an image file was when its bytes were hashed: its inode, size and times as the descriptor
+// saw them before the reading (any write since changes a time), and the digest of its bytes.
+struct HashedFile {
+  std::string key, path;
+  struct stat seen {};
+  XXH128_hash_t digest{};
 };
+
+// What a job read to take its content hash: the light's and the medium's bytes, kept for the build
+// to parse (a pipe has no second reading, and the build is of what was hashed); and each image,
+// which the build reads again (in lightvol-image), checked against what was hashed once it has.
+struct JobReads {
+  std::string light, medium;
+  std::vector<HashedFile> images;
+};
+
+// One XXH3-128 state.
+struct Hasher {
+  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state{XXH3_createState(),
+                                                                 &XXH3_freeState};
+  Hasher() {
+    if (!state || XXH3_128bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+  }
+  void add(const void* bytes, std::size_t n) { XXH3_128bits_update(state.get(), bytes, n); }
+  XXH128_hash_t digest() const { return XXH3_128bits_digest(state.get()); }
+};
+
+// "xxh3-128:<32 hex digits>".
+std::string hex_digest(XXH128_hash_t digest) {
+  XXH128_canonical_t canonical;
+  XXH128_canonicalFromHash(&canonical, digest);
+  std::string hex = "xxh3-128:";
+  for (unsigned char byte : canonical.digest) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    hex += kHex[byte >> 4];
+    hex += kHex[byte & 15];
+  }
+  return hex;
+}
 
 // Feeds the regular file at `path` to `add` a chunk at a time, refusing what `build` refuses
 // before it opens an image: a missing file, a directory, a device or a pipe (`/dev/zero` would
 // never end, a FIFO without a writer would never open). Opened without blocking and checked
 // again on the descriptor, so a path swapped for a FIFO meanwhile is refused too; at most the
-// size the descriptor had is read.
+// size the descriptor had is read. `seen`: the descriptor's stat before the reading.
 Status hash_image_file(const std::string& key, const std::string& path,
-                       const std::function<void(const char*, std::size_t)>& add) {
+                       const std::function<void(const char*, std::size_t)>& add,
+                       struct stat* seen = nullptr) {
   const std::string where = "key '" + key + "': " + path + ": ";
   const std::string not_regular =
       "is not a regular file (a device or a pipe); images are read "
@@ -226,6 +283,7 @@ Status hash_image_file(const std::string& key, const std::string& path,
   } closer{fd};
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return Error{where + not_regular};
+  if (seen) *seen = st;
   std::vector<char> chunk(1 << 20);
   for (auto left = static_cast<std::uint64_t>(st.st_size); left > 0;) {
     const ssize_t got = ::read(
@@ -240,60 +298,122 @@ Status hash_image_file(const std::string& key, const std::string& path,
 }
 
 // The job's content hash, "xxh3-128:<32 hex digits>": of the bytes of every file it reads (each
-// with its length), the options that change the output, and the lightvol version. The light's
-// and the medium's bytes are kept in `texts` for the build to parse.
-Result<std::string> content_hash(const BuildCommandOptions& o, DescriptionTexts* texts) {
-  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(),
-                                                                 &XXH3_freeState);
-  if (!state || XXH3_128bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+// with its length), the options that change the output, and the lightvol version. What was read
+// is kept in `reads`.
+Result<std::string> content_hash(const BuildCommandOptions& o, JobReads* reads) {
+  Hasher job;
   auto add = [&](const std::string& bytes) {
     const std::uint64_t size = bytes.size();
-    XXH3_128bits_update(state.get(), &size, sizeof size);
-    XXH3_128bits_update(state.get(), bytes.data(), bytes.size());
+    job.add(&size, sizeof size);
+    job.add(bytes.data(), bytes.size());
   };
   add(std::string("lightvol ") + kVersion);
   add(json_text(output_options_json(o)));
   for (const auto& [key, path] : input_files(o)) {
     std::uint64_t size = 0;
     const std::uint64_t marker = ~std::uint64_t{0};  // a file, then its length after its bytes
-    XXH3_128bits_update(state.get(), &marker, sizeof marker);
+    job.add(&marker, sizeof marker);
     if (key == "inputs") {
-      const Status hashed = hash_image_file(key, path, [&](const char* bytes, std::size_t n) {
-        XXH3_128bits_update(state.get(), bytes, n);
-        size += n;
-      });
-      if (!hashed) return hashed.error();
+      Hasher file;
+      HashedFile hashed{key, path};
+      const Status read = hash_image_file(
+          key, path,
+          [&](const char* bytes, std::size_t n) {
+            job.add(bytes, n);
+            file.add(bytes, n);
+            size += n;
+          },
+          &hashed.seen);
+      if (!read) return read.error();
+      hashed.digest = file.digest();
+      reads->images.push_back(std::move(hashed));
     } else {
       const bool light = key == "light";
       Result<std::string> text =
           read_text_file(path, light ? "light description" : "medium description");
       if (!text) return Error{"key '" + key + "': " + text.error().message};
-      XXH3_128bits_update(state.get(), text->data(), text->size());
+      job.add(text->data(), text->size());
       size = text->size();
-      (light ? texts->light : texts->medium) = std::move(*text);
+      (light ? reads->light : reads->medium) = std::move(*text);
     }
-    XXH3_128bits_update(state.get(), &size, sizeof size);
+    job.add(&size, sizeof size);
   }
-  XXH128_canonical_t canonical;
-  XXH128_canonicalFromHash(&canonical, XXH3_128bits_digest(state.get()));
-  std::string hex = "xxh3-128:";
-  for (unsigned char byte : canonical.digest) {
-    static constexpr char kHex[] = "0123456789abcdef";
-    hex += kHex[byte >> 4];
-    hex += kHex[byte & 15];
-  }
-  return hex;
+  return hex_digest(job.digest());
 }
 
-// The report of an earlier run, if the output and its report exist and the report records `hash`.
-std::optional<nlohmann::json> finished_report(const BuildCommandOptions& o,
-                                              const std::string& hash) {
+bool same_file_state(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino && a.st_size == b.st_size &&
+         a.st_mtim.tv_sec == b.st_mtim.tv_sec && a.st_mtim.tv_nsec == b.st_mtim.tv_nsec &&
+         a.st_ctim.tv_sec == b.st_ctim.tv_sec && a.st_ctim.tv_nsec == b.st_ctim.tv_nsec;
+}
+
+// After the build has read the images (lightvol-image opens them by path, apart from the hash):
+// each must still be the file that was hashed, unchanged (its inode, size and times) and with the
+// same bytes; else the volume may be of other bytes than the report's hash covers, and the job
+// fails without writing anything.
+Status images_unchanged(const JobReads& reads) {
+  for (const HashedFile& image : reads.images) {
+    Hasher again;
+    struct stat now {};
+    const Status read = hash_image_file(
+        image.key, image.path, [&](const char* bytes, std::size_t n) { again.add(bytes, n); },
+        &now);
+    if (!read || !same_file_state(image.seen, now) || !XXH128_isEqual(again.digest(), image.digest))
+      return Error{"key '" + image.key + "': " + image.path +
+                   ": changed while the job read it (after its content hash was taken); nothing "
+                   "written, run the batch again"};
+  }
+  return {};
+}
+
+// The size and the hash of the volume a job wrote, for its report: a rerun skips the job only if
+// the output still has them.
+Result<nlohmann::json> output_keys(const std::string& file) {
+  Hasher bytes;
+  std::uint64_t size = 0;
+  const Status read = hash_image_file("out", file, [&](const char* data, std::size_t n) {
+    bytes.add(data, n);
+    size += n;
+  });
+  if (!read) return read.error();
+  return nlohmann::json{{"output_bytes", size}, {"output_hash", hex_digest(bytes.digest())}};
+}
+
+// What a skipped job's result line says: the counts its report recorded.
+struct Finished {
+  std::uint64_t vertices = 0, triangles = 0;
+};
+
+// The counts of an earlier run, when its report vouches for this job as the files are now: the
+// output and its report are regular files; the report is a JSON object whose job_hash is `hash`,
+// whose vertices and triangles are counts (integers >= 0), and whose output_bytes and output_hash
+// are the output's size and hash now. Anything else (a missing, truncated or replaced output, a
+// report hand-edited or cut) is no vouching: the job runs again and writes both anew.
+std::optional<Finished> finished_job(const BuildCommandOptions& o, const std::string& hash) {
   std::error_code ec;
   if (!fs::is_regular_file(o.out_path, ec) || !fs::is_regular_file(o.report_path, ec)) return {};
-  std::ifstream in(o.report_path, std::ios::binary);
-  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
-  if (!report.is_object() || !report.contains("job_hash") || report["job_hash"] != hash) return {};
-  return report;
+  const Result<std::string> text = read_text_file(o.report_path, "report");
+  if (!text) return {};
+  const nlohmann::json report = nlohmann::json::parse(*text, nullptr, false);
+  if (!report.is_object()) return {};
+  const auto string = [&](const char* key) {
+    const auto it = report.find(key);
+    return it != report.end() && it->is_string() ? it->get<std::string>() : std::string();
+  };
+  const auto count = [&](const char* key) -> std::optional<std::uint64_t> {
+    const auto it = report.find(key);
+    if (it == report.end() || !it->is_number_unsigned()) return {};
+    return it->get<std::uint64_t>();
+  };
+  const std::optional<std::uint64_t> vertices = count("vertices"), triangles = count("triangles"),
+                                     bytes = count("output_bytes");
+  if (string("job_hash") != hash || !vertices || !triangles || !bytes) return {};
+  const std::uintmax_t size = fs::file_size(o.out_path, ec);
+  if (ec || size != *bytes) return {};
+  const Result<nlohmann::json> now = output_keys(o.out_path);
+  if (!now || (*now)["output_bytes"] != *bytes || (*now)["output_hash"] != string("output_hash"))
+    return {};
+  return Finished{*vertices, *triangles};
 }
 
 // Jobs wait here, after reading their maps, until the memory their build needs fits under the
@@ -340,8 +460,8 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
     return out;
   }
   const auto started = std::chrono::steady_clock::now();
-  DescriptionTexts texts;
-  const Result<std::string> hash = content_hash(job.options, &texts);
+  JobReads reads;
+  const Result<std::string> hash = content_hash(job.options, &reads);
   out.hash_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   if (!hash) {
@@ -349,10 +469,10 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
     out.error = hash.error().message;
     return out;
   }
-  if (const std::optional<nlohmann::json> report = finished_report(job.options, *hash)) {
+  if (const std::optional<Finished> finished = finished_job(job.options, *hash)) {
     out.status = JobStatus::skipped;
-    out.vertices = report->value("vertices", std::uint64_t{0});
-    out.triangles = report->value("triangles", std::uint64_t{0});
+    out.vertices = finished->vertices;
+    out.triangles = finished->triangles;
     return out;
   }
   // What this job holds of the gate, released however the build ends (an exception too), or the
@@ -364,8 +484,10 @@ Outcome run_job(const Job& job, MemoryGate& gate) {
   } held{gate};
   BuildJobHooks hooks;
   hooks.extra_report = {{"job_hash", *hash}};
-  hooks.light_text = &texts.light;
-  if (!job.options.medium_path.empty()) hooks.medium_text = &texts.medium;
+  hooks.light_text = &reads.light;
+  if (!job.options.medium_path.empty()) hooks.medium_text = &reads.medium;
+  hooks.after_read = [&reads] { return images_unchanged(reads); };
+  hooks.volume_written = output_keys;
   hooks.before_build = [&](const ShadowMaps& maps, BuildMemory mode) {
     const std::uint64_t bytes =
         build_memory_bytes(mode, maps.width(), maps.height(), maps.omni ? kOmniFaces : 1);
@@ -405,11 +527,6 @@ std::string result_line(const Job& job, const Outcome& o) {
   return json_text(line);
 }
 
-// A job file's path as messages name it.
-std::string job_where(const std::string& jobs_path, int line) {
-  return jobs_path + ":" + std::to_string(line);
-}
-
 // No output of the run may be one of its inputs (compared by core/path.h file_identity: the same
 // inode, or the same new path): a job whose out or report is read by any job, or is the jobs file,
 // fails; --results naming an input, the jobs file or a job's output stops the batch, returning its
@@ -446,40 +563,10 @@ std::string check_outputs(const BatchOptions& opts, std::vector<Job>& all,
 int run_batch(const BatchOptions& opts) {
   Result<Shard> shard = !opts.shard_given ? Result<Shard>(Shard{}) : parse_shard(opts.shard);
   if (!shard) return fail(shard.error().message);
-  std::ifstream in(opts.jobs_path, std::ios::binary);
-  std::error_code ec;
-  if (!in || fs::is_directory(opts.jobs_path, ec))
-    return fail(opts.jobs_path + ": cannot open the jobs file");
-  const fs::path base = fs::path(opts.jobs_path).parent_path();
-
-  // Every job of the file, so that a job's number, and so its shard, is the same in every shard;
-  // an output named by an earlier job fails the later one, whichever shards they fall in.
-  std::vector<Job> all;
   std::unordered_map<std::string, int> written;  // each output's identity, and its job's line
-  std::string text;
-  for (int line = 1; std::getline(in, text); ++line) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const std::size_t first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;  // blank, or a comment
-    Job job = parse_job(text, job_where(opts.jobs_path, line), base);
-    job.line = line;
-    job.number = all.size();
-    if (job.error.empty()) {
-      const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
-      std::string identity[2];
-      for (int k = 0; k < 2 && job.error.empty(); ++k) {
-        identity[k] = file_identity(*paths[k]);
-        if (const auto earlier = written.find(identity[k]); earlier != written.end())
-          job.error = job_where(opts.jobs_path, line) + ": " + *paths[k] +
-                      ": also an output of line " + std::to_string(earlier->second) +
-                      "; give each job its own out (and report)";
-      }
-      if (job.error.empty())
-        for (const std::string& id : identity) written.emplace(id, line);
-    }
-    all.push_back(std::move(job));
-  }
-  if (in.bad()) return fail(opts.jobs_path + ": cannot read the jobs file");
+  Result<std::vector<Job>> jobs = read_jobs(opts.jobs_path, &written);
+  if (!jobs) return fail(jobs.error().message);
+  std::vector<Job>& all = *jobs;
   if (const std::string clash = check_outputs(opts, all, written); !clash.empty())
     return fail(clash);
 
@@ -582,14 +669,15 @@ void add_batch_command(CLI::App& app, Runner* run) {
       "build's flags.\n"
       "Paths are relative to the jobs file's folder. Blank lines and lines starting with # are "
       "skipped.\n"
-      "A job whose output and report (<out>.report.json) exist with the same content hash is "
-      "skipped.\n"
+      "A job whose output and report (<out>.report.json) exist with the same content hash, and "
+      "whose\noutput still has the size and hash its report recorded, is skipped.\n"
       "Results: one JSON line per job on stdout, in job order. Exit 0 when every job is ok or "
       "skipped,\n"
       "1 when a volume failed its checks, 2 when a job had bad input. See docs/batch.md.");
   cmd->add_option("jobfile", o->jobs_path, "The jobs (JOBS.jsonl): one JSON object per line")
       ->required();
   cmd->add_option("--jobs,-j", o->jobs, "Jobs run at once (default: one per core; at most 64)")
+      ->check(decimal_integer())
       ->check(CLI::Range(1, kMaxParallelJobs));
   cmd->add_option("--shard", o->shard,
                   "Run the K-th of N slices, K/N (0 <= K < N): the jobs i with i mod N = K");

@@ -162,38 +162,27 @@ nlohmann::json build_report(const BuildCommandOptions& o, const Light& light,
   return report;
 }
 
-// CLI::NonNegativeNumber lets NaN and infinity through (and words its refusal with a 300-digit
-// bound).
-CLI::Validator finite_non_negative() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        std::size_t used = 0;
-        double v = 0;
-        try {
-          v = std::stod(text, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used == 0 || used != text.size() || !std::isfinite(v) || v < 0)
-          return "expected a finite number >= 0, got '" + text + "'";
-        return {};
-      },
-      "NUMBER>=0");
-}
-
 // Every file a build run writes is written here, and only here: the volume (by `write_volume`,
 // under the progress line `what`), then the --report JSON, made by `report_of` once the volume is
 // written (it records that step's time). Returns the report, for --json.
 Result<nlohmann::json> write_outputs(const BuildCommandOptions& o, const std::string& what,
                                      const std::function<Status()>& write_volume,
                                      Progress& progress,
-                                     const std::function<nlohmann::json()>& report_of) {
+                                     const std::function<nlohmann::json()>& report_of,
+                                     const BuildJobHooks& hooks) {
   // The volume and the report are committed together once both are written, or neither is.
   OutputTransaction outputs;
   progress.begin(what);
   if (Status s = write_volume(); !s) return s.error();
   progress.end();
   nlohmann::json report = report_of();
+  if (hooks.volume_written) {
+    const std::string file = outputs.staged_file(o.out_path);
+    if (file.empty()) return Error{o.out_path + ": the volume was not written to a file"};
+    Result<nlohmann::json> keys = hooks.volume_written(file);
+    if (!keys) return keys.error();
+    for (const auto& [key, value] : keys->items()) report[key] = value;
+  }
   if (!o.report_path.empty()) {
     if (Status s = write_bytes_atomically(o.report_path, json_text(report, 2) + "\n"); !s)
       return s.error();
@@ -211,7 +200,7 @@ double last_step_seconds(const Progress& progress) {
 // (its memory does not grow with the mesh); still refused, with nothing written, when float32
 // cannot hold it. Fills `r` as run_build_job does.
 void write_streamed(const BuildCommandOptions& o, const Light& light, const ShadowMaps& maps,
-                    Space space, Progress& progress, const nlohmann::json& extra,
+                    Space space, Progress& progress, const BuildJobHooks& hooks,
                     BuildJobResult& r) {
   StaticVolumeStream stream(light, maps.image, VolumeOptions{space}, maps.source, o.light_path);
   ExportOptions eo;
@@ -227,8 +216,10 @@ void write_streamed(const BuildCommandOptions& o, const Light& light, const Shad
       progress,
       [&] {
         r.write_seconds = last_step_seconds(progress);
-        return build_report(o, light, maps, summary, nullptr, progress.log(), r.warnings, extra);
-      });
+        return build_report(o, light, maps, summary, nullptr, progress.log(), r.warnings,
+                            hooks.extra_report);
+      },
+      hooks);
   if (!report) {
     r.exit_code = 2;
     r.error = report.error().message;
@@ -278,6 +269,7 @@ void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
   cmd.add_flag("--ascii", o.ascii, "Write ASCII PLY or STL instead of binary");
   cmd.add_flag("--draco", o.draco, "Compress .glb output with KHR_draco_mesh_compression");
   cmd.add_option("--draco-bits", o.draco_bits, "Position quantization bits for .drc and --draco")
+      ->check(decimal_integer())
       ->check(CLI::Range(1, 30))
       ->capture_default_str();
   cmd.add_option("--medium", o.medium_path,
@@ -294,7 +286,7 @@ void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
       "T-junctions; see --tessellation)");
   cmd.add_option("--max-error", o.max_error,
                  "Error bound of --adaptive, in world units along each texel ray")
-      ->check(finite_non_negative());
+      ->check(decimal_number(0));
   cmd.add_option(
          "--refine", o.refine,
          "Refinement criterion: error (the bound, default) or laplacian (the paper's edge map; "
@@ -302,7 +294,7 @@ void add_build_options(CLI::App& cmd, BuildCommandOptions& o) {
       ->check(CLI::IsMember({"error", "laplacian"}));
   cmd.add_option("--threshold", o.threshold,
                  "--refine laplacian: split cells whose |Laplacian of window depth| exceeds this")
-      ->check(finite_non_negative());
+      ->check(decimal_number(0));
   cmd.add_option("--tessellation", o.tessellation,
                  "--adaptive: collapse (default: the quadtree coarsened by collapses verified at "
                  "every texel, far fewer triangles) or quadtree (the paper's restricted quadtree; "
@@ -399,6 +391,8 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
       !note.empty())
     r.warnings.push_back(o.depth_paths.front() + ": " + note);
 
+  if (hooks.after_read)
+    if (Status s = hooks.after_read(); !s) return failed(2, s.error().message);
   if (hooks.before_build) {
     const auto waited_from = std::chrono::steady_clock::now();
     hooks.before_build(*maps, read_options.memory);
@@ -407,7 +401,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   }
 
   if (streamed) {
-    write_streamed(o, *light, *maps, options.space, progress, hooks.extra_report, r);
+    write_streamed(o, *light, *maps, options.space, progress, hooks, r);
     return r;
   }
 
@@ -450,7 +444,8 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
         r.write_seconds = last_step_seconds(progress);
         return build_report(o, *light, *maps, summary, adaptive ? &adaptive_report : nullptr,
                             progress.log(), r.warnings, hooks.extra_report);
-      });
+      },
+      hooks);
   if (!report) return failed(2, report.error().message);
   r.vertices = mesh->num_vertices();
   r.triangles = mesh->num_triangles();

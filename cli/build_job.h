@@ -54,8 +54,16 @@ struct BuildJobHooks {
   // mode (core/limits.h build_memory_bytes); may block (batch: until the build's memory fits under
   // the budget beside the jobs already running).
   std::function<void(const ShadowMaps& maps, BuildMemory mode)> before_build;
+  // Called once the light and maps are read, before before_build: an Error fails the run (exit 2)
+  // with its message (batch: an input no longer holds the bytes its content hash covers).
+  std::function<Status()> after_read;
   // Keys added to the report (batch: the job's content hash).
   nlohmann::json extra_report = nlohmann::json::object();
+  // Called with the volume's file once it is written (the temporary that becomes --out when the
+  // outputs are committed), before the report is made: keys added to the report (batch: the
+  // volume's size and hash, which a rerun checks before it skips the job), or an Error that fails
+  // the run with nothing written.
+  std::function<Result<nlohmann::json>(const std::string& volume_file)> volume_written;
   // The light's and the medium's bytes, when the caller has read them (batch: the bytes its
   // content hash covers): parsed instead of reading the files again, so that a pipe is read once
   // and what is built is what was hashed.

@@ -169,6 +169,7 @@ void add_check_command(CLI::App& app, Runner* run) {
       ->check(CLI::IsMember({"lightvol", "cgal"}))
       ->capture_default_str();
   cmd->add_option("--offenders", o->offenders, "Offenders kept per check")
+      ->check(decimal_integer())
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the report as JSON on stdout");

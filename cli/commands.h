@@ -44,4 +44,12 @@ std::string printable(const std::string& text);
 std::string json_text(const nlohmann::json& j, int indent = -1);
 std::string json_text(const nlohmann::ordered_json& j, int indent = -1);
 
+// Validators for every numeric flag: the text is read by core/text.h's one rule (parse_decimal,
+// parse_decimal_integer: decimal only, so 0x10, inf, nan, " 3" and +3 are refused) before CLI11
+// converts it, and the refusal names the flag ("--max-error: expected a finite number >= 0 in
+// decimal digits, got '0x10'").
+CLI::Validator decimal_number();            // a finite number
+CLI::Validator decimal_number(double min);  // a finite number >= min
+CLI::Validator decimal_integer();           // a whole number (bounds: add CLI::Range)
+
 }  // namespace lightvol::cli

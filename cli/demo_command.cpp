@@ -406,9 +406,11 @@ void add_demo_command(CLI::App& app, Runner* run) {
       ->capture_default_str();
   cmd->add_option("--size", o->size,
                   "Shadow-map size (sizes below 512 also shrink the camera image)")
+      ->check(decimal_integer())
       ->check(CLI::Range(8, 4096))
       ->capture_default_str();
   cmd->add_option("--max-error", o->max_error, "Adaptive volume's error bound, world units")
+      ->check(decimal_number(0))
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--data", o->data_dir, "The bundled data folder (default: found automatically)");

@@ -296,33 +296,43 @@ void add_render_command(CLI::App& app, Runner* run) {
                 "made by compute shaders each frame; spot and directional lights");
   cmd->add_option("--max-error", o->max_error,
                   "Error bound of --adaptive, in world units along each texel ray")
+      ->check(decimal_number())
       ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--channel", o->channel, "Channel of the depth images (EXR Z, R, ...)");
   cmd->add_option("--samples", o->samples, "raymarch: steps per pixel; radial: blur samples")
+      ->check(decimal_integer())
       ->capture_default_str();
   cmd->add_option("--interleave", o->interleave, "raymarch: M for M x M interleaved sampling")
+      ->check(decimal_integer())
       ->capture_default_str();
   cmd->add_flag("--composite", o->composite,
                 "Add surfaces of radiance --background seen through the medium");
   cmd->add_option("--background", o->background, "Surface radiance for --composite")
+      ->check(decimal_number())
       ->capture_default_str();
-  cmd->add_option("--exposure", o->exposure, "PNG: scale before tone mapping (default: automatic)");
+  cmd->add_option("--exposure", o->exposure, "PNG: scale before tone mapping (default: automatic)")
+      ->check(decimal_number());
   cmd->add_option("--compare", o->compare_path,
                   "Print relative L2, max abs error and PSNR against this .exr");
   cmd->add_option("--frames", o->frames,
-                  "Render K more frames and print the median GPU time per frame");
+                  "Render K more frames and print the median GPU time per frame")
+      ->check(decimal_integer());
   cmd->add_option("--grid-tile", o->grid_tile,
                   "density, volume: pixels per in-scattering column side (0: automatic)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(decimal_integer());
   cmd->add_option("--grid-slices", o->grid_slices,
                   "density, volume: samples along each in-scattering column")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(decimal_integer());
   cmd->add_option("--opacity-size", o->opacity_size,
                   "density, volume and raymarch: opacity map columns per side (per face)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(decimal_integer());
   cmd->add_option("--opacity-layers", o->opacity_layers,
                   "density, volume and raymarch: opacity map layers along the light's depth")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(decimal_integer());
   cmd->add_flag("--quiet", o->quiet, "No progress lines");
   cmd->callback([o, run] { *run = [o] { return run_render(*o); }; });
 }

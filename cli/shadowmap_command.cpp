@@ -148,7 +148,8 @@ void add_shadowmap_command(CLI::App& app, Runner* run) {
   cmd->add_option("--light", o->light_path, "Light description (LIGHT.json)");
   cmd->add_option("--camera", o->camera_path,
                   "Camera description (a spot light's keys plus width, height): render its depth");
-  cmd->add_option("--size", o->size, "Shadow-map width in texels (with --light)");
+  cmd->add_option("--size", o->size, "Shadow-map width in texels (with --light)")
+      ->check(decimal_integer());
   cmd->add_option("--out,-o", o->out_path, "Output depth image (EXR, TIFF, PFM, PNG-16)")
       ->required();
   cmd->add_option("--preview", o->preview_path,

@@ -4,12 +4,14 @@
 // those `lightvol build --adaptive --max-error E --tessellation T` writes (volume/volume_stats.h).
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/core/text.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/light/light.h>
 #include <lightvol/volume/volume_stats.h>
@@ -38,16 +40,11 @@ Result<std::vector<double>> parse_bounds(const std::string& text) {
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !(v >= 0) || !std::isfinite(v))
-      return Error{"--max-error: '" + item + "' is not a non-negative number"};
-    out.push_back(v);
+    // Decimal only (core/text.h parse_decimal): 0x10, inf and nan are not bounds.
+    const std::optional<double> v = parse_decimal(item);
+    if (!v || *v < 0)
+      return Error{"--max-error: '" + item + "' is not a non-negative number in decimal digits"};
+    out.push_back(*v);
   }
   if (out.empty()) return Error{"--max-error: give at least one bound, e.g. 0.001,0.01"};
   return out;

@@ -5,7 +5,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -262,7 +264,8 @@ TEST(BatchCli, BadUsageRunsNothing) {
   }
   const test::CommandResult missing = test::run_lightvol("batch " + q(b.dir.file("no.jsonl")));
   EXPECT_EQ(missing.exit_code, 2);
-  EXPECT_EQ(missing.err, "lightvol: " + b.dir.file("no.jsonl") + ": cannot open the jobs file\n");
+  EXPECT_EQ(missing.err, "lightvol: " + b.dir.file("no.jsonl") +
+                             ": cannot open the jobs file: No such file or directory\n");
   EXPECT_EQ(b.run("--jobs 0").exit_code, 2);
   EXPECT_EQ(b.dir.entries(), before);
 }
@@ -577,6 +580,250 @@ TEST(BatchCli, InterruptedBatchLeavesOnlyWholeOutputs) {
                            " skipped, 0 failed"),
             std::string::npos)
       << rerun.err;
+}
+
+// Before: a jobs file of /dev/zero grew without bound, and a FIFO was read as it came. A jobs
+// file is a regular file of at most 256 MiB, as build's inputs are regular files; each refusal
+// names the file, and nothing runs.
+TEST(BatchCli, TheJobsFileIsARegularFileOfAtMost256MiB) {
+  Batch b;
+  const std::string fifo = b.dir.file("jobs.fifo"), big = b.dir.file("big.jsonl");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  {
+    std::ofstream out(big);
+    out << job("a", "a.exr", "a.ply") << "\n";
+  }
+  fs::resize_file(big, (std::uintmax_t{256} << 20) + 1);  // sparse: no disk used
+  const int before = b.dir.entries();
+  const std::string not_regular =
+      ": is not a regular file (a device or a pipe); a jobs file is read from a file\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"/dev/zero", "lightvol: /dev/zero" + not_regular},
+      {fifo, "lightvol: " + fifo + not_regular},
+      {b.dir.path(), "lightvol: " + b.dir.path() + ": is a directory, not a jobs file\n"},
+      {big,
+       "lightvol: " + big + ": is larger than 256 MiB, the most a jobs file may hold; split it\n"},
+  };
+  for (const auto& [jobs, message] : cases) {
+    const test::CommandResult r = run_within("batch " + q(jobs), "", 120);
+    EXPECT_EQ(r.exit_code, 2) << jobs;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(r.err, message);
+  }
+  EXPECT_EQ(b.dir.entries(), before);
+}
+
+// Before: args ["--report"] took batch's own "--" as its path and wrote a file named "--"; a
+// flag that needs a value is refused when none follows it, naming the line and the flag.
+TEST(BatchCli, AFlagWithoutItsValueIsRefusedNamingTheLineAndTheFlag) {
+  Batch b;
+  b.write_jobs({job("r", "a.exr", "r.ply", R"("--report")"), job("o", "a.exr", "o.ply", R"("-o")"),
+                job("m", "a.exr", "m.ply", R"("--adaptive", "--max-error")"),
+                job("c", "a.exr", "c.ply", R"("--report", "c.json", "--channel")"),
+                job("ok", "a.exr", "k.ply", R"("--report", "k.json")")});
+  const int before = b.dir.entries();
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 5u) << r.out;
+  const char* flags[] = {"--report", "-o", "--max-error", "--channel"};
+  const char* ids[] = {"r", "o", "m", "c"};
+  const char* outs[] = {"r.ply", "o.ply", "m.ply", "c.ply"};
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(without_seconds(lines[i]), failed_line(i + 1, ids[i], outs[i],
+                                                     b.at(i + 1) + "key 'args': " + flags[i] +
+                                                         ": needs a value, and none follows it"));
+  EXPECT_EQ(nlohmann::json::parse(lines[4])["status"], "ok");
+  EXPECT_FALSE(fs::exists(b.dir.file("--")));
+  EXPECT_EQ(b.dir.entries(), before + 2);  // k.ply and k.json
+}
+
+// Before: a line with "out" twice used the last one. Every key is given once, as in a light file.
+TEST(BatchCli, ARepeatedKeyIsRefusedNamingTheLineAndTheKey) {
+  Batch b;
+  b.write_jobs({
+      R"({"inputs": ["a.exr"], "light": "spot.json", "out": "x.ply", "out": "y.ply"})",
+      R"({"id": "a", "id": "b", "inputs": ["a.exr"], "light": "spot.json", "out": "z.ply"})",
+      R"({"inputs": ["a.exr"], "args": [], "light": "spot.json", "out": "w.ply", "args": []})",
+      R"({"inputs": ["a.exr"], "light": "spot.json", "out": "v.ply"})",
+  });
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const std::vector<std::string> lines = lines_of(r.out);
+  ASSERT_EQ(lines.size(), 4u) << r.out;
+  const char* keys[] = {"out", "id", "args"};
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(without_seconds(lines[i]),
+              failed_line(
+                  i + 1, nullptr, nullptr,
+                  b.at(i + 1) + "key '" + keys[i] + "': given twice (a job gives each key once)"));
+  EXPECT_EQ(nlohmann::json::parse(lines[3])["status"], "ok");
+  for (const char* name : {"x.ply", "y.ply", "z.ply", "w.ply"})
+    EXPECT_FALSE(fs::exists(b.dir.file(name))) << name;
+}
+
+// Before: a rerun skipped an output someone had truncated (the report's hash vouches for the
+// inputs). The report records the output's size and hash; a rerun skips only an output that
+// still has them, else it builds it again.
+TEST(BatchCli, ARerunRebuildsAnOutputThatNoLongerHasItsBytes) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  auto status = [&] {
+    const test::CommandResult r = b.run();
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json line = nlohmann::json::parse(r.out);
+    EXPECT_EQ(line["vertices"], 64) << r.out;
+    EXPECT_EQ(line["triangles"], 124) << r.out;
+    return line["status"].get<std::string>();
+  };
+  EXPECT_EQ(status(), "ok");
+  const std::string volume = slurp(b.dir.file("a.ply"));
+  const nlohmann::json report = nlohmann::json::parse(slurp(b.dir.file("a.ply.report.json")));
+  EXPECT_EQ(report["output_bytes"], volume.size());
+  EXPECT_EQ(report["output_hash"].get<std::string>().rfind("xxh3-128:", 0), 0u);
+  EXPECT_EQ(status(), "skipped");
+
+  fs::resize_file(b.dir.file("a.ply"), volume.size() / 2);  // truncated
+  EXPECT_EQ(status(), "ok");
+  EXPECT_EQ(slurp(b.dir.file("a.ply")), volume);
+  std::string flipped = volume;  // the same size, one byte changed
+  flipped[flipped.size() - 5] ^= 1;
+  b.dir.write("a.ply", flipped);
+  EXPECT_EQ(status(), "ok");
+  EXPECT_EQ(slurp(b.dir.file("a.ply")), volume);
+  EXPECT_EQ(status(), "skipped");
+}
+
+// Before: a report with "vertices": "many" failed the job with nlohmann's message, and -5 printed
+// as 18446744073709551611. A report that cannot be trusted vouches for nothing: the job is built
+// again (and its report written anew), as if there were none.
+TEST(BatchCli, AReportThatCannotBeTrustedMeansTheJobRunsAgain) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  ASSERT_EQ(b.run().exit_code, 0);
+  const std::string report_path = b.dir.file("a.ply.report.json");
+  const nlohmann::json good = nlohmann::json::parse(slurp(report_path));
+  auto edited = [&](const char* key, const nlohmann::json& value) {
+    nlohmann::json r = good;
+    if (value.is_discarded())
+      r.erase(key);
+    else
+      r[key] = value;
+    return r.dump();
+  };
+  const nlohmann::json gone = nlohmann::json(nlohmann::json::value_t::discarded);
+  const std::string reports[] = {
+      edited("vertices", "many"),
+      edited("vertices", -5),
+      edited("triangles", 1.5),
+      edited("triangles", nullptr),
+      edited("vertices", gone),
+      edited("job_hash", 7),
+      edited("output_bytes", -1),
+      edited("output_hash", gone),
+      "[1, 2]",
+      "{\"vertices\": ",
+      std::string(100, '['),
+  };
+  for (const std::string& report : reports) {
+    b.dir.write("a.ply.report.json", report);
+    const test::CommandResult r = b.run();
+    EXPECT_EQ(r.exit_code, 0) << report << ": " << r.err;
+    EXPECT_EQ(without_seconds(r.out), ok_line(1, "a", "a.ply")) << report;
+    EXPECT_EQ(nlohmann::json::parse(slurp(report_path))["job_hash"], good["job_hash"]);
+  }
+  const test::CommandResult again = b.run();
+  EXPECT_EQ(without_seconds(again.out), ok_line(1, "a", "a.ply", "skipped"));
+}
+
+// Temporaries of lightvol's naming left by a killed run (SIGKILL cannot be cleaned up after) are
+// removed by the next run that writes into their folder, once they are an hour old; a younger one
+// may be a live writer's and stays, as does a file of another naming or with a second link.
+TEST(BatchCli, StaleTemporariesOfAKilledRunAreRemovedByTheNextRun) {
+  Batch b;
+  b.write_jobs({job("a", "a.exr", "a.ply")});
+  const auto two_hours_ago = fs::file_time_type::clock::now() - std::chrono::hours(2);
+  const std::string stale = b.dir.file(".lv-0123456789abcdef.ply");
+  const std::string stale_report = b.dir.file(".lv-zyxwvutsrqponmlk.json");
+  const std::string bare = b.dir.file(".lv-aaaaaaaaaaaaaaaa");
+  const std::string fresh = b.dir.file(".lv-fedcba9876543210.ply");
+  const std::string other = b.dir.file(".lv-notours.ply");
+  const std::string linked = b.dir.file(".lv-1111111111111111.ply");
+  for (const std::string& path : {stale, stale_report, bare, fresh, other, linked})
+    b.dir.write(fs::path(path).filename().string(), "partial");
+  ASSERT_EQ(::link(linked.c_str(), b.dir.file("keep.ply").c_str()), 0);
+  for (const std::string& path : {stale, stale_report, bare, other, linked})
+    fs::last_write_time(path, two_hours_ago);
+  const test::CommandResult r = b.run();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(stale));
+  EXPECT_FALSE(fs::exists(stale_report));
+  EXPECT_FALSE(fs::exists(bare));
+  EXPECT_TRUE(fs::exists(fresh));   // may be a live writer's
+  EXPECT_TRUE(fs::exists(other));   // not our naming
+  EXPECT_TRUE(fs::exists(linked));  // a second link: a backup a commit may still need
+  EXPECT_TRUE(fs::exists(b.dir.file("a.ply")));
+}
+
+// Before: the content hash was taken before the build read the map (lightvol-image opens it by
+// path), so a map replaced in between left a report whose hash vouched for other bytes than the
+// volume's. Now each map is checked after the build's read: unchanged, or the job fails and
+// writes nothing. A writer flips the map between two contents while jobs run; every volume
+// written must be the one its report's hash stands for.
+TEST(BatchCli, AMapReplacedWhileAJobReadsItNeverLeavesAReportForOtherBytes) {
+  Batch b;
+  // The two contents, and the volume and job hash of each (the hash covers the out's format, not
+  // its name: every job below has the same hash for the same map).
+  b.write_map("map_a.exr", 0.95f);
+  b.write_map("map_b.exr", 0.5f);
+  std::map<std::string, std::string> volume_of_hash;
+  for (const char* map : {"map_a.exr", "map_b.exr"}) {
+    fs::copy_file(b.dir.file(map), b.dir.file("m.exr"), fs::copy_options::overwrite_existing);
+    b.write_jobs({job("ref", "m.exr", "ref.ply")});
+    ASSERT_EQ(b.run().exit_code, 0);
+    const nlohmann::json report = nlohmann::json::parse(slurp(b.dir.file("ref.ply.report.json")));
+    volume_of_hash[report["job_hash"]] = slurp(b.dir.file("ref.ply"));
+    fs::remove(b.dir.file("ref.ply"));
+  }
+  ASSERT_EQ(volume_of_hash.size(), 2u);
+  ASSERT_NE(volume_of_hash.begin()->second, volume_of_hash.rbegin()->second);
+
+  std::vector<std::string> jobs;
+  for (int i = 0; i < 12; ++i)
+    jobs.push_back(job(std::to_string(i), "m.exr", "o" + std::to_string(i) + ".ply"));
+  b.write_jobs(jobs);
+  std::atomic<bool> stop{false};
+  std::thread writer([&] {  // m.exr becomes the other map, by a rename, again and again
+    for (int flip = 0; !stop; ++flip) {
+      const std::string from = b.dir.file(flip % 2 ? "map_a.exr" : "map_b.exr");
+      const std::string temp = b.dir.file("m.tmp");
+      fs::remove(temp);
+      if (::link(from.c_str(), temp.c_str()) == 0)
+        ::rename(temp.c_str(), b.dir.file("m.exr").c_str());
+      std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    }
+  });
+  int written = 0;
+  for (int round = 0; round < 3; ++round) {
+    for (int i = 0; i < 12; ++i) fs::remove(b.dir.file("o" + std::to_string(i) + ".ply"));
+    const test::CommandResult r = b.run("--jobs 4");
+    for (const std::string& line : lines_of(r.out)) {
+      const nlohmann::json result = nlohmann::json::parse(line);
+      const std::string out = b.dir.file(result["out"].get<std::string>());
+      if (result["status"] != "ok") {
+        EXPECT_FALSE(fs::exists(out)) << line;
+        continue;
+      }
+      ++written;
+      const nlohmann::json report = nlohmann::json::parse(slurp(out + ".report.json"));
+      const auto expected = volume_of_hash.find(report["job_hash"].get<std::string>());
+      ASSERT_NE(expected, volume_of_hash.end()) << line;
+      EXPECT_EQ(slurp(out), expected->second) << line << ": the volume is of other bytes";
+    }
+  }
+  stop = true;
+  writer.join();
+  std::printf("%d of 36 jobs wrote a volume while the map changed under them\n", written);
 }
 
 }  // namespace

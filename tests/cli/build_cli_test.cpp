@@ -335,6 +335,53 @@ TEST(BuildCli, NonFiniteBoundsAreRefused) {
   EXPECT_EQ(w.dir.entries(), before);
 }
 
+// Before: --max-error 0x10 was read as 16, --draco-bits 0x10 and --offenders 0x3 as hexadecimal,
+// " 3" and +3 were numbers, and --max-memory 1Gb was 1 GiB. Every numeric flag of every command
+// reads one way (core/text.h parse_decimal): decimal digits; anything else is refused, naming the
+// flag, before anything is read or written.
+TEST(BuildCli, EveryNumericFlagIsDecimalOnly) {
+  Workspace w;
+  const int before = w.dir.entries();
+  const std::string out = q(w.dir.file("o.ply")), base = q(w.depth) + " --light " + q(w.light);
+  const std::string render = "render " + out + " --light l.json --camera c.json --depth d.exr ";
+  const std::pair<std::string, std::string> cases[] = {
+      {"build " + base + " --out " + out + " --adaptive --max-error 0x10",
+       "--max-error: expected a finite number >= 0 in decimal digits, got '0x10'"},
+      {"build " + base + " --out " + out + " --adaptive --max-error +3", "got '+3'"},
+      {"build " + base + " --out " + out + " --adaptive --max-error ' 3'", "got ' 3'"},
+      {"build " + base + " --out " + out + " --refine laplacian --threshold 1e999",
+       "--threshold: expected a finite number >= 0 in decimal digits, got '1e999'"},
+      {"build " + base + " --out " + out + " --draco-bits 0x10",
+       "--draco-bits: expected a whole number in decimal digits, got '0x10'"},
+      {"build " + base + " --out " + out + " --draco-bits 16.0", "--draco-bits: "},
+      {"batch jobs.jsonl --jobs 0b11",
+       "--jobs: expected a whole number in decimal digits, got '0b11'"},
+      {"check " + out + " --offenders 0x3",
+       "--offenders: expected a whole number in decimal digits, got '0x3'"},
+      {"stats " + base + " --max-error 0.1,0x10",
+       "--max-error: '0x10' is not a non-negative number in decimal digits"},
+      {"stats " + base + " --max-error inf", "--max-error: 'inf' is not a non-negative number"},
+      {render + "--samples 0x10", "--samples: expected a whole number in decimal digits"},
+      {render + "--interleave 0o2", "--interleave: expected a whole number in decimal digits"},
+      {render + "--frames 1e2", "--frames: expected a whole number in decimal digits"},
+      {render + "--background nan", "--background: expected a finite number in decimal digits"},
+      {render + "--exposure 0x1p1", "--exposure: expected a finite number in decimal digits"},
+      {"demo --out " + q(w.dir.file("demo")) + " --size 0x40",
+       "--size: expected a whole number in decimal digits"},
+      {"demo --out " + q(w.dir.file("demo")) + " --max-error inf",
+       "--max-error: expected a finite number >= 0 in decimal digits"},
+      {"check " + out + " --max-memory 1Gb", "--max-memory: '1Gb' is not a memory size"},
+      {"check " + out + " --max-memory 0x10M", "--max-memory: '0x10M' is not a memory size"},
+  };
+  for (const auto& [args, message] : cases) {
+    const test::CommandResult r = test::run_lightvol(args);
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("lightvol: ", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << ": " << r.err;
+  }
+  EXPECT_EQ(w.dir.entries(), before);
+}
+
 // --no-check to PLY streams the static volume row by row into the file: the same bytes as the held
 // volume written after its check, and the same report.
 TEST(BuildCli, StreamedStaticPlyIsTheHeldOneByteForByte) {

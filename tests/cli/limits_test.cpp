@@ -83,7 +83,13 @@ TEST(MemorySize, ParsesUnitsAndRefusesNonsense) {
   EXPECT_EQ(*parse_memory_size("8g"), std::uint64_t{8} << 30);
   EXPECT_EQ(*parse_memory_size("1.5GiB"), std::uint64_t{3} << 29);
   EXPECT_EQ(*parse_memory_size("64KB"), std::uint64_t{64} << 10);
-  for (const char* bad : {"", "lots", "8X", "-1G", "0", "1GG", ".", "8 G"}) {
+  EXPECT_EQ(*parse_memory_size("2GB"), std::uint64_t{2} << 30);
+  EXPECT_EQ(*parse_memory_size("512B"), 512u);
+  // Before: the suffix was upper-cased first, so "1Gb" (gigabits) and "1GIB" passed for 1 GiB;
+  // the number went through std::stod.
+  for (const char* bad :
+       {"",     "lots", "8X",      "-1G", "0",    "1GG", ".",   "8 G", "1Gb", "1gb", "1GIB",
+        "1gib", "1Gib", "1GBytes", "1e9", "0x10", "inf", "nan", "+1G", " 1G", "1b",  "1KiBs"}) {
     const Result<std::uint64_t> r = parse_memory_size(bad);
     ASSERT_FALSE(r.ok()) << bad;
     EXPECT_TRUE(contains(r.error().message, "'" + std::string(bad) + "' is not a memory size"))

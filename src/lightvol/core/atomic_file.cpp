@@ -9,8 +9,10 @@
 #include <atomic>
 #include <cerrno>
 #include <climits>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <mutex>
 #include <vector>
@@ -143,6 +145,45 @@ std::string random_name(const fs::path& target) {
   const std::string ext = target.extension().string();
   if (ext.size() <= 32) name += ext;
   return name;
+}
+
+// ---- Stale temporaries ------------------------------------------------------------------------
+// A process killed by SIGKILL (or a machine that lost power) leaves its temporaries behind. The
+// first write of a process into a folder removes those of this library's naming (random_name:
+// ".lv-", 16 of [a-z0-9], then an extension or nothing) that are regular files with one link
+// whose contents have not changed for kStaleSeconds. A live writer's temporary is younger: it is
+// written from creation to rename without a pause longer than a build step takes, and a backup
+// of commit_files (a hard link to a target being replaced) has two links until its rename. An
+// age, not a process id, decides: a folder may be shared by machines (batch shards on NFS), where
+// a process id says nothing.
+constexpr std::int64_t kStaleSeconds = 3600;
+
+bool is_temporary_name(const std::string& name) {
+  if (name.size() < 20 || name.compare(0, 4, ".lv-") != 0) return false;
+  for (std::size_t i = 4; i < 20; ++i)
+    if (!((name[i] >= 'a' && name[i] <= 'z') || (name[i] >= '0' && name[i] <= '9'))) return false;
+  return name.size() == 20 || name[20] == '.';
+}
+
+void remove_stale_temporaries(const fs::path& dir) {
+  static std::mutex mutex;
+  static std::vector<std::string> cleaned;  // the folders this process has cleaned
+  std::error_code ec;
+  const std::string key = fs::absolute(dir, ec).lexically_normal().string();
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (std::find(cleaned.begin(), cleaned.end(), key) != cleaned.end()) return;
+    cleaned.push_back(key);
+  }
+  const std::int64_t now = static_cast<std::int64_t>(::time(nullptr));
+  fs::directory_iterator it(dir, fs::directory_options::skip_permission_denied, ec);
+  for (const fs::directory_iterator end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (!is_temporary_name(name)) continue;
+    struct stat st {};
+    if (::lstat(it->path().c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) continue;
+    if (now - static_cast<std::int64_t>(st.st_mtime) >= kStaleSeconds) ::unlink(it->path().c_str());
+  }
 }
 
 fs::path directory_of(const fs::path& target) {
@@ -304,6 +345,13 @@ OutputTransaction::~OutputTransaction() {
   t_transaction = previous_;
 }
 
+std::string OutputTransaction::staged_file(const std::string& path) const {
+  const std::string identity = file_identity(path);
+  for (const Impl::Staged& s : impl_->staged)
+    if (s.identity == identity && s.fd < 0) return s.temp;
+  return "";
+}
+
 Status OutputTransaction::commit() {
   std::vector<Impl::Staged>& staged = impl_->staged;
   if (Status s = commit_files(); !s) return s;
@@ -408,6 +456,7 @@ Status write_output(const std::string& path,
   const fs::path dir = stream ? fs::temp_directory_path(ec) : directory_of(target);
   if (ec) return Error{path + ": no folder for a temporary file: " + ec.message()};
   install_signal_cleanup();
+  remove_stale_temporaries(dir);
   int slot = -1;
   Result<std::pair<std::string, int>> created = Error{""};
   {

@@ -28,6 +28,12 @@ namespace lightvol {
 // (removed as the copy starts); write_bytes_atomically writes its bytes straight through. A block
 // device or a socket is refused.
 //
+// Temporaries a killed process left (SIGKILL cannot be caught) are removed later: the first write
+// of a process into a folder (or, for a stream, into the temporary folder) first removes the
+// files there named as this library names its temporaries (".lv-", 16 of [a-z0-9], then the
+// extension) that are regular files with one link, unchanged for an hour: older than any live
+// writer leaves one between writes (docs/robustness.md).
+//
 // While an OutputTransaction is open on this thread, the finished file is not renamed yet: it is
 // staged in the transaction, and appears under `path` when the transaction commits.
 Status write_file_atomically(const std::string& path,
@@ -51,6 +57,11 @@ class OutputTransaction {
   OutputTransaction& operator=(const OutputTransaction&) = delete;
 
   Status commit();
+
+  // The temporary that holds the finished file staged for `path` (its bytes as they will appear
+  // under `path` at commit), or "" when this transaction stages no file for `path` (nothing, or a
+  // stream). For a caller that records what it wrote (batch: the volume's size and hash).
+  std::string staged_file(const std::string& path) const;
 
   struct Impl;
 

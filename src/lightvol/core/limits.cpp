@@ -5,8 +5,11 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <optional>
+#include <string_view>
 
 #include <lightvol/core/limits.h>
+#include <lightvol/core/text.h>
 
 namespace lightvol {
 namespace {
@@ -35,30 +38,20 @@ void set_memory_budget(std::uint64_t bytes) { g_budget.store(bytes, std::memory_
 
 Result<std::uint64_t> parse_memory_size(const std::string& text) {
   const Error bad{"'" + text + "' is not a memory size (examples: 512M, 8G, 1.5GiB, 2000000000)"};
+  // The number: decimal digits with at most one '.' (core/text.h parse_decimal, without a sign
+  // or an exponent); then the suffix, exactly one of those docs/robustness.md lists.
   std::size_t i = 0;
-  while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.'))
-    ++i;
-  if (i == 0) return bad;
-  double value = 0;
-  try {
-    std::size_t used = 0;
-    value = std::stod(text.substr(0, i), &used);
-    if (used != i) return bad;
-  } catch (const std::exception&) {
-    return bad;
-  }
-  std::string suffix;
-  for (std::size_t k = i; k < text.size(); ++k)
-    suffix += static_cast<char>(std::toupper(static_cast<unsigned char>(text[k])));
+  while (i < text.size() && ((text[i] >= '0' && text[i] <= '9') || text[i] == '.')) ++i;
+  const std::optional<double> value = parse_decimal(std::string_view(text).substr(0, i));
+  if (!value) return bad;
+  const std::string suffix = text.substr(i);
   double scale = 1;
-  if (!suffix.empty()) {
-    const char unit = suffix[0];
+  if (!suffix.empty() && suffix != "B") {
+    // K, M, G or T in either case (powers of 1024), alone or followed by exactly "B" or "iB":
+    // "1Gb" (b is bits), "1GIB" and "1GBytes" are refused.
     const std::string rest = suffix.substr(1);
-    if (rest != "" && rest != "B" && rest != "IB") return bad;
-    switch (unit) {
-      case 'B':
-        if (!rest.empty()) return bad;
-        break;
+    if (rest != "" && rest != "B" && rest != "iB") return bad;
+    switch (std::toupper(static_cast<unsigned char>(suffix[0]))) {
       case 'K':
         scale = 1024.0;
         break;
@@ -75,7 +68,7 @@ Result<std::uint64_t> parse_memory_size(const std::string& text) {
         return bad;
     }
   }
-  const double bytes = value * scale;
+  const double bytes = *value * scale;
   if (!std::isfinite(bytes) || bytes < 1 || bytes > 1.8e19) return bad;
   return static_cast<std::uint64_t>(bytes);
 }

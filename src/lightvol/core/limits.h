@@ -21,9 +21,11 @@ std::uint64_t default_memory_budget();
 std::uint64_t memory_budget();
 void set_memory_budget(std::uint64_t bytes);
 
-// "512M", "8G", "1.5GiB", "2000000000": bytes. Suffixes K M G T (powers of 1024, optional "B" or
-// "iB"), case-insensitive. The Error ("'<text>' is not a memory size (examples: ...)") quotes the
-// text; a caller that took it from a flag prefixes the flag.
+// "512M", "8G", "1.5GiB", "2000000000": bytes. The number is decimal digits with at most one '.';
+// the suffix, if any, is exactly "B", or K M G T (powers of 1024, either case) alone or followed
+// by exactly "B" or "iB" ("1Gb", "1GIB", "0x10" and " 8G" are refused). The Error ("'<text>' is not
+// a memory size (examples: ...)") quotes the text; a caller that took it from a flag prefixes the
+// flag.
 Result<std::uint64_t> parse_memory_size(const std::string& text);
 
 // "1.5 GiB", for messages.
