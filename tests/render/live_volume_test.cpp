@@ -414,5 +414,45 @@ TEST(LiveVolume, RefusesTexturesItCannotRead) {
   EXPECT_EQ(pending_error(), "");
 }
 
+// An engine's surface texture (GlVolumeRenderer::set_surface) stands for the scene's distances:
+// the same texture as the renderer's own gives the same image, a surface moved nearer changes
+// it, 0 goes back; textures it cannot read are refused naming them, keeping what it had.
+TEST(LiveVolume, ReadsTheSurfaceFromAnEnginesTexture) {
+  REQUIRE_GL_CONTEXT();
+  const Light light = with_encoding(test::spot_json("linear"), DepthEncoding::window, false);
+  const DepthImage map = scene_map(light, 64, 64, kOffAxisBox);
+  const RenderScene scene = test::make_render_scene(
+      test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+  Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+  ASSERT_TRUE(renderer) << renderer.error().message;
+  const Image own = mesh_image(**renderer, light, map);
+  const TextureHandle same = make_surface_texture(scene);
+  ASSERT_TRUE((*renderer)->set_surface(same.id()));
+  EXPECT_EQ((*renderer)->render().values, own.values);
+  RenderScene nearer = scene;
+  for (double& t : nearer.surface) t = std::min(t, 5.0);
+  const TextureHandle near_texture = make_surface_texture(nearer);
+  ASSERT_TRUE((*renderer)->set_surface(near_texture.id()));
+  EXPECT_GT(compare_images((*renderer)->render(), own).relative_l2, 0.01);
+
+  const std::vector<float> values(4 * kImageW * kImageH, 1.0f);
+  const TextureHandle small = make_texture_2d(kImageW, kImageH - 1, GL_R32F, values.data(), 1);
+  const TextureHandle rg = make_texture_2d(kImageW, kImageH, GL_RG32F, values.data(), 2);
+  const auto error = [&](GLuint texture) {
+    Status s = (*renderer)->set_surface(texture);
+    return s ? std::string("accepted") : s.error().message;
+  };
+  EXPECT_EQ(error(small.id()), "surface texture " + std::to_string(small.id()) +
+                                   ": level 0 is 64x47, the camera 64x48");
+  EXPECT_EQ(error(rg.id()), "surface texture " + std::to_string(rg.id()) +
+                                ": internal format 0x8230 is not GL_R32F");
+  EXPECT_EQ(error(987654), "surface texture 987654: not a texture name");
+  EXPECT_EQ(pending_error(), "");
+  // Still the nearer surface after the refusals; 0 goes back to the scene's own.
+  EXPECT_GT(compare_images((*renderer)->render(), own).relative_l2, 0.01);
+  ASSERT_TRUE((*renderer)->set_surface(0));
+  EXPECT_EQ((*renderer)->render().values, own.values);
+}
+
 }  // namespace
 }  // namespace lightvol
