@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -452,6 +453,58 @@ TEST(LiveVolume, ReadsTheSurfaceFromAnEnginesTexture) {
   EXPECT_GT(compare_images((*renderer)->render(), own).relative_l2, 0.01);
   ASSERT_TRUE((*renderer)->set_surface(0));
   EXPECT_EQ((*renderer)->render().values, own.values);
+}
+
+// NaN texels (which build refuses): the frame goes on, the texel's vertex on its near plane
+// (build's vertex of that texel at the near depth), no GL error; validate() names the texture and
+// the pixel, and passes again once the map is good. A texture reallocated at another size since
+// create is named too.
+TEST(LiveVolume, ANanTexelGoesToTheNearPlaneAndValidateNamesIt) {
+  REQUIRE_GL_CONTEXT();
+  for (DepthEncoding e : {DepthEncoding::window, DepthEncoding::linear, DepthEncoding::radial}) {
+    const Light light = with_encoding(test::spot_json("linear"), e, false);
+    DepthImage map = scene_map(light, 32, 24, kOffAxisBox);
+    const TextureHandle texture = upload_shadow_map(light, map);
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, {texture.id(), 32, 24});
+    ASSERT_TRUE(live) << live.error().message;
+    EXPECT_TRUE((*live)->validate());
+    const std::string name = "shadow map texture " + std::to_string(texture.id());
+
+    // Pixel (5, 7) of the image becomes NaN: GL row 24 - 1 - 7.
+    DepthImage nan_map = map;
+    nan_map.values[7 * 32 + 5] = std::numeric_limits<float>::quiet_NaN();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 5, 24 - 1 - 7, 1, 1, GL_RED, GL_FLOAT, &nan);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    const Status checked = (*live)->validate();
+    ASSERT_FALSE(checked) << to_string(e);
+    EXPECT_EQ(checked.error().message.rfind(name + ": pixel (5, 7): depth is NaN (", 0), 0u)
+        << checked.error().message;
+    Result<std::vector<float>> gpu = (*live)->read_positions();
+    ASSERT_TRUE(gpu) << gpu.error().message;
+    DepthImage near_map = map;
+    near_map.values[7 * 32 + 5] =
+        e == DepthEncoding::window ? 0.0f : static_cast<float>(light.near);
+    Result<Mesh> built = build_static_volume(light, near_map, {}, "map");
+    ASSERT_TRUE(built) << built.error().message;
+    EXPECT_LE(largest_difference(*gpu, *built, light), kPositionTolerance) << to_string(e);
+    EXPECT_EQ(pending_error(), "");
+
+    // The next frame's map is good again.
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 5, 24 - 1 - 7, 1, 1, GL_RED, GL_FLOAT,
+                    &map.values[7 * 32 + 5]);
+    EXPECT_TRUE((*live)->validate()) << to_string(e);
+    // The engine reallocates its texture at another size without telling the live volume.
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, 16, 16, 0, GL_RED, GL_FLOAT, nullptr);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    const Status resized = (*live)->validate();
+    ASSERT_FALSE(resized);
+    EXPECT_EQ(resized.error().message, name + ": level 0 is 16x16, not the 32x24 given");
+    EXPECT_EQ(pending_error(), "");
+  }
 }
 
 }  // namespace

@@ -161,6 +161,7 @@ GlVolumeRenderer::~GlVolumeRenderer() = default;
 
 Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderScene& scene,
                                                                    const GlVolumeOptions& options) {
+  if (Status s = require_context(4, 5, false, "volume renderer"); !s) return s.error();
   std::unique_ptr<GlVolumeRenderer> r(new GlVolumeRenderer());
   r->state_ = std::make_unique<State>();
   State& s = *r->state_;

@@ -42,6 +42,7 @@ void set_matrix(const Program& program, const Mat4d& m) {
 }  // namespace
 
 Result<ShadowMapRenderer> ShadowMapRenderer::create(const Mesh& scene) {
+  if (Status s = require_context(4, 5, false, "shadow-map depth pass"); !s) return s.error();
   ShadowMapRenderer r;
   Result<Program> program =
       Program::compile(kVertexShader, kFragmentShader, "shadow-map depth pass");
