@@ -13,8 +13,9 @@
 # baked static, baked adaptive (`build --adaptive --max-error E`) and ray marching at equal error:
 # the fewest steps N (doubling from 16 to MAX_STEPS; for M > 1 given up when doubling no longer
 # cuts the error by a tenth) whose image is within TARGET relative L2 of the CPU reference
-# (`render --method reference` of the static volume, double precision), for each interleave M. Every image's error against that reference is in the table; ratios are of the
-# frame times of this one run. Times are medians of FRAMES frames (after one warm-up frame).
+# (`render --method reference` of the static volume, double precision), for each interleave M.
+# Every image's error against that reference is in the table; ratios are of the frame times of
+# this one run. Times are medians of FRAMES frames (after one warm-up frame).
 #
 # Usage: tests/bench/live_table1.sh BUILD_DIR [SCENE] [SIZES] [OMNI_SIZES]
 #   SIZES (default "1024 2048 4096"), OMNI_SIZES (default "512"; "" for none).
