@@ -1,6 +1,7 @@
 // lightvol render: the OpenGL checker. Renders the signed single-scattering airlight of a light
 // volume (or, for comparison, ray marching and radial blur from the shadow maps) from a camera.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -140,8 +141,11 @@ Image render_frames(Renderer& renderer, int frames, std::vector<double>* frame_s
 
 // The airlight by --method: the CPU reference, or on the GPU the volume, ray marching or the
 // radial blur.
+// `generation_seconds` receives, for --method live with --frames K, K timings of the volume's
+// generation alone (LiveVolume::generate and glFinish: the paper's "tessellate" row).
 Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, const Mesh& volume,
-                              Progress& progress, std::vector<double>* frame_seconds) {
+                              Progress& progress, std::vector<double>* frame_seconds,
+                              std::vector<double>* generation_seconds, std::string* renderer_name) {
   if (o.method == "reference") {
     progress.begin("rendering reference (CPU, double precision)");
     Image image = render_reference(volume, scene);
@@ -151,6 +155,7 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
 #ifdef LIGHTVOL_WITH_GL
   Result<std::unique_ptr<gl::Context>> context = gl::Context::create();
   if (!context) return context.error();
+  *renderer_name = (*context)->renderer();
   progress.begin("rendering " + o.method + " on " + (*context)->renderer());
   Image image;
   if (o.method == "volume") {
@@ -182,6 +187,13 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
     if (!renderer) return renderer.error();
     if (Status s = (*renderer)->set_volume(**live); !s) return s.error();
     image = render_frames(**renderer, o.frames, frame_seconds);
+    for (int i = 0; i < o.frames; ++i) {
+      const auto start = std::chrono::steady_clock::now();
+      (*live)->generate();
+      gl::glFinish();
+      generation_seconds->push_back(
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
   } else {
     ShadowMaps maps;  // radial needs none
     if (!o.shadow_maps.empty()) {
@@ -204,7 +216,7 @@ Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, 
   progress.end();
   return image;
 #else
-  (void)scene, (void)volume, (void)frame_seconds;
+  (void)scene, (void)volume, (void)frame_seconds, (void)generation_seconds, (void)renderer_name;
   return Error{"--method " + o.method +
                ": this lightvol was built without OpenGL (LIGHTVOL_WITH_GL=OFF)"};
 #endif
@@ -225,8 +237,10 @@ int run_render(const RenderOptions& o) {
     progress.end(thousands(volume.num_triangles()) + " triangles");
   }
 
-  std::vector<double> frame_seconds;
-  Result<Image> image = render_airlight(o, *scene, volume, progress, &frame_seconds);
+  std::vector<double> frame_seconds, generation_seconds;
+  std::string renderer_name;
+  Result<Image> image = render_airlight(o, *scene, volume, progress, &frame_seconds,
+                                        &generation_seconds, &renderer_name);
   if (!image) return fail(image.error().message);
   // Surfaces of constant radiance `background` seen through the medium.
   if (o.composite) add_constant_surfaces(*scene, o.background, &*image);
@@ -244,8 +258,11 @@ int run_render(const RenderOptions& o) {
               image->width, image->height, o.method.c_str(),
               image->values.empty() ? 0.0 : sum / static_cast<double>(image->values.size()), peak);
   if (!frame_seconds.empty())
-    std::printf("time per frame: %.3f ms (median of %zu frames)\n", 1e3 * median(frame_seconds),
-                frame_seconds.size());
+    std::printf("time per frame: %.3f ms (median of %zu frames, %s)\n", 1e3 * median(frame_seconds),
+                frame_seconds.size(), renderer_name.c_str());
+  if (!generation_seconds.empty())
+    std::printf("volume generation alone: %.3f ms (median of %zu)\n",
+                1e3 * median(generation_seconds), generation_seconds.size());
   if (o.compare_path.empty()) return 0;
   Result<Image> ref = read_image(o.compare_path);
   if (!ref) return fail(ref.error().message);
@@ -315,7 +332,8 @@ void add_render_command(CLI::App& app, Runner* run) {
   cmd->add_option("--compare", o->compare_path,
                   "Print relative L2, max abs error and PSNR against this .exr");
   cmd->add_option("--frames", o->frames,
-                  "Render K more frames and print the median GPU time per frame")
+                  "Render K more frames and print the median GPU time per frame (live: and of "
+                  "the volume's generation alone)")
       ->check(decimal_integer());
   cmd->add_option("--grid-tile", o->grid_tile,
                   "density, volume: pixels per in-scattering column side (0: automatic)")

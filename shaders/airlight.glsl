@@ -95,8 +95,11 @@ vec3 live_grid_point(int f, ivec2 texel) {
   float d = live_fetch(f, ivec2(texel.x, row));
   vec2 ndc = live_ndc(texel);
   vec4 base = live_ray_x * ndc.x + live_ray_y * ndc.y;
+  // A NaN texel (which build refuses) gives the texel's near-plane point: no light where the
+  // depth is unknown. Other depths clamp to the near and far planes.
+  bool unknown = isnan(d);
   if (live_depth == 0) {
-    float w = clamp(d, live_min_t, 1.0);
+    float w = unknown ? live_min_t : clamp(d, live_min_t, 1.0);
     vec4 h = base + ((1.0 - w) * live_near_0 + w * live_far_0);
     return h.xyz / h.w;
   }
@@ -112,7 +115,7 @@ vec3 live_grid_point(int f, ivec2 texel) {
     float disc = half_b * half_b - a * c;
     t = disc < 0.0 ? 0.0 : (-half_b + sqrt(disc)) / a;
   }
-  return pn + clamp(t, live_min_t, 1.0) * dv;
+  return pn + (unknown ? live_min_t : clamp(t, live_min_t, 1.0)) * dv;
 }
 
 // Texel of ring vertex k (build's border ring: top row left to right, right column down, bottom

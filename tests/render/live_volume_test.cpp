@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -412,6 +413,98 @@ TEST(LiveVolume, RefusesTexturesItCannotRead) {
   // A good texture after all that: no GL error left behind.
   EXPECT_EQ(error(window, {{r32f.id(), 32, 16}}), "accepted");
   EXPECT_EQ(pending_error(), "");
+}
+
+// An engine's surface texture (GlVolumeRenderer::set_surface) stands for the scene's distances:
+// the same texture as the renderer's own gives the same image, a surface moved nearer changes
+// it, 0 goes back; textures it cannot read are refused naming them, keeping what it had.
+TEST(LiveVolume, ReadsTheSurfaceFromAnEnginesTexture) {
+  REQUIRE_GL_CONTEXT();
+  const Light light = with_encoding(test::spot_json("linear"), DepthEncoding::window, false);
+  const DepthImage map = scene_map(light, 64, 64, kOffAxisBox);
+  const RenderScene scene = test::make_render_scene(
+      test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+  Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
+  ASSERT_TRUE(renderer) << renderer.error().message;
+  const Image own = mesh_image(**renderer, light, map);
+  const TextureHandle same = make_surface_texture(scene);
+  ASSERT_TRUE((*renderer)->set_surface(same.id()));
+  EXPECT_EQ((*renderer)->render().values, own.values);
+  RenderScene nearer = scene;
+  for (double& t : nearer.surface) t = std::min(t, 5.0);
+  const TextureHandle near_texture = make_surface_texture(nearer);
+  ASSERT_TRUE((*renderer)->set_surface(near_texture.id()));
+  EXPECT_GT(compare_images((*renderer)->render(), own).relative_l2, 0.01);
+
+  const std::vector<float> values(4 * kImageW * kImageH, 1.0f);
+  const TextureHandle small = make_texture_2d(kImageW, kImageH - 1, GL_R32F, values.data(), 1);
+  const TextureHandle rg = make_texture_2d(kImageW, kImageH, GL_RG32F, values.data(), 2);
+  const auto error = [&](GLuint texture) {
+    Status s = (*renderer)->set_surface(texture);
+    return s ? std::string("accepted") : s.error().message;
+  };
+  EXPECT_EQ(error(small.id()), "surface texture " + std::to_string(small.id()) +
+                                   ": level 0 is 64x47, the camera 64x48");
+  EXPECT_EQ(error(rg.id()), "surface texture " + std::to_string(rg.id()) +
+                                ": internal format 0x8230 is not GL_R32F");
+  EXPECT_EQ(error(987654), "surface texture 987654: not a texture name");
+  EXPECT_EQ(pending_error(), "");
+  // Still the nearer surface after the refusals; 0 goes back to the scene's own.
+  EXPECT_GT(compare_images((*renderer)->render(), own).relative_l2, 0.01);
+  ASSERT_TRUE((*renderer)->set_surface(0));
+  EXPECT_EQ((*renderer)->render().values, own.values);
+}
+
+// NaN texels (which build refuses): the frame goes on, the texel's vertex on its near plane
+// (build's vertex of that texel at the near depth), no GL error; validate() names the texture and
+// the pixel, and passes again once the map is good. A texture reallocated at another size since
+// create is named too.
+TEST(LiveVolume, ANanTexelGoesToTheNearPlaneAndValidateNamesIt) {
+  REQUIRE_GL_CONTEXT();
+  for (DepthEncoding e : {DepthEncoding::window, DepthEncoding::linear, DepthEncoding::radial}) {
+    const Light light = with_encoding(test::spot_json("linear"), e, false);
+    DepthImage map = scene_map(light, 32, 24, kOffAxisBox);
+    const TextureHandle texture = upload_shadow_map(light, map);
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(light, {texture.id(), 32, 24});
+    ASSERT_TRUE(live) << live.error().message;
+    EXPECT_TRUE((*live)->validate());
+    const std::string name = "shadow map texture " + std::to_string(texture.id());
+
+    // Pixel (5, 7) of the image becomes NaN: GL row 24 - 1 - 7.
+    DepthImage nan_map = map;
+    nan_map.values[7 * 32 + 5] = std::numeric_limits<float>::quiet_NaN();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 5, 24 - 1 - 7, 1, 1, GL_RED, GL_FLOAT, &nan);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    const Status checked = (*live)->validate();
+    ASSERT_FALSE(checked) << to_string(e);
+    EXPECT_EQ(checked.error().message.rfind(name + ": pixel (5, 7): depth is NaN (", 0), 0u)
+        << checked.error().message;
+    Result<std::vector<float>> gpu = (*live)->read_positions();
+    ASSERT_TRUE(gpu) << gpu.error().message;
+    DepthImage near_map = map;
+    near_map.values[7 * 32 + 5] =
+        e == DepthEncoding::window ? 0.0f : static_cast<float>(light.near);
+    Result<Mesh> built = build_static_volume(light, near_map, {}, "map");
+    ASSERT_TRUE(built) << built.error().message;
+    EXPECT_LE(largest_difference(*gpu, *built, light), kPositionTolerance) << to_string(e);
+    EXPECT_EQ(pending_error(), "");
+
+    // The next frame's map is good again.
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 5, 24 - 1 - 7, 1, 1, GL_RED, GL_FLOAT,
+                    &map.values[7 * 32 + 5]);
+    EXPECT_TRUE((*live)->validate()) << to_string(e);
+    // The engine reallocates its texture at another size without telling the live volume.
+    glBindTexture(GL_TEXTURE_2D, texture.id());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, 16, 16, 0, GL_RED, GL_FLOAT, nullptr);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    const Status resized = (*live)->validate();
+    ASSERT_FALSE(resized);
+    EXPECT_EQ(resized.error().message, name + ": level 0 is 16x16, not the 32x24 given");
+    EXPECT_EQ(pending_error(), "");
+  }
 }
 
 }  // namespace

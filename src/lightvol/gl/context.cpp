@@ -26,7 +26,7 @@ namespace {
 #define LIGHTVOL_EGL_FUNCTIONS(X)                                                      \
   X(eglBindAPI) X(eglChooseConfig) X(eglCreateContext) X(eglDestroyContext)            \
   X(eglGetDisplay) X(eglGetError) X(eglGetProcAddress) X(eglInitialize)                \
-  X(eglMakeCurrent) X(eglQueryString) X(eglTerminate)
+  X(eglMakeCurrent) X(eglQueryString) X(eglTerminate) X(eglGetCurrentContext)
 // clang-format on
 #define LIGHTVOL_EGL_DEFINE(name) decltype(&::name) name = nullptr;
 LIGHTVOL_EGL_FUNCTIONS(LIGHTVOL_EGL_DEFINE)
@@ -133,7 +133,7 @@ EGLDisplay open_display(std::string* platform, std::string* why) {
 
 }  // namespace
 
-Result<std::unique_ptr<Context>> Context::create() {
+Result<std::unique_ptr<Context>> Context::create(ContextVersion version) {
   if (Status loaded = load_egl(); !loaded) return Error{"no OpenGL: " + loaded.error().message};
   std::string platform, why;
   EGLDisplay display = open_display(&platform, &why);
@@ -157,14 +157,16 @@ Result<std::unique_ptr<Context>> Context::create() {
       return fail("no EGL config renders OpenGL");
   }
   const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
-                                       4,
+                                       version.major,
                                        EGL_CONTEXT_MINOR_VERSION,
-                                       5,
+                                       version.minor,
                                        EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                        EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                        EGL_NONE};
   EGLContext context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attributes);
-  if (context == EGL_NO_CONTEXT) return fail("cannot create an OpenGL 4.5 core context");
+  if (context == EGL_NO_CONTEXT)
+    return fail("cannot create an OpenGL " + std::to_string(version.major) + "." +
+                std::to_string(version.minor) + " core context");
   if (eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context) != EGL_TRUE) {
     eglDestroyContext(display, context);
     return fail("cannot make a surfaceless OpenGL context current");
@@ -200,6 +202,31 @@ Context::~Context() {
   eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(display, static_cast<EGLContext>(context_));
   eglTerminate(display);
+}
+
+Status require_context(int major, int minor, bool compute, const std::string& what) {
+  const std::string needs = what + ": needs OpenGL " + std::to_string(major) + "." +
+                            std::to_string(minor) + " core" +
+                            (compute ? " with compute shaders" : "") + "; ";
+  if (glGetIntegerv == nullptr || eglGetCurrentContext == nullptr ||
+      eglGetCurrentContext() == EGL_NO_CONTEXT)
+    return Error{needs +
+                 "no OpenGL context is current on this thread (lightvol::gl::Context::create "
+                 "makes one and loads lightvol's OpenGL functions)"};
+  GLint have_major = 0, have_minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &have_major);
+  glGetIntegerv(GL_MINOR_VERSION, &have_minor);
+  GLint invocations = 0;
+  if (have_major > 4 || (have_major == 4 && have_minor >= 3))
+    glGetIntegerv(GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS, &invocations);
+  (void)pending_error();
+  const bool old = have_major < major || (have_major == major && have_minor < minor);
+  if (!old && (!compute || invocations > 0)) return {};
+  const GLubyte* renderer = glGetString(GL_RENDERER);
+  return Error{needs + "the current context is OpenGL " + std::to_string(have_major) + "." +
+               std::to_string(have_minor) +
+               (compute && invocations <= 0 ? ", without compute shaders" : "") + " (" +
+               (renderer ? reinterpret_cast<const char*>(renderer) : "unknown renderer") + ")"};
 }
 
 // ---- objects ------------------------------------------------------------------------------------

@@ -32,6 +32,7 @@ namespace lightvol::gl {
 // X-macro list of the OpenGL entry points lightvol uses. Add a line to use another one.
 #define LIGHTVOL_GL_FUNCTIONS(X)                                     \
   X(PFNGLGETSTRINGPROC, glGetString)                                 \
+  X(PFNGLGETTEXIMAGEPROC, glGetTexImage)                             \
   X(PFNGLGETERRORPROC, glGetError)                                   \
   X(PFNGLGETINTEGERVPROC, glGetIntegerv)                             \
   X(PFNGLVIEWPORTPROC, glViewport)                                   \
@@ -125,6 +126,12 @@ namespace lightvol::gl {
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
 #undef LIGHTVOL_GL_DECLARE
 
+// The OpenGL version a Context asks EGL for (core profile). lightvol's renderers need 4.5;
+// another version is for tests of what they say on an older context.
+struct ContextVersion {
+  int major = 4, minor = 5;
+};
+
 // A headless OpenGL 4.5 core context, current on the creating thread until destroyed.
 class Context {
  public:
@@ -132,7 +139,7 @@ class Context {
   // then the default display; creates a 4.5 core context without any surface, makes it current
   // and loads the functions above. The Error says what failed at each step ("no OpenGL: ..."),
   // for tests to print when they skip.
-  static Result<std::unique_ptr<Context>> create();
+  static Result<std::unique_ptr<Context>> create(ContextVersion version = {});
 
   ~Context();
   Context(const Context&) = delete;
@@ -259,6 +266,14 @@ class GpuTimer {
  private:
   GLuint query_ = 0;
 };
+
+// Whether the OpenGL context current on this thread (made by Context::create, which loads the
+// functions above) is at least `major`.`minor`, and, with `compute`, has compute shaders (4.3 or
+// later). The Error names `what` needs it and what the context is, e.g. "live volume: needs
+// OpenGL 4.5 core; the current context is OpenGL 3.3 (llvmpipe ...)", or says that no context is
+// current. Renderers call it before any other GL call, so an old context is an Error value, never
+// a GL error or a crash at draw time.
+Status require_context(int major, int minor, bool compute, const std::string& what);
 
 // The first pending glGetError as text ("GL_INVALID_OPERATION"), or empty when there is none.
 std::string pending_error();

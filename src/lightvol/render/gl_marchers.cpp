@@ -255,6 +255,7 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
                                                      const std::vector<DepthImage>& maps,
                                                      const std::vector<std::string>& sources,
                                                      const MarchOptions& options) {
+  if (Status s = require_context(4, 5, false, "ray marcher"); !s) return s.error();
   LV_CHECK_EQ(maps.size(), sources.size());
   const Light& light = scene.light;
   const std::size_t want = light.type == LightType::omni ? 6 : 1;

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <string>
 
@@ -150,6 +151,7 @@ struct GlVolumeRenderer::State {
   LiveDraw live_draw = LiveDraw::two_pass;
   Framebuffer accumulate, output;
   TextureHandle surface, table;
+  GLuint external_surface = 0;  // set_surface's texture, or 0 for `surface`
   VertexArrayHandle vao, empty_vao;
   BufferHandle positions, indices;
   GLsizei index_count = 0;
@@ -162,6 +164,7 @@ GlVolumeRenderer::~GlVolumeRenderer() = default;
 
 Result<std::unique_ptr<GlVolumeRenderer>> GlVolumeRenderer::create(const RenderScene& scene,
                                                                    const GlVolumeOptions& options) {
+  if (Status s = require_context(4, 5, false, "volume renderer"); !s) return s.error();
   std::unique_ptr<GlVolumeRenderer> r(new GlVolumeRenderer());
   r->state_ = std::make_unique<State>();
   State& s = *r->state_;
@@ -287,6 +290,35 @@ Status GlVolumeRenderer::set_volume(const LiveVolume& live, LiveDraw draw) {
   return {};
 }
 
+Status GlVolumeRenderer::set_surface(GLuint texture) {
+  State& s = *state_;
+  if (texture == 0) {
+    s.external_surface = 0;
+    return {};
+  }
+  const std::string name = "surface texture " + std::to_string(texture);
+  (void)pending_error();
+  if (glIsTexture(texture) != GL_TRUE) return Error{name + ": not a texture name"};
+  glBindTexture(GL_TEXTURE_2D, texture);
+  if (!pending_error().empty()) return Error{name + ": not a 2D texture"};
+  GLint w = 0, h = 0, format = 0;
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_WIDTH, &w);
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_HEIGHT, &h);
+  glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  if (w != s.scene.camera.width || h != s.scene.camera.height)
+    return Error{name + ": level 0 is " + std::to_string(w) + "x" + std::to_string(h) +
+                 ", the camera " + std::to_string(s.scene.camera.width) + "x" +
+                 std::to_string(s.scene.camera.height)};
+  if (format != GL_R32F) {
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "0x%04X", static_cast<unsigned>(format));
+    return Error{name + ": internal format " + hex + " is not GL_R32F"};
+  }
+  s.external_surface = texture;
+  return {};
+}
+
 Image GlVolumeRenderer::render(double* seconds) {
   State& s = *state_;
   const auto start = std::chrono::steady_clock::now();
@@ -308,7 +340,7 @@ Image GlVolumeRenderer::render(double* seconds) {
   const Program& program = in_vertex_stage ? s.live_program : s.volume;
   program.use();
   glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_2D, s.surface.id());
+  glBindTexture(GL_TEXTURE_2D, s.external_surface != 0 ? s.external_surface : s.surface.id());
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_2D, s.table.id());
   if (s.grid) s.grid->bind(program);

@@ -66,6 +66,16 @@ class GlVolumeRenderer {
   // Errors: the live vertex stage does not compile (a driver problem).
   Status set_volume(const LiveVolume& live, LiveDraw draw = LiveDraw::two_pass);
 
+  // Reads the visible surface from `texture` from the next render() on, instead of the scene's
+  // `surface` distances (uploaded by create): a 2D GL_R32F texture of the camera's size, each
+  // texel the distance along its pixel's ray to the visible surface (3e38 where nothing was hit),
+  // row 0 at the bottom as GL renders it: what the shader's LIGHTVOL_SURFACE_* stages draw
+  // (docs/engines.md). Its contents may change between frames without a call (an engine's moving
+  // objects); it must outlive its use here. 0 goes back to the scene's distances. Errors, naming
+  // the texture, and the renderer then keeps what it had: not a 2D texture, not the camera's size,
+  // a format other than GL_R32F.
+  Status set_surface(GLuint texture);
+
   // Draws the volume and the resolve pass, waits for the GPU, and returns the airlight image
   // (first row = top). `seconds`, when given, receives the wall-clock time of the GPU work
   // (draw + resolve + glFinish, not the read-back).

@@ -183,6 +183,11 @@ LiveVolume::~LiveVolume() = default;
 Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light,
                                                        const std::vector<GlShadowMap>& maps,
                                                        const LiveOptions& options) {
+  // The adaptive volume's compute shaders need compute (OpenGL 4.3, within 4.5).
+  if (Status st = require_context(4, 5, options.max_error.has_value(),
+                                  options.max_error ? "adaptive live volume" : "live volume");
+      !st)
+    return st.error();
   std::unique_ptr<LiveVolume> live(new LiveVolume());
   live->state_ = std::make_unique<State>();
   State& s = *live->state_;
@@ -270,6 +275,42 @@ Status LiveVolume::set_shadow_maps(const std::vector<GlShadowMap>& maps) {
   glBindBuffer(GL_ARRAY_BUFFER, 0);
   if (std::string e = pending_error(); !e.empty())
     return Error{"OpenGL: uploading the live volume's triangles: " + e};
+  return {};
+}
+
+Status LiveVolume::validate() const {
+  const State& s = *state_;
+  if (Status st = require_context(4, 5, false, "live volume"); !st) return st;
+  if (const std::string problem = maps_problem(s.light, s.maps); !problem.empty())
+    return Error{problem};
+  const bool omni = s.light.type == LightType::omni;
+  for (std::size_t f = 0; f < s.maps.size(); ++f) {
+    const GlShadowMap& map = s.maps[f];
+    GLint format = 0;
+    glBindTexture(GL_TEXTURE_2D, map.texture);
+    glGetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &format);
+    std::vector<float> rows(static_cast<std::size_t>(map.width) * map.height);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glGetTexImage(GL_TEXTURE_2D, 0, is_depth_format(format) ? GL_DEPTH_COMPONENT : GL_RED, GL_FLOAT,
+                  rows.data());
+    glBindTexture(GL_TEXTURE_2D, 0);
+    if (std::string e = pending_error(); !e.empty())
+      return Error{"OpenGL: reading shadow map texture " + std::to_string(map.texture) + ": " + e};
+    DepthImage image;
+    image.width = map.width;
+    image.height = map.height;
+    image.values.resize(rows.size());
+    const std::size_t w = static_cast<std::size_t>(map.width);
+    for (int t = 0; t < map.height; ++t) {
+      const int row = s.light.flip_y ? t : map.height - 1 - t;  // as upload_shadow_map stores it
+      std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(t * w), w,
+                  image.values.begin() + static_cast<std::ptrdiff_t>(row * w));
+    }
+    const std::string name =
+        "shadow map texture " + std::to_string(map.texture) +
+        (omni ? " (face " + omni_face_name(static_cast<int>(f)) + ")" : std::string());
+    if (Status st = validate_depths(image, name); !st) return st;
+  }
   return {};
 }
 

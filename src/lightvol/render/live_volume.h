@@ -98,6 +98,15 @@ class LiveVolume {
   Status set_shadow_maps(const std::vector<GlShadowMap>& maps);
   Status set_shadow_map(const GlShadowMap& map) { return set_shadow_maps({map}); }
 
+  // Opt-in, for an engine's debug builds and for tests, never per frame (it reads the maps back):
+  // the maps checked again as set_shadow_maps checks them (a texture deleted, or reallocated at
+  // another size or format since), then every texel as build checks a depth image: the first
+  // NaN, infinite or negative depth is an Error naming the texture (and omni face) and the pixel
+  // (column, row as an image file of the map stores it). The frame itself never fails on a
+  // texel: a NaN one gives its texel's near-plane point (no light where the depth is unknown),
+  // any other depth is clamped to the near and far planes (docs/rendering.md).
+  Status validate() const;
+
   const Light& light() const;
   const std::vector<GlShadowMap>& shadow_maps() const;
   // build's counts for the map (static_volume_counts); adaptive: the most a map of this size can

@@ -42,6 +42,7 @@ void set_matrix(const Program& program, const Mat4d& m) {
 }  // namespace
 
 Result<ShadowMapRenderer> ShadowMapRenderer::create(const Mesh& scene) {
+  if (Status s = require_context(4, 5, false, "shadow-map depth pass"); !s) return s.error();
   ShadowMapRenderer r;
   Result<Program> program =
       Program::compile(kVertexShader, kFragmentShader, "shadow-map depth pass");
@@ -111,6 +112,20 @@ Result<std::vector<float>> ShadowMapRenderer::render_window_depth(const Light& l
                        depth.begin() + static_cast<std::ptrdiff_t>(bottom * w));
   }
   return depth;
+}
+
+void ShadowMapRenderer::draw(const Light& light, int face, const Mat4d& model) const {
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  program_.use();
+  set_matrix(program_, light.projection * pass_view(light, face) * model);
+  glBindVertexArray(vao_.id());
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(num_indices_), GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  glUseProgram(0);
 }
 
 Result<std::vector<DepthImage>> ShadowMapRenderer::render(const Light& light, MapSize size,

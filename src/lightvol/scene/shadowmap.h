@@ -42,6 +42,14 @@ class ShadowMapRenderer {
   Result<std::vector<DepthImage>> render(const Light& light, MapSize size,
                                          double* gpu_seconds = nullptr) const;
 
+  // The depth pass into a texture that stays on the GPU (a live volume's shadow map, an engine's
+  // frame): draws the scene's triangles, moved by `model` (world ← scene), as pass `face` of
+  // `light` sees them, into the bound framebuffer's depth buffer with the state of
+  // render_window_depth (depth test GL_LESS, depth writes on, no culling, no blending); it
+  // neither clears nor reads back. Several renderers (a static scene and moving objects) draw
+  // into one pass between the caller's glClear(GL_DEPTH_BUFFER_BIT) and its use. No allocation.
+  void draw(const Light& light, int face, const Mat4d& model = Mat4d::identity()) const;
+
   std::size_t num_triangles() const { return num_indices_ / 3; }
 
  private:
