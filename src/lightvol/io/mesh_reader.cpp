@@ -20,6 +20,7 @@
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/text.h>
 #include <lightvol/io/detail/draco_mesh.h>
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
@@ -360,6 +361,14 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
                           {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
                            static_cast<std::uint32_t>(face[k + 1])});
   }
+  // The last face ends the file: after it, only blank lines and comments.
+  if (next_line(&words)) {
+    std::string word;
+    words >> word;
+    return Error{at_line() + "text after the last face: '" + utf8_prefix(word, 40) +
+                 "'; an OFF file ends with its faces (comments and blank lines aside)"};
+  }
+  if (in.bad()) return Error{path + ": cannot read: " + std::strerror(errno)};
   return mesh;
 }
 
