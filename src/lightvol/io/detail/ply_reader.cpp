@@ -792,8 +792,8 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
         }
         if (!(value >= 0) || value > static_cast<double>(words.size() - at) ||
             value != std::floor(value))
-          return fail("a list of " + std::string(words[at - 1].substr(0, 20)) +
-                      " items on a line of " + std::to_string(words.size()) + " values");
+          return fail("a list of " + utf8_prefix(words[at - 1], 20) + " items on a line of " +
+                      std::to_string(words.size()) + " values");
         const auto items = static_cast<std::size_t>(value);
         if (p.role == Role::face) {
           face.resize(items);
@@ -827,9 +827,11 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
 
 }  // namespace
 
-Result<Mesh> read_ply(const std::string& path, std::uintmax_t size) {
+Result<Mesh> read_ply(const std::string& path, std::uintmax_t size,
+                      const std::function<Status(std::uint64_t, std::uint64_t)>& budget) {
   Result<Header> header = read_header(path, size);
   if (!header) return header.error();
+  if (Status s = budget(header->vertices, header->faces); !s) return s.error();
   return header->encoding == Encoding::ascii ? read_ascii(path, *header)
                                              : read_binary(path, size, *header);
 }
