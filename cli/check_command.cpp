@@ -120,18 +120,24 @@ int run_check(const CheckCommandOptions& o) {
     if (!loaded) return fail(loaded.error().message);
     light = *loaded;
   }
+  CheckOptions options;
+  options.cgal_with_light = o.cgal;
+  options.engine = o.engine == "cgal" ? CheckEngine::cgal : CheckEngine::lightvol;
+  options.max_offenders = o.offenders;
   progress.begin("reading " + o.mesh_path);
   double quantization_step = 0;
-  Result<Mesh> mesh = read_mesh(o.mesh_path, &quantization_step);
+  // The check's memory, from the file's counts, against the budget before the mesh is read.
+  MeshWork work;
+  work.what = "checking";
+  work.bytes = [&](std::uint64_t vertices, std::uint64_t triangles) {
+    return check_memory_bytes(vertices, triangles, !o.light_path.empty(), options);
+  };
+  Result<Mesh> mesh = read_mesh(o.mesh_path, &quantization_step, work);
   if (!mesh) return fail(mesh.error().message);
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
   progress.begin("checking");
-  CheckOptions options;
   options.quantization_step = quantization_step;
-  options.cgal_with_light = o.cgal;
-  options.engine = o.engine == "cgal" ? CheckEngine::cgal : CheckEngine::lightvol;
-  options.max_offenders = o.offenders;
   const CheckReport report = check_volume(*mesh, o.light_path.empty() ? nullptr : &light, options);
   progress.end(report.valid() ? "valid" : "invalid");
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/check/check.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
@@ -93,6 +94,72 @@ TEST(CheckCommand, AnUnusedFarVertexDoesNotMakeAFoldedVolumeValid) {
     EXPECT_EQ(r.exit_code, 1) << far << ": " << r.err;
     EXPECT_NE(r.err.find("non-self-nesting"), std::string::npos) << r.err;
   }
+}
+
+// A mesh is measured against --max-memory before it is read: the check's estimate from the file's
+// counts (check_memory_bytes), at the byte. Before, `check` of a 1 M-triangle PLY under
+// --max-memory 1M used 256 MB.
+TEST(CheckCommand, MeshesAreMeasuredAgainstTheBudgetAtTheBoundary) {
+  TempDir dir;
+  const std::string light = dir.write("light.json", test::spot_json());
+  const Mesh sound = sound_spot_volume();
+  const std::string path = dir.file("sound.ply");
+  ASSERT_TRUE(write_mesh(path, sound).ok());
+  struct Mode {
+    std::string flags;
+    bool with_light;
+    CheckEngine engine;
+  };
+  for (const Mode& m : {Mode{"", false, CheckEngine::lightvol},
+                        Mode{" --light " + test::q(light), true, CheckEngine::lightvol},
+                        Mode{" --engine cgal", false, CheckEngine::cgal}}) {
+    CheckOptions options;
+    options.engine = m.engine;
+    const std::uint64_t needed =
+        check_memory_bytes(sound.num_vertices(), sound.num_triangles(), m.with_light, options);
+    const std::string check = "check " + test::q(path) + m.flags + " --quiet --max-memory ";
+    auto r = test::run_lightvol(check + std::to_string(needed));
+    EXPECT_EQ(r.exit_code, 0) << m.flags << ": " << r.err;
+    r = test::run_lightvol(check + std::to_string(needed - 1));
+    EXPECT_EQ(r.exit_code, 2) << m.flags;
+    EXPECT_EQ(r.err.rfind("lightvol: " + path + ": checking " +
+                              std::to_string(sound.num_triangles()) + " triangles needs about ",
+                          0),
+              0u)
+        << r.err;
+    EXPECT_NE(r.err.find("of memory, more than the budget of"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("raise it with --max-memory"), std::string::npos) << r.err;
+  }
+  // The estimate grows with the counts: 12 MiB, 24 bytes a vertex, 12/64/256 bytes a triangle.
+  CheckOptions cgal;
+  cgal.engine = CheckEngine::cgal;
+  EXPECT_EQ(check_memory_bytes(500000, 1000000, true), (12u << 20) + 24 * 500000u + 12 * 1000000u);
+  EXPECT_EQ(check_memory_bytes(500000, 1000000, false), (12u << 20) + 24 * 500000u + 64 * 1000000u);
+  EXPECT_EQ(check_memory_bytes(500000, 1000000, false, cgal),
+            (12u << 20) + 24 * 500000u + 256 * 1000000u);
+}
+
+// A mesh whose header promises more than the budget holds is refused before it is read, in any
+// command that reads meshes (here: 3 M faces in the header of a file that holds them).
+TEST(CheckCommand, AMeshOverTheBudgetIsRefusedFromItsHeaderCounts) {
+  TempDir dir;
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 3000000\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  ply += std::string(36, '\0');
+  std::string face(13, '\0');
+  face[0] = 3;
+  face[5] = 1;
+  face[9] = 2;
+  for (int f = 0; f < 3000000; ++f) ply += face;
+  const std::string path = dir.write("big.ply", ply);
+  const auto r = test::run_lightvol("check " + test::q(path) + " --quiet --max-memory 64M");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err,
+            "lightvol: " + path +
+                ": checking 3000000 triangles needs about 195.1 MiB of memory, more than the "
+                "budget of 64.0 MiB; raise it with --max-memory (e.g. to 1G)\n");
 }
 
 TEST(BuildCommand, ChecksWhatItWrites) {

@@ -1,15 +1,21 @@
+#include <fcntl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <ctime>
+#include <functional>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include <lightvol/core/detail/isolated.h>
+
+#include "support/test_support.h"
 
 namespace lightvol {
 namespace {
@@ -205,6 +211,72 @@ TEST(Isolated, AnAnswerThatBreaksOffIsTheParentsError) {
       });
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.error().message, "broke off");
+}
+
+TEST(Isolated, AChildKilledFromOutsideIsReportedWithItsSignal) {
+  // The out-of-memory killer or a user's kill -9: not our kill, so its signal is the message.
+  const Status s = run_isolated(
+      "the decoder", {}, [](ChildOutput&) { ::raise(SIGKILL); }, read_an_int);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the decoder was killed (signal 9: Killed)");
+  const Status term = run_isolated(
+      "the decoder", {}, [](ChildOutput&) { ::raise(SIGTERM); }, read_an_int);
+  ASSERT_FALSE(term.ok());
+  EXPECT_EQ(term.error().message, "the decoder was killed (signal 15: Terminated)");
+  expect_no_children();
+}
+
+// A child that forks a grandchild (which sleeps, holding the channel) and sends its pid; `after`
+// is what the child does then.
+enum class After { exit, wait };
+std::function<void(ChildOutput&)> leave_a_grandchild(After after) {
+  return [after](ChildOutput& out) {
+    const pid_t grandchild = ::fork();
+    if (grandchild == 0) {
+      const int null = ::open("/dev/null", O_RDWR);
+      ::dup2(null, 1);  // not the test's output, which ctest waits on
+      ::dup2(null, 2);
+      ::alarm(300);  // a backstop where it is not killed (the defect this tests)
+      for (;;) ::pause();
+    }
+    out.write_value(static_cast<std::int32_t>(grandchild));
+    if (after == After::wait)
+      for (;;) ::pause();
+  };
+}
+
+TEST(Isolated, AChildThatExitsLeavingAGrandchildOnTheChannelIsNotWaitedForAndTheGrandchildDies) {
+  // Before, the parent read the channel until the grandchild's end closed it: the deadline (here
+  // 120 s, far beyond what the child needs on a loaded machine), and the grandchild lived on.
+  IsolationLimits limits;
+  limits.wall_seconds = 120;
+  std::int32_t grandchild = 0;
+  const Status s = run_isolated("the decoder", limits, leave_a_grandchild(After::exit),
+                                [&](ChildInput& in) -> Status {
+                                  return in.read_value(&grandchild) ? Status{} : Error{"short"};
+                                });
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  ASSERT_GT(grandchild, 0);
+  EXPECT_TRUE(test::process_dies(grandchild)) << "grandchild " << grandchild << " still runs";
+  expect_no_children();
+}
+
+TEST(Isolated, AChildThatIsStoppedTakesItsGrandchildrenWithIt) {
+  // Stopped because the parent refuses its answer (as at the deadline: the same end, without
+  // depending on how fast a loaded machine forks).
+  IsolationLimits limits;
+  limits.wall_seconds = 120;
+  std::int32_t grandchild = 0;
+  const Status s = run_isolated("the decoder", limits, leave_a_grandchild(After::wait),
+                                [&](ChildInput& in) -> Status {
+                                  if (!in.read_value(&grandchild)) return Error{"short"};
+                                  return Error{"the answer is refused"};
+                                });
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, "the answer is refused");
+  ASSERT_GT(grandchild, 0);
+  EXPECT_TRUE(test::process_dies(grandchild)) << "grandchild " << grandchild << " still runs";
+  expect_no_children();
 }
 
 }  // namespace

@@ -1,6 +1,10 @@
 // A lightvol-image that misbehaves on request: it serves images as the real one does, except that
-// a read of a path containing "crash" ends it with SIGSEGV and one containing "hang" never
-// answers. For the tests of how a failing decoder is reported (image_helper_test.cpp).
+// a read of a path containing "crash" ends it with SIGSEGV, "killed" with SIGKILL (as the
+// out-of-memory killer would), "exit" with exit status 3, and one containing "hang" never answers.
+// With $LIGHTVOL_FAKE_GRANDCHILD set to a path, it first forks a grandchild that sleeps holding the
+// channel, and writes the grandchild's pid to that file before it is ready. For the tests of how a
+// failing decoder is reported (image_helper_test.cpp).
+#include <fcntl.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -9,6 +13,8 @@
 #include <csignal>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <string>
@@ -49,9 +55,27 @@ std::string peek_path() {
   return all.substr(sizeof head);
 }
 
+// A process that sleeps holding the channel (inherited), its pid written to `pid_file`.
+void leave_a_grandchild(const char* pid_file) {
+  const pid_t grandchild = ::fork();
+  if (grandchild == 0) {
+    const int null = ::open("/dev/null", O_RDWR);
+    ::dup2(null, 1);  // not the test's output, which ctest waits on
+    ::dup2(null, 2);
+    ::alarm(300);  // a backstop where it is not killed (the defect the tests look for)
+    for (;;) ::pause();
+  }
+  std::FILE* f = std::fopen(pid_file, "w");
+  if (f) {
+    std::fprintf(f, "%d\n", static_cast<int>(grandchild));
+    std::fclose(f);
+  }
+}
+
 }  // namespace
 
 int main() {
+  if (const char* pid_file = std::getenv("LIGHTVOL_FAKE_GRANDCHILD")) leave_a_grandchild(pid_file);
   lightvol::ChildOutput channel(lightvol::kProgramChannel);
   channel.write_value(lightvol::kProgramReady);
   for (;;) {
@@ -60,6 +84,8 @@ int main() {
       std::signal(SIGSEGV, SIG_DFL);  // a plain crash, also under AddressSanitizer's handler
       std::raise(SIGSEGV);
     }
+    if (path.find("killed") != std::string::npos) std::raise(SIGKILL);
+    if (path.find("exit") != std::string::npos) std::_Exit(3);
     if (path.find("hang") != std::string::npos) ::pause();
     if (!lightvol::detail::serve_image_request(channel, 0)) return 0;
     channel.write_value(lightvol::kProgramReady);

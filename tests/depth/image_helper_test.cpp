@@ -88,19 +88,25 @@ TEST(ImageHelper, ACrashingDecoderIsAnErrorNamingTheFileAndTheNextReadWorks) {
   EXPECT_EQ(read->values, image.values);
 }
 
-TEST(ImageHelper, AHangingDecoderIsStoppedAtTheDeadlineAndTheNextRequestWorks) {
-  const FakeHelper fake;
+// A read request for `path`, whose answer the fake helper may withhold: OK when a verdict came
+// back.
+Status read_request(const std::string& path, double wall_seconds) {
   IsolationLimits limits;
-  limits.wall_seconds = 0.5;
-  // A read request for a path the fake helper hangs on: nothing comes back.
-  const Status hung = detail::run_image_helper("hang.exr: the reader", limits, [](ChildInput& in) {
+  limits.wall_seconds = wall_seconds;
+  return detail::run_image_helper(path + ": the reader", limits, [&](ChildInput& in) {
     std::uint8_t verdict = 0;
-    if (!in.write_value(detail::ImageRequest::read) || !in.write_string("hang.exr") ||
+    if (!in.write_value(detail::ImageRequest::read) || !in.write_string(path) ||
         !in.write_string("openexr") || !in.write_string("") || !in.write_string("") ||
         !in.read_value(&verdict))
       return Status{Error{"no answer"}};
     return Status{};
   });
+}
+
+TEST(ImageHelper, AHangingDecoderIsStoppedAtTheDeadlineAndTheNextRequestWorks) {
+  const FakeHelper fake;
+  // A read request for a path the fake helper hangs on: nothing comes back.
+  const Status hung = read_request("hang.exr", 0.5);
   ASSERT_FALSE(hung.ok());
   EXPECT_EQ(hung.error().message,
             "hang.exr: the reader took longer than 0.5 s on this input and was stopped");
@@ -110,6 +116,68 @@ TEST(ImageHelper, AHangingDecoderIsStoppedAtTheDeadlineAndTheNextRequestWorks) {
   const Result<DepthImage> read = read_depth_image(dir.file("after.pfm"));
   ASSERT_TRUE(read.ok()) << read.error().message;
   EXPECT_EQ(read->values, image.values);
+}
+
+TEST(ImageHelper, AKilledDecoderIsReportedWithItsSignal) {
+  // SIGKILL from outside (the out-of-memory killer, kill -9) was reported as an answer that broke
+  // off, without the signal.
+  const FakeHelper fake;
+  const Status killed = read_request("killed.exr", 120);
+  ASSERT_FALSE(killed.ok());
+  EXPECT_EQ(killed.error().message, "killed.exr: the reader was killed (signal 9: Killed)");
+}
+
+// The fake helper, started with $LIGHTVOL_FAKE_GRANDCHILD: it leaves a grandchild that holds the
+// channel, whose pid pid() reads.
+class FakeHelperWithGrandchild {
+ public:
+  FakeHelperWithGrandchild() : pid_file_(dir_.file("grandchild.pid")) {
+    ::setenv("LIGHTVOL_FAKE_GRANDCHILD", pid_file_.c_str(), 1);
+  }
+  ~FakeHelperWithGrandchild() { ::unsetenv("LIGHTVOL_FAKE_GRANDCHILD"); }
+  int pid() const { return std::atoi(test::slurp(pid_file_).c_str()); }
+
+ private:
+  test::TempDir dir_;
+  std::string pid_file_;
+  FakeHelper fake_;
+};
+
+TEST(ImageHelper, ADecoderThatExitsLeavingAGrandchildOnTheChannelIsNotWaitedFor) {
+  // The helper exits; its grandchild holds the channel open. Before, the request waited for the
+  // channel to close, i.e. until the deadline (60 s in a build; 120 s here, far beyond what the
+  // helper takes to exit on a loaded machine), and the grandchild lived on.
+  const FakeHelperWithGrandchild fake;
+  const Status exited = read_request("exit.exr", 120);
+  ASSERT_FALSE(exited.ok());
+  EXPECT_EQ(exited.error().message, "exit.exr: the reader failed (exit status 3)");
+  ASSERT_GT(fake.pid(), 0);
+  EXPECT_TRUE(test::process_dies(fake.pid())) << "grandchild " << fake.pid() << " still runs";
+}
+
+TEST(ImageHelper, ADecoderStoppedAtTheDeadlineTakesItsGrandchildrenWithIt) {
+  // The grandchild exists (its pid written) before the helper is ready, so the short deadline
+  // does not race with it.
+  const FakeHelperWithGrandchild fake;
+  const Status hung = read_request("hang.exr", 0.5);
+  ASSERT_FALSE(hung.ok());
+  EXPECT_EQ(hung.error().message,
+            "hang.exr: the reader took longer than 0.5 s on this input and was stopped");
+  ASSERT_GT(fake.pid(), 0);
+  EXPECT_TRUE(test::process_dies(fake.pid())) << "grandchild " << fake.pid() << " still runs";
+}
+
+TEST(ImageHelper, AnIdleServerClosedAtTheEndTakesItsGrandchildrenWithIt) {
+  int grandchild = 0;
+  {
+    const FakeHelperWithGrandchild fake;
+    test::TempDir dir;
+    const DepthImage image = ramp(5, 4, 2);
+    ASSERT_TRUE(write_depth_image(dir.file("fine.exr"), image).ok());  // through the helper
+    grandchild = fake.pid();
+  }  // the idle server is closed here
+  ASSERT_GT(grandchild, 0);
+  EXPECT_TRUE(test::process_dies(grandchild)) << "grandchild " << grandchild << " still runs";
 }
 
 TEST(ImageHelper, AMissingProgramIsAnErrorSayingWhere) {

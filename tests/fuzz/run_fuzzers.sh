@@ -20,7 +20,7 @@ seconds=${2:-20}
 shift $(( $# >= 2 ? 2 : 1 ))
 source_dir=$(cd "$(dirname "$0")/../.." && pwd)
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(light depth_image mesh volumes jobs)
+[ ${#targets[@]} -gt 0 ] || targets=(light depth_image mesh volumes jobs text)
 cxx=${CXX:-clang++-14}; command -v "$cxx" >/dev/null || cxx=clang++
 
 # Lean: only the library and the fuzz targets (no CLI, no GL, no tests).

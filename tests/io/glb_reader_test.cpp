@@ -229,5 +229,16 @@ TEST(GlbReader, InstancingIsBoundedByTheFileSize) {
       << over.error().message;
 }
 
+// The header's length is the file's (glTF 2.0): bytes after the last chunk were ignored before.
+TEST(GlbReader, BytesAfterTheLastChunkAreRefused) {
+  const std::string file = glb(tetra_doc(), tetra_bin());
+  ASSERT_TRUE(read_glb(file, "t.glb").ok());
+  const Result<DracoMesh> longer = read_glb(file + std::string(4, '\0'), "t.glb");
+  ASSERT_FALSE(longer.ok());
+  EXPECT_EQ(longer.error().message, "t.glb: glTF binary: header claims " +
+                                        std::to_string(file.size()) + " bytes, the file has " +
+                                        std::to_string(file.size() + 4));
+}
+
 }  // namespace
 }  // namespace lightvol::detail

@@ -374,5 +374,54 @@ TEST(ReadPly, BigFileWithANonFiniteCoordinateIsRefused) {
   EXPECT_EQ(mesh.error().message, path + ": has a vertex with a non-finite coordinate");
 }
 
+// Bytes after the last element used to be ignored: a face count one too small dropped a face
+// without a word, and two files joined read as the first. The last element ends the file.
+TEST(ReadPly, BytesAfterTheLastElementAreRefusedNamingTheOffset) {
+  TempDir dir;
+  for (const bool big : {false, true}) {
+    const std::string ply = binary_square(big);
+    for (const std::string& extra :
+         {std::string("\n"), std::string(1, '\0'), std::string("ply\n")}) {
+      const std::string path = dir.write("after.ply", ply + extra);
+      const Result<Mesh> mesh = read_mesh(path);
+      ASSERT_FALSE(mesh.ok()) << big << " " << extra.size();
+      EXPECT_EQ(mesh.error().message, path + ": " + std::to_string(extra.size()) +
+                                          (extra.size() == 1 ? " byte" : " bytes") +
+                                          " after the last element ('face'), from byte offset " +
+                                          std::to_string(ply.size()) +
+                                          " on: a binary PLY file ends with its last element");
+    }
+  }
+  // The same in the parallel reader's blocks: a face count that leaves the last face out.
+  std::vector<std::vector<double>> faces(70000, {0, 1, 2});
+  std::string big = big_ply(false, 70000, faces, false);
+  const std::string count = "element face 70000\n";
+  big.replace(big.find(count), count.size(), "element face 69999\n");
+  const std::string path = dir.write("one_more.ply", big);
+  const Result<Mesh> mesh = read_mesh(path);
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.error().message,
+            path + ": 13 bytes after the last element ('face'), from byte offset " +
+                std::to_string(big.size() - 13) +
+                " on: a binary PLY file ends with its last element");
+
+  // ASCII: blank lines and whitespace after the last element are fine; anything else is refused
+  // naming the line.
+  const std::string ascii =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const Result<Mesh> blank = read_mesh(dir.write("blank.ply", ascii + "\n  \t\r\n\n"));
+  ASSERT_TRUE(blank.ok()) << blank.error().message;
+  EXPECT_EQ(blank->num_triangles(), 1u);
+  const std::string more = dir.write("more.ply", ascii + "\n3 0 2 1\n");
+  const Result<Mesh> refused = read_mesh(more);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().message,
+            more +
+                ": PLY body line 6: text after the last element ('face'): '3'; an ASCII PLY "
+                "file ends with its last element (blank lines aside)");
+}
+
 }  // namespace
 }  // namespace lightvol

@@ -2,6 +2,8 @@
 // refuse it naming the line: "nan", "inf", "abc" and 1e39 are never read as numbers (OpenMesh's
 // ASCII STL reader left them as whatever the memory held). ASCII STL is lightvol's own reader:
 // its structure is checked line by line.
+#include <algorithm>
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -135,6 +137,46 @@ TEST(TextMesh, AsciiStlOutOfOrderOrCutIsRefusedNamingTheLine) {
     const Result<Mesh> mesh = read_mesh(path);
     ASSERT_FALSE(mesh.ok()) << c.message;
     EXPECT_EQ(mesh.error().message, path + ": " + c.message);
+  }
+}
+
+// What follows the last element, format by format (docs/formats.md): blank lines (and comments,
+// where the format has them) are fine; anything else is refused naming the line. OBJ is a list of
+// statements with no last element: it is read to its end, whatever statements it holds.
+TEST(TextMesh, TextAfterTheLastElementIsRefusedWhereTheFormatHasALastElement) {
+  TempDir dir;
+  struct Case {
+    std::string name, after, message;  // message: "" when accepted
+  };
+  const Case cases[] = {
+      {"t.stl", "\n \n", ""},
+      {"t.stl", "solid u\nendsolid u\n", ""},  // several solids in one file
+      {"t.stl", "3 0 1 2\n", "STL line 31: expected 'solid', got '3'"},
+      {"t.off", "\n# the end\n  \n", ""},
+      {"t.off", "3 1 3 2\n",
+       "OFF line 11: text after the last face: '3'; an OFF file ends with its faces (comments and "
+       "blank lines aside)"},
+      {"t.off", "# a comment\n4 4 0\n",
+       "OFF line 12: text after the last face: '4'; an OFF file ends with its faces (comments and "
+       "blank lines aside)"},
+      {"t.ply", " \n\r\n", ""},
+      {"t.ply", "end\n",
+       "PLY body line 9: text after the last element ('face'): 'end'; an ASCII PLY file ends "
+       "with its last element (blank lines aside)"},
+      {"t.obj", "vn 0 0 1\ng rest\n", ""},
+  };
+  for (const Case& c : cases) {
+    const Format& format = *std::find_if(std::begin(kFormats), std::end(kFormats),
+                                         [&](const Format& f) { return f.name == c.name; });
+    const std::string path = dir.write(c.name, with(format.text, "1") + c.after);
+    const Result<Mesh> mesh = read_mesh(path);
+    if (c.message.empty()) {
+      ASSERT_TRUE(mesh.ok()) << c.name << ": " << mesh.error().message;
+      EXPECT_EQ(mesh->num_triangles(), 4u) << c.name;
+    } else {
+      ASSERT_FALSE(mesh.ok()) << c.name << " " << c.after;
+      EXPECT_EQ(mesh.error().message, path + ": " + c.message);
+    }
   }
 }
 

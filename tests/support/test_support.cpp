@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <thread>
 
 namespace lightvol::test {
 namespace fs = std::filesystem;
@@ -146,6 +148,18 @@ std::string q(const std::string& text) {
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), {}};
+}
+
+bool process_dies(int pid) {
+  for (int i = 0; i < 6000; ++i) {
+    const std::string stat = slurp("/proc/" + std::to_string(pid) + "/stat");
+    const std::size_t close = stat.rfind(')');  // the state follows the command name
+    if (stat.empty() || (close != std::string::npos && close + 2 < stat.size() &&
+                         (stat[close + 2] == 'Z' || stat[close + 2] == 'X')))
+      return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
 }
 
 std::string fuzz_regression_file(const std::string& target, const std::string& name) {

@@ -61,6 +61,11 @@ std::string q(const std::string& text);
 // The whole file at `path`, byte for byte ("" if it cannot be read).
 std::string slurp(const std::string& path);
 
+// Whether the process `pid` (not a child of the caller) has ended, or ends within a minute (it
+// may be a zombie its new parent has not reaped yet): checked every 10 ms, so a process that was
+// killed passes at once and one that lives on fails after the minute.
+bool process_dies(int pid);
+
 // The file a fuzz target read from regression input tests/fuzz/corpus/TARGET/NAME: the input
 // without its first byte, which the depth_image and mesh targets spend on choosing the extension.
 std::string fuzz_regression_file(const std::string& target, const std::string& name);

@@ -8,12 +8,22 @@
 #include <lightvol/check/detail/exact_checks.h>
 #include <lightvol/check/detail/linear_checks.h>
 #include <lightvol/core/check.h>
+#include <lightvol/core/limits.h>
 
 namespace lightvol {
 
 using detail::make_offender;
 using detail::passed;
 using detail::skipped;
+
+std::uint64_t check_memory_bytes(std::uint64_t vertices, std::uint64_t triangles, bool with_light,
+                                 const CheckOptions& options) {
+  const bool exact = !with_light || options.cgal_with_light;
+  const std::uint64_t per_triangle = !exact                                    ? 12
+                                     : options.engine == CheckEngine::lightvol ? 64
+                                                                               : 256;
+  return process_base_bytes() + 24 * vertices + per_triangle * triangles;
+}
 
 CheckReport check_volume(const Mesh& mesh, const Light* light, const CheckOptions& options) {
   CheckReport report =

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -20,6 +21,7 @@
 
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
+#include <lightvol/core/text.h>
 #include <lightvol/io/detail/draco_mesh.h>
 #include <lightvol/io/detail/glb_reader.h>
 #include <lightvol/io/detail/obj_reader.h>
@@ -32,6 +34,9 @@
 
 namespace lightvol {
 namespace {
+
+// Asked with a file's counts (vertices, triangles) before they are allocated: MeshWork's check.
+using Budget = std::function<Status(std::uint64_t, std::uint64_t)>;
 
 namespace fs = std::filesystem;
 
@@ -232,7 +237,7 @@ Status check_header(const std::string& path, MeshFormat format, std::uintmax_t s
 // fan-triangulated. Binary OFF is refused.
 // Long (over 80 lines) on purpose: a straight parse of the format (header, counts, vertices,
 // faces), each step with its own message.
-Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
+Result<Mesh> read_off(const std::string& path, std::uintmax_t size, const Budget& budget) {
   if (Status s = check_header(path, MeshFormat::off, size); !s) return s.error();
   std::ifstream in(path, std::ios::binary);
   if (!in) return Error{path + ": cannot open: " + std::strerror(errno)};
@@ -267,13 +272,13 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
         prefix.remove_prefix(p.size());
       }
     if (!prefix.empty())
-      return Error{at_line() + "'" + keyword.substr(0, 40) +
+      return Error{at_line() + "'" + utf8_prefix(keyword, 40) +
                    "' is not an OFF keyword ([ST][C][N][4][n]OFF)"};
     header.erase(header.begin());
     if (!header.empty() && header.front() == "BINARY")
       return Error{at_line() + "binary OFF is not supported; convert it to PLY"};
   } else if (keyword.find_first_not_of("0123456789") != std::string::npos) {
-    return Error{at_line() + "expected the OFF keyword, got '" + keyword.substr(0, 40) + "'"};
+    return Error{at_line() + "expected the OFF keyword, got '" + utf8_prefix(keyword, 40) + "'"};
   }
   const std::size_t needed = any_dimension ? 3 : 2;
   while (header.size() < needed) {
@@ -293,7 +298,7 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
   if (any_dimension && !integer(header[0], &dimension))
     return Error{at_line() + "expected the dimension of nOFF"};
   if (dimension != 3)
-    return Error{at_line() + "vertices of dimension " + header[0].substr(0, 20) +
+    return Error{at_line() + "vertices of dimension " + utf8_prefix(header[0], 20) +
                  ": only 3-dimensional OFF makes a triangle mesh"};
   if (!integer(header[needed - 2], &nv) || !integer(header[needed - 1], &nf))
     return Error{at_line() + "expected the vertex and face counts"};
@@ -302,6 +307,8 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
     return Error{path + ": OFF header: " + std::to_string(nv) + " vertices and " +
                  std::to_string(nf) + " faces cannot fit in " + std::to_string(size) +
                  " bytes (truncated file?)"};
+  if (Status s = budget(static_cast<std::uint64_t>(nv), static_cast<std::uint64_t>(nf)); !s)
+    return s.error();
   Mesh mesh;
   mesh.positions.reserve(3 * static_cast<std::size_t>(nv));
   for (long long v = 0; v < nv; ++v) {
@@ -360,6 +367,14 @@ Result<Mesh> read_off(const std::string& path, std::uintmax_t size) {
                           {static_cast<std::uint32_t>(face[0]), static_cast<std::uint32_t>(face[k]),
                            static_cast<std::uint32_t>(face[k + 1])});
   }
+  // The last face ends the file: after it, only blank lines and comments.
+  if (next_line(&words)) {
+    std::string word;
+    words >> word;
+    return Error{at_line() + "text after the last face: '" + utf8_prefix(word, 40) +
+                 "'; an OFF file ends with its faces (comments and blank lines aside)"};
+  }
+  if (in.bad()) return Error{path + ": cannot read: " + std::strerror(errno)};
   return mesh;
 }
 
@@ -422,10 +437,13 @@ Result<Mesh> read_with_openmesh(const std::string& path, std::uintmax_t size) {
 }
 
 // STL: binary by OpenMesh, ASCII by lightvol's own reader (io/detail/stl_reader.h).
-Result<Mesh> read_stl(const std::string& path, std::uintmax_t size) {
+Result<Mesh> read_stl(const std::string& path, std::uintmax_t size, const Budget& budget) {
   if (Status s = check_header(path, MeshFormat::stl, size); !s) return s.error();
-  return stl_is_binary(file_head(path, 84), size) ? read_with_openmesh(path, size)
-                                                  : detail::read_stl_ascii(path);
+  if (!stl_is_binary(file_head(path, 84), size)) return detail::read_stl_ascii(path);
+  // Binary: (size - 84) / 50 triangles, three corners each before welding.
+  const std::uint64_t triangles = (size - 84) / 50;
+  if (Status s = budget(3 * triangles, triangles); !s) return s.error();
+  return read_with_openmesh(path, size);
 }
 
 // DRC and GLB: the whole file in memory, decoded by Draco or read by the GLB reader.
@@ -456,7 +474,11 @@ Result<DecodedMesh> decode_mesh_bytes(std::string_view bytes, MeshFormat format,
   return DecodedMesh{std::move(decoded->mesh), decoded->step};
 }
 
-Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
+std::uint64_t mesh_read_bytes(std::uint64_t vertices, std::uint64_t triangles) {
+  return process_base_bytes() + 24 * vertices + 12 * triangles;
+}
+
+Result<Mesh> read_mesh(const std::string& path, double* quantization_step, const MeshWork& work) {
   if (quantization_step) *quantization_step = 0;
   const Result<MeshFormat> format = mesh_format_from_path(path);
   if (!format) return format.error();
@@ -470,13 +492,21 @@ Result<Mesh> read_mesh(const std::string& path, double* quantization_step) {
   if (std::ifstream probe(path, std::ios::binary); !probe)
     return Error{path + ": cannot open: " + std::strerror(errno)};
 
+  const Budget budget = [&](std::uint64_t vertices, std::uint64_t triangles) {
+    const std::uint64_t bytes =
+        work.bytes ? work.bytes(vertices, triangles) : mesh_read_bytes(vertices, triangles);
+    return check_memory(bytes, path, work.what + " " + std::to_string(triangles) + " triangles");
+  };
   Result<Mesh> mesh = (*format == MeshFormat::drc || *format == MeshFormat::glb)
                           ? read_draco_or_glb(path, *format, quantization_step)
-                      : *format == MeshFormat::off ? read_off(path, size)
-                      : *format == MeshFormat::ply ? detail::read_ply(path, size)
+                      : *format == MeshFormat::off ? read_off(path, size, budget)
+                      : *format == MeshFormat::ply ? detail::read_ply(path, size, budget)
                       : *format == MeshFormat::obj ? detail::read_obj(path)
-                                                   : read_stl(path, size);
+                                                   : read_stl(path, size, budget);
   if (!mesh) return mesh;
+  // The counts read (polygons split; OBJ, ASCII STL, GLB and DRC have none before), before the
+  // weld and the caller's work allocate more.
+  if (Status s = budget(mesh->num_vertices(), mesh->num_triangles()); !s) return s.error();
   if (mesh->num_triangles() == 0) return Error{path + ": has no triangles"};
   if (mesh->num_vertices() >= std::numeric_limits<std::uint32_t>::max())
     return Error{path + ": has too many vertices"};

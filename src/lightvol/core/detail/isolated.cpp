@@ -3,6 +3,7 @@
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -36,6 +37,42 @@ extern char** environ;
 
 namespace lightvol {
 namespace {
+
+// Whether the child `pid` has ended (it is then a zombie until reaped), without reaping it.
+bool has_ended(pid_t pid) {
+  siginfo_t info{};
+  while (::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) < 0)
+    if (errno != EINTR) return true;  // not ours to wait for (reaped already): gone
+  return info.si_pid == pid;
+}
+
+// Kills what is left of `pid`'s process group (the processes it started) and reaps `pid`: first,
+// unless it has ended or is `ending` (it closed its end of the channel: it is waited for), it is
+// killed, after `grace` seconds for it to end by itself (a process that dies closes its channel
+// before the kernel marks it ended: a parent that saw the channel close gives it that moment, so
+// that a signal it died of is not taken for ours). True when this killed it and its status says
+// SIGKILL (a SIGKILL there is then ours, not another's). The group is killed while `pid` is
+// unreaped, so its number cannot yet name another group.
+bool end_and_reap(pid_t pid, bool ending, double grace, int* status, rusage* usage) {
+  bool killed = false;
+  if (ending) {
+    siginfo_t info{};
+    while (::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOWAIT) < 0 &&
+           errno == EINTR) {
+    }
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    while (!has_ended(pid) &&
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < grace)
+      ::usleep(1000);
+    killed = !has_ended(pid);
+  }
+  ::kill(-pid, SIGKILL);
+  if (killed) ::kill(pid, SIGKILL);  // also where it leads no group (setpgid failed)
+  while (::wait4(pid, status, 0, usage) < 0 && errno == EINTR) {
+  }
+  return killed && WIFSIGNALED(*status) && WTERMSIG(*status) == SIGKILL;
+}
 
 double now_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -78,6 +115,17 @@ void limit_child(double cpu, std::uint64_t space) {
     const rlimit bytes{static_cast<rlim_t>(space), static_cast<rlim_t>(space)};
     setrlimit(RLIMIT_AS, &bytes);
   }
+#endif
+}
+
+// A descriptor that becomes readable when `pid` (a child of ours, not yet reaped) ends; -1 where
+// the kernel has none (before Linux 5.3), and the caller then asks has_ended().
+int open_pidfd(pid_t pid) {
+#ifdef SYS_pidfd_open
+  return static_cast<int>(::syscall(SYS_pidfd_open, pid, 0));  // close-on-exec by itself
+#else
+  (void)pid;
+  return -1;
 #endif
 }
 
@@ -125,16 +173,29 @@ bool ChildInput::transfer(char* data, std::size_t bytes, bool sending) {
       timed_out_ = true;
       return false;
     }
-    pollfd ready{fd_, static_cast<short>(sending ? POLLOUT : POLLIN), 0};
-    const int polled = ::poll(&ready, 1, static_cast<int>(std::ceil(left * 1000)));
+    // The channel, and the child's end (its pidfd; without one, the kernel is asked every 50 ms).
+    // Once the child has ended, only what the channel holds now is taken.
+    pollfd ready[2] = {{fd_, static_cast<short>(sending ? POLLOUT : POLLIN), 0},
+                       {ended_ ? -1 : pidfd_, POLLIN, 0}};
+    const double wait = ended_ ? 0 : pidfd_ >= 0 ? left : std::min(left, 0.05);
+    const int polled = ::poll(ready, 2, static_cast<int>(std::ceil(wait * 1000)));
     if (polled < 0 && errno == EINTR) continue;
     if (polled < 0) return false;
-    if (polled == 0) continue;  // the deadline is tested above
-    const ssize_t n = sending ? send_some(fd_, data, bytes) : ::read(fd_, data, bytes);
-    if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
-    if (n <= 0) return false;  // the child ended or broke off
-    data += n;
-    bytes -= static_cast<std::size_t>(n);
+    if (ready[0].revents != 0) {
+      const ssize_t n = sending ? send_some(fd_, data, bytes) : ::read(fd_, data, bytes);
+      if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+      if (n <= 0) {  // the child ended or broke off
+        closed_ = true;
+        return false;
+      }
+      data += n;
+      bytes -= static_cast<std::size_t>(n);
+      continue;
+    }
+    if (ended_) return false;  // the child is gone and the channel holds no more
+    // What it wrote before it ended is in the channel already: one more look, then no waiting
+    // (a process it left behind may hold the channel open).
+    if (pidfd_ >= 0 ? ready[1].revents != 0 : has_ended(pid_)) ended_ = true;
   }
   return true;
 }
@@ -221,15 +282,19 @@ bool ChildInput::read(void* data, std::size_t bytes) {
 
 namespace {
 
+// "signal N: its description".
+std::string signal_text(int sig) {
+  const char* name = ::strsignal(sig);
+  return "signal " + std::to_string(sig) + (name ? std::string(": ") + name : "");
+}
+
 // Reaps `pid` (killed first unless it `ended` by itself), and returns the Error its end is, or
 // `answer`. `cpu_base` is the processor time it had used before this request (a server's).
 Status reap(const std::string& what, const IsolationLimits& limits, std::uint64_t memory, pid_t pid,
             const ChildInput& in, bool ended, double cpu_base, const Status& answer) {
-  if (!ended) ::kill(pid, SIGKILL);
   int status = 0;
   rusage usage{};
-  while (::wait4(pid, &status, 0, &usage) < 0 && errno == EINTR) {
-  }
+  const bool killed_by_us = end_and_reap(pid, ended, in.closed() ? 2 : 0, &status, &usage);
 
   const auto seconds = [](double s) {
     char text[32];
@@ -248,12 +313,13 @@ Status reap(const std::string& what, const IsolationLimits& limits, std::uint64_
     return Error{what + " took longer than " +
                  seconds(limits.wall_seconds + in.wall_seconds_added()) +
                  " s on this input and was stopped"};
-  const bool killed_by_us = !ended && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
   if (WIFSIGNALED(status) && !killed_by_us) {
+    // A signal that something outside sends (the out-of-memory killer, a user's kill), or one the
+    // child's own fault raised.
     const int sig = WTERMSIG(status);
-    const char* name = ::strsignal(sig);
-    return Error{what + " crashed on this input (signal " + std::to_string(sig) +
-                 (name ? std::string(": ") + name : "") + ")"};
+    const bool sent = sig == SIGKILL || sig == SIGTERM || sig == SIGINT || sig == SIGHUP;
+    return Error{what + (sent ? " was killed (" : " crashed on this input (") + signal_text(sig) +
+                 ")"};
   }
   if (WIFEXITED(status) && WEXITSTATUS(status) == kChildOutOfMemory)
     return Error{what + " ran out of memory (its limit is " + format_bytes(memory) + "; " +
@@ -357,6 +423,7 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
     return Error{what + ": cannot start a process for it: " + std::strerror(e)};
   }
   if (pid == 0) {
+    ::setpgid(0, 0);  // a group of its own (also set by the parent: whichever runs first)
     ::close(fds[0]);
     limit_child(limits.cpu_seconds, space);
     int code = 0;
@@ -370,10 +437,13 @@ Status run_isolated(const std::string& what, const IsolationLimits& limits,
     }
     _exit(code);
   }
+  ::setpgid(pid, 0);
   ::close(fds[1]);
-  ChildInput in(fds[0], pid, limits.cpu_seconds, deadline);
+  const int pidfd = open_pidfd(pid);
+  ChildInput in(fds[0], pid, pidfd, limits.cpu_seconds, deadline);
   const Status result = supervise(what, limits, memory, pid, in, parent);
   ::close(fds[0]);
+  if (pidfd >= 0) ::close(pidfd);
   return result;
 }
 
@@ -395,7 +465,8 @@ Status spawn_program(const std::string& cannot, const std::vector<std::string>& 
   sigset_t none;
   sigemptyset(&none);
   posix_spawnattr_setsigmask(&attributes, &none);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
+  posix_spawnattr_setpgroup(&attributes, 0);  // a process group of its own, to be ended whole
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETPGROUP);
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -416,13 +487,15 @@ Status spawn_program(const std::string& cannot, const std::vector<std::string>& 
 Status await_ready(const std::string& cannot, pid_t pid, ChildInput& in) {
   std::uint8_t ready = 0;
   if (in.read_value(&ready) && ready == kProgramReady) return {};
-  ::kill(pid, SIGKILL);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  rusage usage{};
+  const bool killed = end_and_reap(pid, false, in.closed() ? 2 : 0, &status, &usage);
   if (in.timed_out()) return Error{cannot + "it did not get ready in time)"};
   if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
     return Error{cannot + "it could not be executed)"};
+  if (WIFSIGNALED(status) && !killed)
+    return Error{cannot + "it ended with " + signal_text(WTERMSIG(status)) +
+                 " before it was ready)"};
   return Error{cannot + "it ended before it was ready)"};
 }
 
@@ -435,28 +508,27 @@ Result<std::unique_ptr<IsolatedServer>> IsolatedServer::start(const std::string&
   pid_t pid = -1;
   int fd = -1;
   if (Status s = spawn_program(cannot, argv, &pid, &fd); !s) return s.error();
-  ChildInput in(fd, pid, 0, now_seconds() + wall_seconds);
+  const int pidfd = open_pidfd(pid);
+  ChildInput in(fd, pid, pidfd, 0, now_seconds() + wall_seconds);
   if (Status s = await_ready(cannot, pid, in); !s) {
     ::close(fd);
+    if (pidfd >= 0) ::close(pidfd);
     return s.error();
   }
-  return std::unique_ptr<IsolatedServer>(new IsolatedServer(pid, fd));
+  return std::unique_ptr<IsolatedServer>(new IsolatedServer(pid, fd, pidfd));
 }
 
 IsolatedServer::~IsolatedServer() {
   if (fd_ >= 0) ::close(fd_);
   if (pid_ > 0) {
-    // It ends when it reads the end of its channel; wait a moment for that, then end it.
+    // It ends when it reads the end of its channel; wait a moment for that, then end it and what
+    // it left behind.
+    for (int i = 0; i < 100 && !has_ended(pid_); ++i) ::usleep(1000);
     int status = 0;
-    for (int i = 0; i < 100; ++i) {
-      const pid_t done = ::waitpid(pid_, &status, WNOHANG);
-      if (done == pid_ || (done < 0 && errno != EINTR)) return;
-      ::usleep(1000);
-    }
-    ::kill(pid_, SIGKILL);
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
+    rusage usage{};
+    end_and_reap(pid_, false, 0, &status, &usage);
   }
+  if (pidfd_ >= 0) ::close(pidfd_);
 }
 
 Status IsolatedServer::request(const std::string& what, const IsolationLimits& limits,
@@ -465,7 +537,7 @@ Status IsolatedServer::request(const std::string& what, const IsolationLimits& l
   const std::uint64_t memory = limits.memory > 0 ? limits.memory : memory_budget();
   const double used = process_cpu_seconds(pid_);
   limit_program(pid_, used, limits.cpu_seconds, memory);
-  ChildInput in(fd_, pid_, used + limits.cpu_seconds, now_seconds() + limits.wall_seconds);
+  ChildInput in(fd_, pid_, pidfd_, used + limits.cpu_seconds, now_seconds() + limits.wall_seconds);
   const Status answer = parent(in);
   std::uint8_t ready = 0;
   if (answer && in.read_value(&ready) && ready == kProgramReady) return answer;

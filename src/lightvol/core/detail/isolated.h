@@ -53,11 +53,15 @@ class ChildOutput {
   int fd_;
 };
 
-// The parent's end: reads exactly the bytes asked for before the deadline, or fails.
+// The parent's end: reads exactly the bytes asked for before the deadline, or fails. The child
+// itself is watched too (through `pidfd`, a descriptor that becomes readable when it ends, or,
+// where the kernel has none (-1), by asking every 50 ms): once it has ended, what it sent is read
+// and then nothing more is waited for, even while a process it left behind holds its end of the
+// channel.
 class ChildInput {
  public:
-  ChildInput(int fd, int pid, double cpu_seconds, double deadline)
-      : fd_(fd), pid_(pid), cpu_(cpu_seconds), deadline_(deadline) {}
+  ChildInput(int fd, int pid, int pidfd, double cpu_seconds, double deadline)
+      : fd_(fd), pid_(pid), pidfd_(pidfd), cpu_(cpu_seconds), deadline_(deadline) {}
   // False (and `timed_out()` true if so) when the child ended, broke off or ran out of time first.
   bool read(void* data, std::size_t bytes);
   template <class T>
@@ -82,6 +86,8 @@ class ChildInput {
   enum class Verdict { accepted, refused, broken };
   Verdict read_verdict(Error* refusal);
   bool timed_out() const { return timed_out_; }
+  // The channel was closed, or broke, under a read or a send (the child ended or closed its end).
+  bool closed() const { return closed_; }
   // Grants the child `cpu_seconds` more processor time, and four times that more wall-clock time:
   // for work whose size only the child's first answer tells (an image's texel count).
   void allow_more(double cpu_seconds);
@@ -94,10 +100,13 @@ class ChildInput {
 
   int fd_;
   int pid_;
-  double cpu_;       // processor seconds granted (the child's RLIMIT_CPU)
-  double deadline_;  // seconds on the monotonic clock
+  int pidfd_;           // readable once the child ended; -1: none (the kernel is asked instead)
+  bool ended_ = false;  // the child ended (seen through pidfd_ or waitid)
+  double cpu_;          // processor seconds granted (the child's RLIMIT_CPU)
+  double deadline_;     // seconds on the monotonic clock
   double wall_added_ = 0;
   bool timed_out_ = false;
+  bool closed_ = false;
 };
 
 struct IsolationLimits {
@@ -115,10 +124,16 @@ struct IsolationLimits {
 // Runs `child` in a forked process and `parent` on what it writes. `child` must not use threads
 // (only the forking thread exists in the child). The result is `parent`'s, unless the child was
 // killed by a signal, ran out of time, or exited otherwise than after `child` returned: then it is
-// an Error "<what> crashed on this input (signal N: name)", "<what> used more than S s of processor
-// time ...", "<what> took longer than S s ...", "<what> ran out of memory ..." or "<what> failed
-// ...". When `parent` fails because the child's answer broke off, the child's fate is the message.
-// Where fork is not possible the Error says so.
+// an Error "<what> crashed on this input (signal N: name)", "<what> was killed (signal N: name)"
+// (SIGKILL, SIGTERM, SIGINT or SIGHUP from outside: the kernel's out-of-memory killer, a user),
+// "<what> used more than S s of processor time ...", "<what> took longer than S s ...", "<what> ran
+// out of memory ..." or "<what> failed ...". When `parent` fails because the child's answer broke
+// off, the child's fate is the message. Where fork is not possible the Error says so.
+//
+// The child (like an IsolatedServer's program) leads a process group of its own. When it has ended
+// or is stopped, the whole group is killed with SIGKILL before the child is reaped: a process it
+// forked cannot outlive it, and one that holds the channel open does not keep the parent waiting
+// (a process that leaves the group, by setsid or setpgid, is beyond this).
 Status run_isolated(const std::string& what, const IsolationLimits& limits,
                     const std::function<void(ChildOutput&)>& child,
                     const std::function<Status(ChildInput&)>& parent);
@@ -153,9 +168,10 @@ class IsolatedServer {
   int pid() const { return pid_; }
 
  private:
-  IsolatedServer(int pid, int fd) : pid_(pid), fd_(fd) {}
+  IsolatedServer(int pid, int fd, int pidfd) : pid_(pid), fd_(fd), pidfd_(pidfd) {}
   int pid_;
   int fd_;
+  int pidfd_;  // see ChildInput
 };
 
 // Exit statuses of a child (or program) that could not finish its work, beside 0: out of memory

@@ -14,6 +14,7 @@
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
+#include <lightvol/core/text.h>
 #include <lightvol/depth/detail/image_file.h>
 
 namespace lightvol::detail {
@@ -161,7 +162,7 @@ Status check_exr_header(const std::string& path) {
     // OpenEXR's readers lose their place on these and then read text as sizes (fuzz findings:
     // 1.7 GB requested by a 515-byte file with a repeated attribute).
     if (name.size() > max_name)
-      return Error{where + "attribute name '" + name.substr(0, 40) + "' is longer than " +
+      return Error{where + "attribute name '" + utf8_prefix(name, 40) + "' is longer than " +
                    std::to_string(max_name) + " characters (corrupt)"};
     if (!names.insert(name).second)
       return Error{where + "attribute '" + name + "' appears twice (corrupt)"};
@@ -255,7 +256,7 @@ Status check_pfm_scale(const std::string& path, const std::string& magic) {
   char* end = nullptr;
   const double value = std::strtod(scale.c_str(), &end);
   if (scale.empty() || end != scale.c_str() + scale.size() || !std::isfinite(value) || value == 0)
-    return Error{path + ": PFM scale '" + scale.substr(0, 40) +
+    return Error{path + ": PFM scale '" + utf8_prefix(scale, 40) +
                  "' is not a finite non-zero number (its sign is the byte order, -1 for "
                  "little-endian; its magnitude multiplies the values)"};
   return {};

@@ -101,7 +101,9 @@ class GlbReader {
     };
     if (bytes_.size() < 20) return fail("shorter than its header");
     if (u32(4) != 2) return fail("version " + std::to_string(u32(4)) + ", not 2");
-    if (u32(8) > bytes_.size())
+    // Its length is the file's (glTF 2.0, "Binary glTF Layout"): fewer bytes are a truncated file,
+    // more are bytes after its last chunk, which are not silently dropped.
+    if (u32(8) != bytes_.size())
       return fail("header claims " + std::to_string(u32(8)) + " bytes, the file has " +
                   std::to_string(bytes_.size()));
     const std::size_t json_length = u32(12);

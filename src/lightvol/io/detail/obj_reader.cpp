@@ -6,6 +6,7 @@
 #include <string_view>
 #include <vector>
 
+#include <lightvol/core/text.h>
 #include <lightvol/io/detail/obj_reader.h>
 #include <lightvol/io/detail/text_numbers.h>
 
@@ -74,7 +75,7 @@ Result<Mesh> read_obj(const std::string& path) {
       for (float& c : xyz) {
         const std::string_view word = next_word(line, &at);
         if (word.empty())
-          return fail("expected a vertex 'v x y z', got '" + std::string(line.substr(0, 60)) + "'");
+          return fail("expected a vertex 'v x y z', got '" + utf8_prefix(line, 60) + "'");
         if (!parse_coordinate(word, &c)) return fail(not_a_coordinate(word));
       }
       mesh.positions.insert(mesh.positions.end(), xyz, xyz + 3);
@@ -85,8 +86,7 @@ Result<Mesh> read_obj(const std::string& path) {
            word = next_word(line, &at)) {
         long long v = 0;
         if (!parse_face_vertex(word, &v))
-          return fail("face vertex '" + std::string(word.substr(0, 40)) +
-                      "' is not v, v/t, v//n or v/t/n");
+          return fail("face vertex '" + utf8_prefix(word, 40) + "' is not v, v/t, v//n or v/t/n");
         if (v == 0 || v < -so_far)
           return fail("face " + std::to_string(faces) + " names vertex " + std::to_string(v) +
                       ", but there are " + std::to_string(so_far) + " before it");

@@ -22,6 +22,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include <lightvol/core/buffer.h>
+#include <lightvol/core/text.h>
 #include <lightvol/io/detail/ply_reader.h>
 #include <lightvol/io/detail/text_numbers.h>
 
@@ -85,7 +86,7 @@ std::vector<std::string_view> split(std::string_view line) {
   }
 }
 
-std::string quoted(std::string_view word) { return "'" + std::string(word.substr(0, 40)) + "'"; }
+std::string quoted(std::string_view word) { return "'" + utf8_prefix(word, 40) + "'"; }
 
 // The header: every line is one the format allows, every count fits in the bytes after it.
 // Long (over 80 lines) on purpose: one pass over the header's lines, a case per keyword, each with
@@ -738,6 +739,13 @@ Result<Mesh> read_binary(const std::string& path, std::uintmax_t size, const Hea
         return Error{path + ": " + bad};
     }
   }
+  // The last element ends the file: bytes after it are not silently dropped (they are a sign of a
+  // count that is too small, or of two files joined).
+  if (const std::uintmax_t after = bytes.left(); after > 0)
+    return Error{path + ": " + std::to_string(after) + (after == 1 ? " byte" : " bytes") +
+                 " after the last element ('" + header.elements.back().name +
+                 "'), from byte offset " + std::to_string(size - after) +
+                 " on: a binary PLY file ends with its last element"};
   return mesh.take();
 }
 
@@ -784,8 +792,8 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
         }
         if (!(value >= 0) || value > static_cast<double>(words.size() - at) ||
             value != std::floor(value))
-          return fail("a list of " + std::string(words[at - 1].substr(0, 20)) +
-                      " items on a line of " + std::to_string(words.size()) + " values");
+          return fail("a list of " + utf8_prefix(words[at - 1], 20) + " items on a line of " +
+                      std::to_string(words.size()) + " values");
         const auto items = static_cast<std::size_t>(value);
         if (p.role == Role::face) {
           face.resize(items);
@@ -802,14 +810,28 @@ Result<Mesh> read_ascii(const std::string& path, const Header& header) {
                     std::to_string(at) + ")");
     }
   }
+  // After the last element, only blank lines (whitespace).
+  while (std::getline(in, line)) {
+    ++number;
+    const std::size_t text = line.find_first_not_of(" \t\r\f\v");
+    if (text == std::string::npos) continue;
+    const std::size_t end = std::min(line.find_first_of(" \t\r\f\v", text), line.size());
+    return Error{path + ": PLY body line " + std::to_string(number) +
+                 ": text after the last element ('" + header.elements.back().name +
+                 "'): " + quoted(std::string_view(line).substr(text, end - text)) +
+                 "; an ASCII PLY file ends with its last element (blank lines aside)"};
+  }
+  if (in.bad()) return Error{path + ": cannot read: " + std::strerror(errno)};
   return mesh.take();
 }
 
 }  // namespace
 
-Result<Mesh> read_ply(const std::string& path, std::uintmax_t size) {
+Result<Mesh> read_ply(const std::string& path, std::uintmax_t size,
+                      const std::function<Status(std::uint64_t, std::uint64_t)>& budget) {
   Result<Header> header = read_header(path, size);
   if (!header) return header.error();
+  if (Status s = budget(header->vertices, header->faces); !s) return s.error();
   return header->encoding == Encoding::ascii ? read_ascii(path, *header)
                                              : read_binary(path, size, *header);
 }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include <lightvol/core/mesh.h>
@@ -18,7 +19,9 @@ namespace lightvol::detail {
 // is skipped. Elements may come in any order. ASCII files hold one element per line. Any header
 // the format does not allow, a count the file cannot hold, a short or long line, a face of fewer
 // than three vertices or naming a missing one, and a file that ends early are Errors naming the
-// file and the header line, body line or element.
-Result<Mesh> read_ply(const std::string& path, std::uintmax_t size);
+// file and the header line, body line or element. `budget(vertices, faces)` is asked, with the
+// header's counts, before anything is allocated; its Error is returned.
+Result<Mesh> read_ply(const std::string& path, std::uintmax_t size,
+                      const std::function<Status(std::uint64_t, std::uint64_t)>& budget);
 
 }  // namespace lightvol::detail

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include <lightvol/core/text.h>
 #include <lightvol/io/detail/stl_reader.h>
 #include <lightvol/io/detail/text_numbers.h>
 
@@ -78,7 +79,7 @@ Result<Mesh> read_stl_ascii(const std::string& path) {
     const std::string_view key = words[0];
     const auto unexpected = [&] {
       return fail("expected " + std::string(expected(state, corners)) + ", got '" +
-                  std::string(key.substr(0, 40)) + "'");
+                  utf8_prefix(key, 40) + "'");
     };
     if (is_keyword(key, "solid")) {
       if (state != State::outside) return unexpected();

@@ -11,6 +11,8 @@
 #include <string_view>
 #include <system_error>
 
+#include <lightvol/core/text.h>
+
 namespace lightvol::detail {
 
 // A number spanning all of `word`: decimal, optionally scientific, with an optional sign ("+1.5"
@@ -36,7 +38,7 @@ inline bool parse_coordinate(std::string_view word, float* value) {
 
 // What is wrong with a word parse_coordinate refused, quoting at most 40 bytes of it.
 inline std::string not_a_coordinate(std::string_view word) {
-  return "'" + std::string(word.substr(0, 40)) +
+  return "'" + utf8_prefix(word, 40) +
          "' is not a coordinate (a finite number within a float's range)";
 }
 
