@@ -437,11 +437,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   eo.draco = o.draco;
   eo.draco_bits = o.draco_bits;
   if (!o.no_check) eo.light = &frame_light;  // a lossy encoding must stay sound seen from the light
-  // A GLB carries its light, in the volume's frame: in light space the light's eye space is the
-  // frame itself (omni: world axes at the light), so its view is the identity.
-  Light glb_light = frame_light;
-  if (options.space == Space::light) glb_light.view = Mat4d::identity();
-  eo.glb.light = &glb_light;
+  eo.glb.light = &frame_light;               // a GLB carries its light, in the volume's frame
   eo.glb.medium_json = *medium;
   const VolumeSummary summary = summary_of(*mesh);
   Result<nlohmann::json> report = write_outputs(

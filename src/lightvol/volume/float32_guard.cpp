@@ -15,12 +15,12 @@ namespace lightvol {
 namespace detail {
 
 GuardLight guard_light(const Light& light, Space space) {
+  const Light frame = light_in_space(light, space);
   GuardLight g;
   g.type = light.type;
-  const bool world = space == Space::world;
-  g.position = world ? light.position : Vec3d{0, 0, 0};
+  g.position = frame.position;
   if (light.type == LightType::directional) {
-    g.f = normalize(world ? light.direction : Vec3d{0, 0, -1});
+    g.f = normalize(frame.direction);
     g.near_origin = g.position + light.near * g.f;
   }
   g.at_light = 4 * std::ldexp(std::max({std::abs(g.position.x), std::abs(g.position.y),
