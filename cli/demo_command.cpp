@@ -19,6 +19,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/scene.h>

@@ -11,6 +11,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/io/mesh_reader.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/reference.h>

@@ -5,12 +5,12 @@
 #include <string>
 #include <vector>
 
-#include <lightvol/airlight/airlight.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/scene/depth_passes.h>
 #include <lightvol/scene/scene.h>

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 
 #include "support/test_support.h"
