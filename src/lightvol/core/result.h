@@ -66,7 +66,14 @@ class [[nodiscard]] Status {
 
   bool ok() const { return !error_.has_value(); }
   explicit operator bool() const { return ok(); }
-  const Error& error() const { return *error_; }
+  // Accessing the error of a success is a broken invariant and aborts, as Result::error() does.
+  const Error& error() const {
+    if (ok()) {
+      std::fprintf(stderr, "lightvol: internal error: error() on a successful Status\n");
+      std::abort();
+    }
+    return *error_;
+  }
 
  private:
   std::optional<Error> error_;
