@@ -18,6 +18,7 @@ namespace {
 // them here. The library's tests assert that its messages use these names.
 constexpr std::pair<std::string_view, std::string_view> kParameterFlags[] = {
     {"DepthReadOptions::channel", "--channel"},
+    {"VolumeOptions::space = Space::light", "--space light"},
     {"ExportOptions::draco_bits", "--draco-bits"},
     {"CheckOptions::cgal_with_light", "--cgal"},
     {"set_memory_budget()", "--max-memory"},

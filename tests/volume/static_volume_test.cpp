@@ -171,6 +171,10 @@ TEST(StaticVolume, BuildVolumeRefusesWhatFloat32CannotHold) {
             std::string::npos)
       << far_away.error().message;
   EXPECT_NE(far_away.error().message.find("key 'position'"), std::string::npos);
+  // The library names its own parameter (the CLI says --space light).
+  EXPECT_NE(far_away.error().message.find("with VolumeOptions::space = Space::light and place it"),
+            std::string::npos)
+      << far_away.error().message;
   const Result<Mesh> needle =
       build_volume(spot("[0, 10, 0]", "1e-6"), ShadowMaps::planar(depth, "d.exr"), options);
   ASSERT_FALSE(needle.ok());

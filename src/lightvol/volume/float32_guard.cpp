@@ -136,8 +136,8 @@ Status representable_verdict(const VertexTally& vertices, const FaceTally& faces
   if (space == Space::world && largest > 100 * size)
     return Error{what + ": key 'position': the light is far from the origin for the volume's " +
                  "size " + shown(size) +
-                 "; write it in the light's eye space with --space light and place it with the "
-                 "light's view matrix"};
+                 "; write it in the light's eye space with VolumeOptions::space = Space::light "
+                 "and place it with the light's view matrix"};
   return Error{what + ": " + frustum_keys(light) +
                ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
                "near and far closer"};

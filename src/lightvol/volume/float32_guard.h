@@ -20,12 +20,12 @@ namespace lightvol {
 // against a texel's angle; directional: against a texel's width in the ortho extents). That
 // refuses a spot far from the origin or a needle of a frustum, but not a thin, wide box. Lights
 // whose volumes cannot be represented are valid lights: the Error says which keys of
-// `light_source` are to blame and what to do (far from the origin: --space light; a frustum too
-// thin, too large, or with far/near beyond what the precision holds: the keys to change).
-// Every public builder runs it on the volume it returns (build_static_volume, build_omni_volume,
-// build_adaptive_volume, build_adaptive_omni_volume, and so build_volume), StaticVolumeStream on
-// the volume it streams (the same verdict and message); it never writes NaN. Two parallel passes:
-// the vertices, then the faces.
+// `light_source` are to blame and what to do (far from the origin: VolumeOptions::space =
+// Space::light; a frustum too thin, too large, or with far/near beyond what the precision holds:
+// the keys to change). Every public builder runs it on the volume it returns (build_static_volume,
+// build_omni_volume, build_adaptive_volume, build_adaptive_omni_volume, and so build_volume),
+// StaticVolumeStream on the volume it streams (the same verdict and message); it never writes NaN.
+// Two parallel passes: the vertices, then the faces.
 Status check_representable(const Mesh& mesh, const Light& light, Space space,
                            const std::string& light_source);
 
