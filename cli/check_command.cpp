@@ -117,13 +117,13 @@ int run_check(const CheckCommandOptions& o) {
   Light light;
   if (!o.light_path.empty()) {
     Result<Light> loaded = load_light(o.light_path);
-    if (!loaded) return fail(loaded.error().message);
+    if (!loaded) return fail(loaded.error());
     light = *loaded;
   }
   progress.begin("reading " + o.mesh_path);
   double quantization_step = 0;
   Result<Mesh> mesh = read_mesh(o.mesh_path, &quantization_step);
-  if (!mesh) return fail(mesh.error().message);
+  if (!mesh) return fail(mesh.error());
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
   progress.begin("checking");
@@ -141,8 +141,9 @@ int run_check(const CheckCommandOptions& o) {
     print_table(o, report);
   }
   if (report.valid()) return 0;
-  if (o.quiet) return invalid(o.mesh_path + ": invalid: " + report.first_failure());
-  return 1;
+  if (o.quiet)
+    return fail(Error{o.mesh_path + ": invalid: " + report.first_failure(), ErrorKind::unsound});
+  return exit_code(ErrorKind::unsound);
 }
 
 }  // namespace

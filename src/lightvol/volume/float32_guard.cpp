@@ -65,21 +65,24 @@ Status vertex_verdict(const VertexTally& vertices, const Light& light,
   constexpr double kLargest = 1e18;  // squares stay below float's 3.4e38
   if (!vertices.finite)
     return Error{light_source + ": " + frustum_keys(light) +
-                 ": the volume's vertices are not finite numbers (near " + shown(light.near) +
-                 ", far " + shown(light.far) +
-                 ": more than double precision holds); bring far closer to near"};
+                     ": the volume's vertices are not finite numbers (near " + shown(light.near) +
+                     ", far " + shown(light.far) +
+                     ": more than double precision holds); bring far closer to near",
+                 ErrorKind::unrepresentable};
   if (vertices.largest > kLargest)
     return Error{light_source + ": " + frustum_keys(light) + ": the volume reaches coordinate " +
-                 shown(vertices.largest) + "; float32 meshes need coordinates below " +
-                 shown(kLargest) + " (choose the scene's units so that the frustum is smaller)"};
+                     shown(vertices.largest) + "; float32 meshes need coordinates below " +
+                     shown(kLargest) + " (choose the scene's units so that the frustum is smaller)",
+                 ErrorKind::unrepresentable};
   const Vec3d span = vertices.hi - vertices.lo;
   const double across = std::max({span.x, span.y, span.z});
   // The checks form areas and volumes in float: a volume smaller than this underflows them.
   constexpr double kSmallest = 1e-12;
   if (across < kSmallest)
     return Error{light_source + ": " + frustum_keys(light) + ": the volume is " + shown(across) +
-                 " across; float32 meshes and their checks need at least " + shown(kSmallest) +
-                 " (choose the scene's units, or near and far, so that it is larger)"};
+                     " across; float32 meshes and their checks need at least " + shown(kSmallest) +
+                     " (choose the scene's units, or near and far, so that it is larger)",
+                 ErrorKind::unrepresentable};
   return {};
 }
 
@@ -129,18 +132,24 @@ Status representable_verdict(const VertexTally& vertices, const FaceTally& faces
   // A directional light's volume begins `near` from its position, in either frame: far for the
   // volume's size, only moving the position closer helps.
   if (light.type == LightType::directional && light.near > 100 * size)
-    return Error{what + ": keys 'position' and 'near': the volume begins " + shown(light.near) +
-                 " from the light's position, far for its size " + shown(size) +
-                 "; move the position along the light's direction towards the volume and reduce "
-                 "near and far by as much"};
+    return Error{
+        what + ": keys 'position' and 'near': the volume begins " + shown(light.near) +
+            " from the light's position, far for its size " + shown(size) +
+            "; move the position along the light's direction towards the volume and reduce "
+            "near and far by as much",
+        ErrorKind::unrepresentable};
   if (space == Space::world && largest > 100 * size)
-    return Error{what + ": key 'position': the light is far from the origin for the volume's " +
-                 "size " + shown(size) +
-                 "; write it in the light's eye space with VolumeOptions::space = Space::light "
-                 "and place it with the light's view matrix"};
-  return Error{what + ": " + frustum_keys(light) +
-               ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
-               "near and far closer"};
+    return Error{
+        what + ": key 'position': the light is far from the origin for the volume's size " +
+            shown(size) +
+            "; write it in the light's eye space with VolumeOptions::space = Space::light and "
+            "place it with the light's view matrix",
+        ErrorKind::unrepresentable};
+  return Error{
+      what + ": " + frustum_keys(light) +
+          ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
+          "near and far closer",
+      ErrorKind::unrepresentable};
 }
 
 }  // namespace detail
