@@ -221,7 +221,8 @@ void write_streamed(const BuildCommandOptions& o, const Light& light, const Shad
       },
       hooks);
   if (!report) {
-    r.exit_code = 2;
+    r.exit_code = exit_code(report.error().kind);
+    r.kind = report.error().kind;
     r.error = report.error().message;
     return;
   }
@@ -237,8 +238,7 @@ int run_build(const BuildCommandOptions& o) {
   if (!o.quiet)
     for (const std::string& w : r.warnings)
       std::fprintf(stderr, "lightvol: warning: %s\n", printable(w).c_str());
-  if (r.exit_code == 1) return invalid(r.error);
-  if (r.exit_code != 0) return fail(r.error);
+  if (r.exit_code != 0) return fail(Error{r.error, r.kind});
   if (o.json) {
     std::printf("%s\n", json_text(r.report, 2).c_str());
   } else if (!o.quiet) {
@@ -325,9 +325,10 @@ nlohmann::json output_options_json(const BuildCommandOptions& o) {
 BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
                              const BuildJobHooks& hooks) {
   BuildJobResult r;
-  auto failed = [&r](int code, std::string message) {
-    r.exit_code = code;
-    r.error = std::move(message);
+  auto failed = [&r](Error error) {
+    r.exit_code = exit_code(error.kind);
+    r.kind = error.kind;
+    r.error = std::move(error.message);
     return r;
   };
   // A NUL would end a path early, a line break split a message: no path may hold either.
@@ -338,7 +339,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   for (const std::string& p : o.depth_paths) paths.emplace_back("depth input", p);
   for (const auto& [flag, path] : paths)
     if (const std::string where = control_character_in(path); !where.empty())
-      return failed(2, flag + ": " + where + " in the path; paths may not hold one");
+      return failed(Error{flag + ": " + where + " in the path; paths may not hold one"});
   // No output may replace an input (compared by identity: the same inode, or the same new path).
   std::vector<std::pair<std::string, std::string>> inputs = {{"--light", o.light_path},
                                                              {"--medium", o.medium_path}};
@@ -353,26 +354,26 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
     const std::string identity = file_identity(out);
     for (const auto& [in_flag, in] : inputs)
       if (!in.empty() && file_identity(in) == identity)
-        return failed(2, out_flag + " " + out + ": is also the " + in_flag + " " + in +
-                             "; an output may not replace an input");
+        return failed(Error{out_flag + " " + out + ": is also the " + in_flag + " " + in +
+                            "; an output may not replace an input"});
   }
   Result<MeshFormat> format = mesh_format_from_path(o.out_path);
-  if (!format) return failed(2, format.error().message);
+  if (!format) return failed(format.error());
   if (const std::string conflict = conflicting_flags(o, *format); !conflict.empty())
-    return failed(2, conflict);
+    return failed(Error{conflict});
   const BuildVolumeOptions options = volume_options(o);
   const bool adaptive = options.grid == VolumeGrid::adaptive;
 
   progress.begin("reading " + o.light_path);
   Result<Light> light =
       hooks.light_text ? parse_light(*hooks.light_text, o.light_path) : load_light(o.light_path);
-  if (!light) return failed(2, light.error().message);
+  if (!light) return failed(light.error());
   progress.end();
   r.read_seconds += last_step_seconds(progress);
   Result<std::string> medium = o.medium_path.empty()
                                    ? Result<std::string>(std::string())
                                    : medium_json(o.medium_path, hooks.medium_text);
-  if (!medium) return failed(2, medium.error().message);
+  if (!medium) return failed(medium.error());
 
   const bool omni = light->type == LightType::omni;
   // A static volume written unchecked to PLY is streamed: built row by row into the file.
@@ -382,7 +383,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   read_options.channel = o.channel;
   read_options.memory = memory_mode(o, adaptive, streamed);
   Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, read_options);
-  if (!maps) return failed(2, maps.error().message);
+  if (!maps) return failed(maps.error());
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
   r.read_seconds += last_step_seconds(progress);
 
@@ -392,7 +393,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
     r.warnings.push_back(o.depth_paths.front() + ": " + note);
 
   if (hooks.after_read)
-    if (Status s = hooks.after_read(); !s) return failed(2, s.error().message);
+    if (Status s = hooks.after_read(); !s) return failed(s.error());
   if (hooks.before_build) {
     const auto waited_from = std::chrono::steady_clock::now();
     hooks.before_build(*maps, read_options.memory);
@@ -410,7 +411,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   AdaptiveReport adaptive_report;
   // A valid light whose volume float32 cannot hold is bad input (exit 2), not an invalid volume.
   Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
-  if (!mesh) return failed(2, mesh.error().message);
+  if (!mesh) return failed(mesh.error());
   progress.end(thousands(mesh->num_triangles()) + " triangles");
   r.build_seconds = last_step_seconds(progress);
 
@@ -420,8 +421,9 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
     progress.begin("checking");
     const CheckReport check = check_volume_linear(*mesh, &frame_light);
     if (!check.valid())
-      return failed(1, o.out_path + ": the built volume fails its checks, nothing written: " +
-                           check.first_failure());
+      return failed(Error{o.out_path + ": the built volume fails its checks, nothing written: " +
+                              check.first_failure(),
+                          ErrorKind::unsound});
     progress.end("valid");
     r.check_seconds = last_step_seconds(progress);
   }
@@ -431,11 +433,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
   eo.draco = o.draco;
   eo.draco_bits = o.draco_bits;
   if (!o.no_check) eo.light = &frame_light;  // a lossy encoding must stay sound seen from the light
-  // A GLB carries its light, in the volume's frame: in light space the light's eye space is the
-  // frame itself (omni: world axes at the light), so its view is the identity.
-  Light glb_light = frame_light;
-  if (options.space == Space::light) glb_light.view = Mat4d::identity();
-  eo.glb.light = &glb_light;
+  eo.glb.light = &frame_light;               // a GLB carries its light, in the volume's frame
   eo.glb.medium_json = *medium;
   const VolumeSummary summary = summary_of(*mesh);
   Result<nlohmann::json> report = write_outputs(
@@ -446,7 +444,7 @@ BuildJobResult run_build_job(const BuildCommandOptions& o, Progress& progress,
                             progress.log(), r.warnings, hooks.extra_report);
       },
       hooks);
-  if (!report) return failed(2, report.error().message);
+  if (!report) return failed(report.error());
   r.vertices = mesh->num_vertices();
   r.triangles = mesh->num_triangles();
   r.report = std::move(*report);

@@ -73,7 +73,8 @@ struct BuildJobHooks {
 
 // What one build run did.
 struct BuildJobResult {
-  int exit_code = 0;  // 0 written, 1 the volume fails its checks, 2 bad usage or input
+  int exit_code = 0;  // 0 written, else exit_code(kind): 1 the volume fails its checks, 2 others
+  ErrorKind kind = ErrorKind::bad_input;  // when exit_code != 0
   std::string error;  // the one-line message when exit_code != 0 (without "lightvol: ")
   std::vector<std::string> warnings;
   std::uint64_t vertices = 0, triangles = 0;

@@ -117,7 +117,7 @@ int run_check(const CheckCommandOptions& o) {
   Light light;
   if (!o.light_path.empty()) {
     Result<Light> loaded = load_light(o.light_path);
-    if (!loaded) return fail(loaded.error().message);
+    if (!loaded) return fail(loaded.error());
     light = *loaded;
   }
   CheckOptions options;
@@ -133,7 +133,7 @@ int run_check(const CheckCommandOptions& o) {
     return check_memory_bytes(vertices, triangles, !o.light_path.empty(), options);
   };
   Result<Mesh> mesh = read_mesh(o.mesh_path, &quantization_step, work);
-  if (!mesh) return fail(mesh.error().message);
+  if (!mesh) return fail(mesh.error());
   progress.end(thousands(mesh->num_triangles()) + " triangles");
 
   progress.begin("checking");
@@ -147,8 +147,9 @@ int run_check(const CheckCommandOptions& o) {
     print_table(o, report);
   }
   if (report.valid()) return 0;
-  if (o.quiet) return invalid(o.mesh_path + ": invalid: " + report.first_failure());
-  return 1;
+  if (o.quiet)
+    return fail(Error{o.mesh_path + ": invalid: " + report.first_failure(), ErrorKind::unsound});
+  return exit_code(ErrorKind::unsound);
 }
 
 }  // namespace

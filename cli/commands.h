@@ -7,6 +7,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <lightvol/core/result.h>
+
 namespace lightvol::cli {
 
 using Runner = std::function<int()>;
@@ -27,11 +29,15 @@ void add_render_command(CLI::App& app, Runner* run);
 // (--draco-bits, --max-memory, ...).
 std::string with_flags(std::string message);
 
-// Prints "lightvol: <message>" on stderr, one line (printable, with_flags), and returns 2 (bad
-// usage or input).
+// The exit code of an error of `kind`: 1 an unsound volume, 2 the other kinds. Defined once, in
+// main.cpp.
+int exit_code(ErrorKind kind);
+
+// Prints "lightvol: <message>" on stderr, one line (printable, with_flags), and returns its
+// kind's exit code.
+int fail(const Error& error);
+// The same for bad usage or input (exit 2).
 int fail(const std::string& message);
-// The same for an invalid volume: returns 1.
-int invalid(const std::string& message);
 
 // `text` safe for a terminal line: control characters (line breaks, escapes, NUL), which a
 // message may quote from a hostile file, are written as \xNN.

@@ -19,6 +19,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/export/export.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/scene.h>
@@ -312,7 +313,7 @@ int run_demo(const DemoOptions& o) {
   const std::string scene_path = data + "/sponza_crop.ply";
   progress.begin("reading " + scene_path);
   Result<DemoScene> scene = load_demo_scene(data, o.size);
-  if (!scene) return fail(scene.error().message);
+  if (!scene) return fail(scene.error());
   progress.end();
   const Light& light = scene->light;
   const Camera& camera = scene->camera;
@@ -323,10 +324,10 @@ int run_demo(const DemoOptions& o) {
       open_depth_passes(scene->mesh, scene_path, &why_not_gl);
   const bool gl = why_not_gl.empty();
   const Result<MapSize> size = shadow_map_size(light, o.size, data + "/sponza_demo_spot.json");
-  if (!size) return fail(size.error().message);
+  if (!size) return fail(size.error());
   progress.begin("shadow map");
   Result<RenderedPasses> shadow_pass = depth_pass(*passes, light, *size, out("shadow_map"));
-  if (!shadow_pass) return fail(shadow_pass.error().message);
+  if (!shadow_pass) return fail(shadow_pass.error());
   const ShadowMaps shadow = ShadowMaps::planar(shadow_pass->maps.image, "shadow_map.exr");
   summary.add("shadow map " + size_text(size->width, size->height), "shadow_map.exr",
               thousands(scene->mesh.num_triangles()) + " scene",
@@ -335,16 +336,16 @@ int run_demo(const DemoOptions& o) {
   progress.begin("camera depth");
   Result<RenderedPasses> camera_pass =
       depth_pass(*passes, camera.view, {camera.width, camera.height}, out("camera_depth"));
-  if (!camera_pass) return fail(camera_pass.error().message);
+  if (!camera_pass) return fail(camera_pass.error());
   summary.add("camera depth " + size_text(camera.width, camera.height), "camera_depth.exr", "", "");
 
   // ---- volumes ----------------------------------------------------------------------------------
   Result<std::vector<Volume>> volumes =
       build_volumes(light, shadow, o.max_error, o.out_dir, progress, summary);
-  if (!volumes) return fail(volumes.error().message);
+  if (!volumes) return fail(volumes.error());
   progress.begin("web viewer inputs");
   if (Status s = write_viewer_inputs(data, o.out_dir, scene->mesh, light, camera, *volumes); !s)
-    return fail(s.error().message);
+    return fail(s.error());
   summary.add("web viewer inputs", "volume_static.glb", "",
               "+ adaptive, scene, camera, medium, light");
   bool all_valid = true;
@@ -362,12 +363,12 @@ int run_demo(const DemoOptions& o) {
     const DepthImage& camera_depth = camera_pass->maps.image;
     Result<std::vector<double>> surface = surface_distances(
         camera, camera_depth.values, camera_depth.width, camera_depth.height, "camera_depth.exr");
-    if (!surface) return fail(surface.error().message);
+    if (!surface) return fail(surface.error());
     render_scene.surface = std::move(*surface);
     if (Status s = render_pictures(render_scene, *volumes, shadow, *shadow_pass, o.out_dir,
                                    progress, summary);
         !s)
-      return fail(s.error().message);
+      return fail(s.error());
   } else {
     summary.skipped("render", "no OpenGL (" + why_not_gl + ")");
   }
@@ -388,7 +389,8 @@ int run_demo(const DemoOptions& o) {
         "live.html?scene=/data/scene.glb&light=/data/light.json&medium=/data/"
         "medium.json&camera=/data/camera.json&animate=1\n",
         serve.string().c_str(), o.out_dir.c_str());
-  if (!all_valid) return fail("a demo volume failed its checks (see the table)");
+  if (!all_valid)
+    return fail(Error{"a demo volume failed its checks (see the table)", ErrorKind::unsound});
   return 0;
 }
 

@@ -18,6 +18,7 @@ namespace {
 // them here. The library's tests assert that its messages use these names.
 constexpr std::pair<std::string_view, std::string_view> kParameterFlags[] = {
     {"DepthReadOptions::channel", "--channel"},
+    {"VolumeOptions::space = Space::light", "--space light"},
     {"ExportOptions::draco_bits", "--draco-bits"},
     {"CheckOptions::cgal_with_light", "--cgal"},
     {"set_memory_budget()", "--max-memory"},
@@ -58,15 +59,16 @@ std::string json_text(const nlohmann::ordered_json& j, int indent) {
   return j.dump(indent, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
-int fail(const std::string& message) {
-  std::fprintf(stderr, "lightvol: %s\n", printable(with_flags(message)).c_str());
-  return 2;
+// The one place an error becomes an exit code (docs/design.md): 1 a volume that fails its checks,
+// 2 anything else (bad usage or input, a volume float32 cannot hold, a refused read or write).
+int exit_code(ErrorKind kind) { return kind == ErrorKind::unsound ? 1 : 2; }
+
+int fail(const Error& error) {
+  std::fprintf(stderr, "lightvol: %s\n", printable(with_flags(error.message)).c_str());
+  return exit_code(error.kind);
 }
 
-int invalid(const std::string& message) {
-  fail(message);
-  return 1;
-}
+int fail(const std::string& message) { return fail(Error{message}); }
 
 }  // namespace lightvol::cli
 

@@ -12,6 +12,7 @@
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/io/mesh_reader.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/reference.h>
@@ -227,12 +228,12 @@ int run_render(const RenderOptions& o) {
   if (const std::string conflict = conflicting_flags(o); !conflict.empty()) return fail(conflict);
 
   Result<RenderScene> scene = load_render_scene(o, progress);
-  if (!scene) return fail(scene.error().message);
+  if (!scene) return fail(scene.error());
   Mesh volume;
   if (needs_mesh(o)) {
     progress.begin("reading " + o.mesh_path);
     Result<Mesh> mesh = read_mesh(o.mesh_path);
-    if (!mesh) return fail(mesh.error().message);
+    if (!mesh) return fail(mesh.error());
     volume = std::move(*mesh);
     progress.end(thousands(volume.num_triangles()) + " triangles");
   }
@@ -241,12 +242,12 @@ int run_render(const RenderOptions& o) {
   std::string renderer_name;
   Result<Image> image = render_airlight(o, *scene, volume, progress, &frame_seconds,
                                         &generation_seconds, &renderer_name);
-  if (!image) return fail(image.error().message);
+  if (!image) return fail(image.error());
   // Surfaces of constant radiance `background` seen through the medium.
   if (o.composite) add_constant_surfaces(*scene, o.background, &*image);
 
   progress.begin("writing " + o.out_path);
-  if (Status s = write_image(o.out_path, *image, o.exposure); !s) return fail(s.error().message);
+  if (Status s = write_image(o.out_path, *image, o.exposure); !s) return fail(s.error());
   progress.end();
 
   double sum = 0, peak = 0;
@@ -265,7 +266,7 @@ int run_render(const RenderOptions& o) {
                 1e3 * median(generation_seconds), generation_seconds.size());
   if (o.compare_path.empty()) return 0;
   Result<Image> ref = read_image(o.compare_path);
-  if (!ref) return fail(ref.error().message);
+  if (!ref) return fail(ref.error());
   if (ref->width != image->width || ref->height != image->height)
     return fail(o.compare_path + ": image is " + size_text(ref->width, ref->height) +
                 ", the render is " + size_text(image->width, image->height));

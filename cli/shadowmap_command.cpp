@@ -5,12 +5,12 @@
 #include <string>
 #include <vector>
 
-#include <lightvol/airlight/airlight.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/depth/shadow_maps.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 #include <lightvol/scene/depth_passes.h>
 #include <lightvol/scene/scene.h>
@@ -75,13 +75,13 @@ Result<View> load_view(const ShadowmapOptions& o) {
 
 int run_shadowmap(const ShadowmapOptions& o) {
   Result<View> view = load_view(o);
-  if (!view) return fail(view.error().message);
+  if (!view) return fail(view.error());
   const MapSize size = view->size;
 
   Progress progress(o.quiet);
   progress.begin("reading " + o.scene_path);
   Result<Mesh> scene = load_scene(o.scene_path);
-  if (!scene) return fail(scene.error().message);
+  if (!scene) return fail(scene.error());
   progress.end(std::to_string(scene->num_triangles()) + " triangles");
 
   const int passes = pass_count(view->light);
@@ -97,20 +97,20 @@ int run_shadowmap(const ShadowmapOptions& o) {
     renderer = std::move(*gl);
   }
   Result<RenderedPasses> rendered = render_passes(*renderer, view->light, size);
-  if (!rendered) return fail(rendered.error().message);
+  if (!rendered) return fail(rendered.error());
   progress.end();
 
   progress.begin("writing " + o.out_path);
   OutputTransaction outputs;  // the faces and the preview appear together, or none does
   Result<std::vector<std::string>> written = write_shadow_maps(o.out_path, rendered->maps);
-  if (!written) return fail(written.error().message);
+  if (!written) return fail(written.error());
   if (!o.preview_path.empty()) {
     if (Status s = write_depth_image(
             o.preview_path, depth_preview(view->light, size.width, size.height, rendered->window));
         !s)
-      return fail(s.error().message);
+      return fail(s.error());
   }
-  if (Status s = outputs.commit(); !s) return fail(s.error().message);
+  if (Status s = outputs.commit(); !s) return fail(s.error());
   progress.end();
 
   if (!o.quiet) {

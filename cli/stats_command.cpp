@@ -205,14 +205,14 @@ void print_table(const StatsOptions& o, const Light& light, const VolumeStats& s
 int run_stats(const StatsOptions& o) {
   if (o.json && o.csv) return fail("--json and --csv: choose one");
   Result<std::vector<double>> bounds = parse_bounds(o.max_errors);
-  if (!bounds) return fail(bounds.error().message);
+  if (!bounds) return fail(bounds.error());
   Result<std::vector<Tessellation>> tessellations = parse_tessellations(o.tessellations);
-  if (!tessellations) return fail(tessellations.error().message);
+  if (!tessellations) return fail(tessellations.error());
   Progress progress(o.quiet || o.json || o.csv);
 
   progress.begin("reading " + o.light_path);
   Result<Light> light = load_light(o.light_path);
-  if (!light) return fail(light.error().message);
+  if (!light) return fail(light.error());
   progress.end();
 
   const bool omni = light->type == LightType::omni;
@@ -221,13 +221,13 @@ int run_stats(const StatsOptions& o) {
   read_options.channel = o.channel;
   read_options.memory = BuildMemory::stats;  // the error pyramid, not a static volume
   Result<ShadowMaps> maps = read_shadow_maps(*light, o.depth_paths, read_options);
-  if (!maps) return fail(maps.error().message);
+  if (!maps) return fail(maps.error());
   progress.end(size_text(maps->width(), maps->height()) + (omni ? " x 6" : ""));
 
   progress.begin(omni ? "error pyramids" : "error pyramid");
   Result<VolumeStats> stats =
       VolumeStats::create(*light, *maps, o.space == "light" ? Space::light : Space::world);
-  if (!stats) return fail(stats.error().message);
+  if (!stats) return fail(stats.error());
   progress.end();
 
   Rows rows;

@@ -1,8 +1,9 @@
-// The static volume build alone (no file I/O), for the synthetic map at several sizes; the float32
-// guard (check_representable) on the held volume; the streamed volume (StaticVolumeStream, which
-// runs the guard as it goes) handed to sinks that keep nothing.
+// The static volume build (no file I/O; the float32 guard included), for the synthetic map at
+// several sizes; the float32 guard (check_representable) alone on the held volume; the streamed
+// volume (StaticVolumeStream, which runs the guard as it goes) handed to sinks that keep nothing.
 #include <benchmark/benchmark.h>
 
+#include <lightvol/volume/float32_guard.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "synthetic_scene.h"

@@ -205,7 +205,10 @@ TEST(DepthImage, AlphaOnlyImageIsRefusedUnlessNamed) {
     ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
     ASSERT_TRUE(out->close());
   }
-  expect_error(read_depth_image(path), "alpha.exr: its only channel, 'A', is alpha");
+  // The library names its own parameter (the CLI says --channel).
+  expect_error(read_depth_image(path),
+               "alpha.exr: its only channel, 'A', is alpha (coverage), not depth; to read it as "
+               "depth anyway, name it with DepthReadOptions::channel A");
   DepthReadOptions named;
   named.channel = "A";
   const Result<DepthImage> read = read_depth_image(path, named);

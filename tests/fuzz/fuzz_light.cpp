@@ -7,6 +7,7 @@
 
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/core/check.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 
 namespace {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 
 #include "support/test_support.h"
@@ -39,6 +40,31 @@ TEST(LightParse, Spot) {
   EXPECT_DOUBLE_EQ(l.position.y, 4);
   EXPECT_DOUBLE_EQ(l.direction.y, -1);
   EXPECT_TRUE(l.is_perspective());
+}
+
+// The light in a volume's frame: the world light itself, or in light space at the origin looking
+// down −Z (omni: world axes) with the identity view, which maps the light's eye (the origin) to
+// the origin and its axis to −Z.
+bool same(const Vec3d& a, const Vec3d& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+TEST(LightInSpace, WorldIsTheLightLightSpaceIsItsEye) {
+  const Light lights[] = {
+      test::light_from_json(obj(kSpot)), test::light_from_json(obj(kDir)),
+      test::light_from_json(R"({"type": "omni", "position": [1, 2, 3], "near": 0.1, "far": 9})")};
+  for (const Light& light : lights) {
+    SCOPED_TRACE(std::string(to_string(light.type)));
+    const Light world = light_in_space(light, Space::world);
+    EXPECT_TRUE(same(world.position, light.position));
+    EXPECT_TRUE(same(world.direction, light.direction));
+    EXPECT_TRUE(same(world.view.transform_point({5, 6, 7}), light.view.transform_point({5, 6, 7})));
+    const Light eye = light_in_space(light, Space::light);
+    EXPECT_TRUE(same(eye.position, {0, 0, 0}));
+    const Vec3d axis = light.type == LightType::omni ? light.direction : Vec3d{0, 0, -1};
+    EXPECT_TRUE(same(eye.direction, axis));
+    EXPECT_TRUE(same(eye.view.transform_point({5, 6, 7}), {5, 6, 7}));
+    EXPECT_EQ(eye.near, light.near);
+    EXPECT_EQ(eye.far, light.far);
+  }
 }
 
 TEST(LightParse, DirectionalDefaultsToWindowDepth) {

@@ -12,6 +12,7 @@
 
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/volume/build_volume.h>
+#include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -101,6 +102,34 @@ double chamfered_cube_volume(double d, int w) {
   const double seams = 12 * (2 * (d - e)) * (std::sqrt(2) * e) * ((2 * d - e) / std::sqrt(2)) / 3;
   const double corners = 8 * (std::sqrt(3) / 2 * e * e) * ((3 * d - 2 * e) / std::sqrt(3)) / 3;
   return faces + seams + corners;
+}
+
+// The float32 guard runs inside both omni builders, called directly: an omni light 10^6 from the
+// origin over a cube a few units across is refused in world space, naming the light and its key,
+// and built in light space.
+TEST(OmniVolume, BothBuildersRunTheFloat32Guard) {
+  const Light far_away = light_from_json(omni_json("linear", false, "[1e6, 10, 0]"));
+  const CubeFaces cube = bumpy_cube(16);
+  for (const Space space : {Space::world, Space::light}) {
+    VolumeOptions options;
+    options.space = space;
+    options.light_source = "o.json";
+    AdaptiveOptions adaptive;
+    adaptive.max_error = 0.01;
+    const Result<Mesh> results[] = {build_omni_volume(far_away, cube, options),
+                                    build_adaptive_omni_volume(far_away, cube, options, adaptive)};
+    for (const Result<Mesh>& m : results) {
+      if (space == Space::light) {
+        EXPECT_TRUE(m.ok()) << m.error().message;
+        continue;
+      }
+      ASSERT_FALSE(m.ok());
+      EXPECT_NE(m.error().message.find("o.json: float32 cannot hold this volume"),
+                std::string::npos)
+          << m.error().message;
+      EXPECT_NE(m.error().message.find("key 'position'"), std::string::npos);
+    }
+  }
 }
 
 TEST(OmniVolume, CountsAreExact) {

@@ -6,6 +6,8 @@
 #include <lightvol/check/check.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/build_volume.h>
+#include <lightvol/volume/detail/float32_guard.h>
+#include <lightvol/volume/float32_guard.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/test_support.h"
@@ -17,6 +19,13 @@ constexpr double kTan30 = 0.57735026918962576;
 
 Mesh build(const Light& light, const DepthImage& depth, Space space = Space::world) {
   Result<Mesh> m = build_static_volume(light, depth, {space}, "depth.exr");
+  EXPECT_TRUE(m.ok()) << (m.ok() ? "" : m.error().message);
+  return m.ok() ? std::move(*m) : Mesh{};
+}
+
+// The volume before the float32 guard (which refuses it), for the guard's tests.
+Mesh unguarded(const Light& light, const DepthImage& depth) {
+  Result<Mesh> m = detail::assemble_static_volume(light, depth, {}, "depth.exr");
   EXPECT_TRUE(m.ok()) << (m.ok() ? "" : m.error().message);
   return m.ok() ? std::move(*m) : Mesh{};
 }
@@ -162,6 +171,10 @@ TEST(StaticVolume, BuildVolumeRefusesWhatFloat32CannotHold) {
             std::string::npos)
       << far_away.error().message;
   EXPECT_NE(far_away.error().message.find("key 'position'"), std::string::npos);
+  // The library names its own parameter (the CLI says --space light).
+  EXPECT_NE(far_away.error().message.find("with VolumeOptions::space = Space::light and place it"),
+            std::string::npos)
+      << far_away.error().message;
   const Result<Mesh> needle =
       build_volume(spot("[0, 10, 0]", "1e-6"), ShadowMaps::planar(depth, "d.exr"), options);
   ASSERT_FALSE(needle.ok());
@@ -171,6 +184,28 @@ TEST(StaticVolume, BuildVolumeRefusesWhatFloat32CannotHold) {
   const Result<Mesh> in_light_space =
       build_volume(spot("[1e6, 10, 0]", "60"), ShadowMaps::planar(depth, "d.exr"), options);
   ASSERT_TRUE(in_light_space.ok()) << in_light_space.error().message;
+}
+
+// The guard runs inside the spot and directional builders, called directly (not only through
+// build_volume): static and adaptive refuse the far spot with the light's name and key.
+TEST(StaticVolume, BothBuildersRunTheFloat32Guard) {
+  const Light far_away = test::light_from_json(
+      R"({"type": "spot", "position": [1e6, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
+      R"( "fov_y_deg": 60, "near": 1, "far": 20, "depth": "linear"})");
+  const DepthImage depth = occluded(64, 64);
+  VolumeOptions options;
+  options.light_source = "l.json";
+  AdaptiveOptions adaptive;
+  adaptive.max_error = 0.01;
+  const Result<Mesh> results[] = {
+      build_static_volume(far_away, depth, options, "d.exr"),
+      build_adaptive_volume(far_away, depth, options, adaptive, "d.exr")};
+  for (const Result<Mesh>& m : results) {
+    ASSERT_FALSE(m.ok());
+    EXPECT_NE(m.error().message.find("l.json: float32 cannot hold this volume"), std::string::npos)
+        << m.error().message;
+    EXPECT_NE(m.error().message.find("key 'position'"), std::string::npos);
+  }
 }
 
 // The guard counts the faces the light proof would see turned towards the light: a sound volume
@@ -361,9 +396,14 @@ TEST(StaticVolumeStream, RefusesWhatTheHeldVolumeRefuses) {
       R"({"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0], "up": [0, 0, -1],)"
       R"( "fov_y_deg": 1e-6, "near": 1, "far": 20})");
   const DepthImage depth = occluded(64, 64);
-  const Mesh held = build(needle, depth);
+  const Mesh held = unguarded(needle, depth);
   const Status expected = check_representable(held, needle, Space::world, "needle.json");
   ASSERT_FALSE(expected.ok());
+  VolumeOptions named;
+  named.light_source = "needle.json";
+  const Result<Mesh> built = build_static_volume(needle, depth, named, "depth.exr");
+  ASSERT_FALSE(built.ok());
+  EXPECT_EQ(built.error().message, expected.error().message);
   StaticVolumeStream stream(needle, depth, {}, "depth.exr", "needle.json");
   const Streamed s = collect(stream);
   ASSERT_FALSE(s.status.ok());
@@ -419,7 +459,7 @@ TEST(StaticVolumeStream, JudgedAsTheHeldVolumeIs) {
   for (const Case& c : cases) {
     SCOPED_TRACE(std::to_string(c.depth.width) + "x" + std::to_string(c.depth.height) + " " +
                  c.refusal);
-    const Mesh held = build(c.light, c.depth);
+    const Mesh held = unguarded(c.light, c.depth);
     const Status expected = check_representable(held, c.light, Space::world, "l.json");
     const CheckReport report = check_volume_linear(held, &c.light);
     EXPECT_EQ(report.valid(), !c.checks_refuse) << report.first_failure();
@@ -449,7 +489,7 @@ TEST(StaticVolumeStream, RefusesBeforeAnyPositionWhenTheVerticesDecide) {
       R"({"type": "directional", "position": [0, 10, 0], "direction": [0, -1, 0],)"
       R"( "up": [0, 0, -1], "ortho": [-1e30, 1e30, -1e30, 1e30], "near": 0, "far": 20})");
   const DepthImage depth = occluded(300, 200);
-  const Status expected = check_representable(build(huge, depth), huge, Space::world, "l.json");
+  const Status expected = check_representable(unguarded(huge, depth), huge, Space::world, "l.json");
   ASSERT_FALSE(expected.ok());
   EXPECT_NE(expected.error().message.find("l.json: keys 'ortho', 'near' and 'far': the volume "
                                           "reaches coordinate"),

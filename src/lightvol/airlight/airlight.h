@@ -1,5 +1,5 @@
 // Single-scattering airlight in a homogeneous medium (docs/design.md §6), in double precision, and
-// the medium and camera descriptions that `lightvol render` reads.
+// the medium description that `lightvol render` reads (its camera: light/camera.h).
 //
 // A ray leaves the eye E along the unit direction ω; La(0, t) is the light scattered toward the eye
 // from its first t world units. Summed with signs over a light volume's fragments along the ray
@@ -15,6 +15,7 @@
 #include <lightvol/airlight/density.h>
 #include <lightvol/core/math.h>
 #include <lightvol/core/result.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 
 namespace lightvol {
@@ -70,35 +71,6 @@ struct Medium {
 // [1, 16], gain outside [0, 1], a negative offset or scale.
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source);
 Result<Medium> load_medium(const std::string& path);
-
-// ---- camera -------------------------------------------------------------------------------------
-
-// A camera is a light description (docs/design.md §2, "type" defaults to "spot"; a directional type
-// gives an orthographic camera) plus the image size. Its "depth" key is the encoding of the camera
-// depth image that `lightvol render --depth` reads.
-struct Camera {
-  Light view;  // position, direction, projection, near/far, depth encoding, flip_y
-  int width = 0;
-  int height = 0;
-};
-
-// Errors name `source` and the key: missing or non-integer "width"/"height" (1..16384), omni
-// cameras, and everything parse_light rejects.
-Result<Camera> parse_camera(std::string_view json_text, const std::string& source);
-Result<Camera> load_camera(const std::string& path);
-
-// A world-space ray through the centre of pixel (col, row) (first row = top unless flip_y).
-struct Ray {
-  Vec3d origin;     // perspective: the eye; orthographic: the pixel's point on the near plane
-  Vec3d direction;  // unit
-};
-Ray pixel_ray(const Camera& camera, int col, int row);
-
-// Distance along each pixel's ray to the visible surface, from the camera's depth image (its size
-// must be the camera's). Depths at or beyond the far plane ("nothing hit") give +infinity. The
-// result is row-major, first row first. Errors name `source` and the size mismatch.
-Result<std::vector<double>> surface_distances(const Camera& camera, const std::vector<float>& depth,
-                                              int width, int height, const std::string& source);
 
 // ---- airlight -----------------------------------------------------------------------------------
 

@@ -122,10 +122,6 @@ struct CheckOptions {
 CheckReport check_volume_linear(const Mesh& mesh, const Light* light, int max_offenders = 5,
                                 double quantization_step = 0);
 
-// The light in a volume's output frame, for checking a volume built with `space`: unchanged for
-// world space; in light space at the origin, looking down −Z (omni: world axes at the origin).
-Light light_in_space(const Light& light, Space space);
-
 // Everything: the linear checks, then CGAL (Polygon Mesh Processing, exact predicates) for
 // self-intersections and bounds-a-volume when there is no light or `cgal_with_light`. CGAL needs
 // an edge-manifold, consistently oriented mesh (bounds-a-volume also a closed one without

@@ -370,13 +370,4 @@ CheckResult nesting_check_directional(const Mesh& mesh, const LightView& view,
 
 }  // namespace detail
 
-Light light_in_space(const Light& light, Space space) {
-  if (space == Space::world) return light;
-  Light out = light;
-  out.position = {0, 0, 0};
-  // Omni light space keeps world axes; spot and directional look down their eye space's −Z.
-  if (light.type != LightType::omni) out.direction = {0, 0, -1};
-  return out;
-}
-
 }  // namespace lightvol

@@ -199,11 +199,12 @@ Result<std::pair<std::string, int>> create_temporary(const std::string& path, co
     const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
     if (fd >= 0) return std::make_pair(temp, fd);
     if (errno != EEXIST)
-      return Error{path + ": cannot create a file in " + dir.string() + ": " +
-                   std::strerror(errno)};
+      return Error{path + ": cannot create a file in " + dir.string() + ": " + std::strerror(errno),
+                   ErrorKind::io};
   }
-  return Error{path + ": cannot create a temporary file in " + dir.string() +
-               ": every name tried exists"};
+  return Error{
+      path + ": cannot create a temporary file in " + dir.string() + ": every name tried exists",
+      ErrorKind::io};
 }
 
 // Where an output goes: a file (a temporary beside it is renamed onto it; a symlink is followed
@@ -220,13 +221,16 @@ Result<Destination> destination_of(const std::string& path) {
   d.identity = file_identity(path);
   if (const int named = named_descriptor(path); named >= 0) {
     const int flags = ::fcntl(named, F_GETFL);
-    if (flags < 0) return Error{path + ": descriptor " + std::to_string(named) + " is not open"};
+    if (flags < 0)
+      return Error{path + ": descriptor " + std::to_string(named) + " is not open", ErrorKind::io};
     if ((flags & O_ACCMODE) == O_RDONLY)
-      return Error{path + ": descriptor " + std::to_string(named) + " is not open for writing"};
+      return Error{path + ": descriptor " + std::to_string(named) + " is not open for writing",
+                   ErrorKind::io};
     d.fd = ::fcntl(named, F_DUPFD_CLOEXEC, 3);
     if (d.fd < 0)
-      return Error{path + ": cannot use descriptor " + std::to_string(named) + ": " +
-                   std::strerror(errno)};
+      return Error{
+          path + ": cannot use descriptor " + std::to_string(named) + ": " + std::strerror(errno),
+          ErrorKind::io};
     return d;
   }
   Result<std::string> followed = follow_links(path);
@@ -238,20 +242,23 @@ Result<Destination> destination_of(const std::string& path) {
     std::error_code ec;
     const fs::path dir = directory_of(d.target);
     if (!fs::is_directory(dir, ec))
-      return Error{path + ": directory " + dir.string() + " does not exist"};
+      return Error{path + ": directory " + dir.string() + " does not exist", ErrorKind::io};
     return d;
   }
   if (S_ISREG(st.st_mode)) return d;
-  if (S_ISDIR(st.st_mode)) return Error{path + ": is a directory"};
+  if (S_ISDIR(st.st_mode)) return Error{path + ": is a directory", ErrorKind::io};
   if (S_ISCHR(st.st_mode) || S_ISFIFO(st.st_mode)) {
     // A device or a pipe is written through: renaming a file over it would replace it.
     d.fd = ::open(d.target.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY);
-    if (d.fd < 0) return Error{path + ": cannot open for writing: " + std::strerror(errno)};
+    if (d.fd < 0)
+      return Error{path + ": cannot open for writing: " + std::strerror(errno), ErrorKind::io};
     d.target.clear();
     return d;
   }
-  return Error{path + ": is " + (S_ISSOCK(st.st_mode) ? "a socket" : "a block device") +
-               "; outputs are written to files, character devices, pipes or standard output (-)"};
+  return Error{
+      path + ": is " + (S_ISSOCK(st.st_mode) ? "a socket" : "a block device") +
+          "; outputs are written to files, character devices, pipes or standard output (-)",
+      ErrorKind::io};
 }
 
 // Writes all of `bytes` to `fd` (after what the program printed: fd may be standard output).
@@ -273,19 +280,21 @@ Status copy_spool(const std::string& path, const std::string& spool, int fd) {
   const int in = ::open(spool.c_str(), O_RDONLY | O_CLOEXEC);
   ::unlink(spool.c_str());  // nothing left behind, whatever happens while copying
   if (in < 0)
-    return Error{path + ": cannot read back the finished output: " + std::strerror(errno)};
+    return Error{path + ": cannot read back the finished output: " + std::strerror(errno),
+                 ErrorKind::io};
   std::vector<char> buffer(1 << 20);
   Status status;
   for (;;) {
     const ssize_t n = ::read(in, buffer.data(), buffer.size());
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) {
-      status = Error{path + ": cannot read back the finished output: " + std::strerror(errno)};
+      status = Error{path + ": cannot read back the finished output: " + std::strerror(errno),
+                     ErrorKind::io};
       break;
     }
     if (n == 0) break;
     if (!write_all(fd, buffer.data(), static_cast<std::size_t>(n))) {
-      status = Error{path + ": write failed: " + std::strerror(errno)};
+      status = Error{path + ": write failed: " + std::strerror(errno), ErrorKind::io};
       break;
     }
   }
@@ -328,7 +337,7 @@ Status write_through(OutputTransaction::Impl::Staged& s) {
     unregister_temporary(s.slot);
     s.temp.clear();
   } else if (!write_all(s.fd, s.bytes.data(), s.bytes.size())) {
-    status = Error{s.target + ": write failed: " + std::strerror(errno)};
+    status = Error{s.target + ": write failed: " + std::strerror(errno), ErrorKind::io};
   }
   ::close(s.fd);
   s.fd = -1;
@@ -408,7 +417,7 @@ Status OutputTransaction::commit_files() {
     staged.erase(staged.begin(), staged.begin() + static_cast<std::ptrdiff_t>(i));
     impl_->discard();
     drop_backups();
-    return Error{why};
+    return Error{why, ErrorKind::io};
   }
   for (std::size_t i = 0; i < files; ++i) unregister_temporary(staged[i].slot);
   staged.erase(staged.begin(), staged.begin() + static_cast<std::ptrdiff_t>(files));
@@ -438,7 +447,8 @@ Status write_output(const std::string& path,
     for (const OutputTransaction::Impl::Staged& s : t_transaction->staged)
       if (s.identity == d.identity)
         return Error{path + ": is also " + (s.target == path ? "another" : s.target + ", another") +
-                     " output of this run; give each output its own file"};
+                         " output of this run; give each output its own file",
+                     ErrorKind::io};
 
   if (stream && bytes) {
     if (t_transaction) {
@@ -447,18 +457,18 @@ Status write_output(const std::string& path,
       return {};
     }
     if (!write_all(d.fd, bytes->data(), bytes->size()))
-      return Error{path + ": write failed: " + std::strerror(errno)};
+      return Error{path + ": write failed: " + std::strerror(errno), ErrorKind::io};
     return {};
   }
 
   const fs::path target(stream ? path : d.target);
   std::error_code ec;
   const fs::path dir = stream ? fs::temp_directory_path(ec) : directory_of(target);
-  if (ec) return Error{path + ": no folder for a temporary file: " + ec.message()};
+  if (ec) return Error{path + ": no folder for a temporary file: " + ec.message(), ErrorKind::io};
   install_signal_cleanup();
   remove_stale_temporaries(dir);
   int slot = -1;
-  Result<std::pair<std::string, int>> created = Error{""};
+  Result<std::pair<std::string, int>> created = Error{"", ErrorKind::io};
   {
     // A signal between creating the file and registering it would leave it behind.
     SignalDefer defer;
@@ -475,30 +485,34 @@ Status write_output(const std::string& path,
 
   Status status;
   try {
-    status = bytes ? (write_all(fd, bytes->data(), bytes->size())
-                          ? Status{}
-                          : Status{Error{path + ": write failed: " + std::strerror(errno)}})
-                   : write(temp);
+    status =
+        bytes
+            ? (write_all(fd, bytes->data(), bytes->size())
+                   ? Status{}
+                   : Status{Error{path + ": write failed: " + std::strerror(errno), ErrorKind::io}})
+            : write(temp);
   } catch (const std::bad_alloc&) {
-    status = Error{path + ": out of memory while writing"};
+    status = Error{path + ": out of memory while writing", ErrorKind::io};
   } catch (const std::exception& e) {
-    status = Error{path + ": " + e.what()};
+    status = Error{path + ": " + e.what(), ErrorKind::io};
   }
   if (status.ok()) {
     // The writer opened the file by name: it must still be the file created above.
     struct stat mine {
     }, now{};
     if (::fstat(fd, &mine) != 0 || ::lstat(temp.c_str(), &now) != 0 || !S_ISREG(now.st_mode))
-      status = Error{path + ": the writer produced no file"};
+      status = Error{path + ": the writer produced no file", ErrorKind::io};
     else if (mine.st_dev != now.st_dev || mine.st_ino != now.st_ino)
-      status = Error{path + ": the temporary file " + temp + " was replaced while writing"};
+      status = Error{path + ": the temporary file " + temp + " was replaced while writing",
+                     ErrorKind::io};
   }
   if (status.ok() && !stream) {
     // Replacing a file keeps its permission bits.
     struct stat old {};
     if (::stat(d.target.c_str(), &old) == 0 && S_ISREG(old.st_mode) &&
         ::fchmod(fd, old.st_mode & 07777) != 0)
-      status = Error{path + ": cannot keep the file's mode: " + std::strerror(errno)};
+      status =
+          Error{path + ": cannot keep the file's mode: " + std::strerror(errno), ErrorKind::io};
   }
   if (!status.ok()) {
     remove_temp();
@@ -521,7 +535,7 @@ Status write_output(const std::string& path,
     const std::string why = std::strerror(errno);
     ::unlink(temp.c_str());
     unregister_temporary(slot);
-    return Error{path + ": cannot move the finished file into place: " + why};
+    return Error{path + ": cannot move the finished file into place: " + why, ErrorKind::io};
   }
   unregister_temporary(slot);
   return {};

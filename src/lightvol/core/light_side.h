@@ -1,6 +1,6 @@
 // Which side of a face a light sees, beyond what float rounding of its corners could change: the
 // test the proof from the light (check/light_proof.cpp) makes of every face, and the float32 guard
-// (volume/static_volume.cpp) of the faces it cannot settle more cheaply. Both judge a face with
+// (volume/float32_guard.cpp) of the faces it cannot settle more cheaply. Both judge a face with
 // the motion of its own corners (corner_motion): nothing else in the mesh widens it.
 #pragma once
 

@@ -2,8 +2,9 @@
 //
 // A bad file, a bad key in a JSON file, a broken mesh: these are results, not crashes. Every
 // message names what the user must fix ("light.json: key 'fov_y_deg': must lie in (0, 180), got
-// 190"); the CLI prints it as "lightvol: <message>" and exits 2. Broken internal invariants are
-// not Results: they are LV_CHECKs (core/check.h) that stop loudly.
+// 190"); the CLI prints it as "lightvol: <message>" and exits with its kind's code (cli/main.cpp:
+// 1 for an unsound volume, 2 for the others). Broken internal invariants are not Results: they
+// are LV_CHECKs (core/check.h) that stop loudly.
 #pragma once
 
 #include <cstdio>
@@ -15,8 +16,17 @@
 
 namespace lightvol {
 
+// What kind of failure an Error is: what the caller may do about it.
+enum class ErrorKind {
+  bad_input,        // a file, key or parameter to fix (the default)
+  unsound,          // a volume that fails its checks (check_volume, or a build refusing one)
+  unrepresentable,  // a valid light whose volume float32 cannot hold (volume/float32_guard.h)
+  io,               // the system refused a read or write (disk full, permissions, descriptors)
+};
+
 struct Error {
   std::string message;
+  ErrorKind kind = ErrorKind::bad_input;
 };
 
 // Either a T or an Error. Accessing the wrong alternative is a broken invariant and aborts.
@@ -66,7 +76,14 @@ class [[nodiscard]] Status {
 
   bool ok() const { return !error_.has_value(); }
   explicit operator bool() const { return ok(); }
-  const Error& error() const { return *error_; }
+  // Accessing the error of a success is a broken invariant and aborts, as Result::error() does.
+  const Error& error() const {
+    if (ok()) {
+      std::fprintf(stderr, "lightvol: internal error: error() on a successful Status\n");
+      std::abort();
+    }
+    return *error_;
+  }
 
  private:
   std::optional<Error> error_;

@@ -35,7 +35,7 @@ Result<int> choose_channel(const detail::ImageHeader& spec, const DepthReadOptio
   if (spec.nchannels() == 1)
     return Error{path + ": its only channel, '" + names[0] +
                  "', is alpha (coverage), not depth; to read it as depth anyway, name it with "
-                 "--channel " +
+                 "DepthReadOptions::channel " +
                  names[0]};
   for (const char* preferred : {"Z", "depth", "Y"})
     for (int c = 0; c < spec.nchannels(); ++c)

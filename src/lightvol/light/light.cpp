@@ -274,6 +274,16 @@ std::string aspect_mismatch(const Light& light, int width, int height) {
   return note.str();
 }
 
+Light light_in_space(const Light& light, Space space) {
+  if (space == Space::world) return light;
+  Light out = light;
+  out.position = {0, 0, 0};
+  // Omni light space keeps world axes; spot and directional look down their eye space's −Z.
+  if (light.type != LightType::omni) out.direction = {0, 0, -1};
+  out.view = Mat4d::identity();
+  return out;
+}
+
 Mat4d omni_face_view(const Light& light, int face) {
   static constexpr Vec3d look[kOmniFaces] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
                                              {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};

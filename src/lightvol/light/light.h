@@ -64,6 +64,12 @@ Mat4d omni_face_view(const Light& light, int face);
 // Output frame of a volume.
 enum class Space { world, light };
 
+// The light in the output frame of a volume built in `space`: what the volume is checked against
+// (check_volume_linear's proof), what the float32 guard judges it with, and what a GLB of it
+// records. Unchanged for world space; in light space at the origin, looking down −Z (omni: world
+// axes at the origin), with the identity view (the frame is the light's eye space).
+Light light_in_space(const Light& light, Space space);
+
 // Maps the texels of one W×H depth image of a light (an omni light: of one face) to points.
 class Unprojector {
  public:

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
 
 namespace lightvol {

@@ -13,6 +13,7 @@
 #include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/closing.h>
+#include <lightvol/volume/float32_guard.h>
 
 namespace lightvol {
 
@@ -145,6 +146,8 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   Result<Mesh> mesh = assemble_adaptive_volume(light, depth, grid, volume, source);
   r.assemble_seconds = seconds_since(a);
   if (!mesh) return mesh;
+  if (Status s = check_representable(*mesh, light, volume.space, volume.light_source); !s)
+    return s.error();
   r.vertices = mesh->num_vertices();
   r.triangles = mesh->num_triangles();
   if (report) *report = r;

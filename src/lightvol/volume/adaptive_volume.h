@@ -55,7 +55,9 @@ Result<Mesh> assemble_adaptive_volume(const Light& light, const DepthImage& dept
 
 // The whole adaptive build: texel depths, pyramid, tessellation, assembly. Closed, oriented
 // outward, without T-junctions; in max_error mode every texel's point lies within
-// options.max_error world units of its ray's point on the volume. `report` is optional.
+// options.max_error world units of its ray's point on the volume. `report` is optional. A volume
+// float32 cannot hold is refused with check_representable's Error (volume/float32_guard.h), naming
+// volume.light_source; assemble_adaptive_volume alone does not run that guard.
 // The bound `options` uses (max_error or threshold, per its refinement), or an error naming the
 // option when it is negative, NaN or infinite.
 Result<double> adaptive_bound(const AdaptiveOptions& options);

@@ -11,18 +11,14 @@ Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
   LV_CHECK(maps.omni == (light.type == LightType::omni));
   VolumeOptions volume;
   volume.space = options.space;
-  Result<Mesh> mesh =
-      options.grid == VolumeGrid::adaptive
-          ? (maps.omni
-                 ? build_adaptive_omni_volume(light, maps.cube, volume, options.adaptive, report)
-                 : build_adaptive_volume(light, maps.image, volume, options.adaptive, maps.source,
-                                         report))
-          : (maps.omni ? build_omni_volume(light, maps.cube, volume)
-                       : build_static_volume(light, maps.image, volume, maps.source));
-  if (!mesh) return mesh;
-  if (Status s = check_representable(*mesh, light, options.space, options.light_source); !s)
-    return s.error();
-  return mesh;
+  volume.light_source = options.light_source;
+  return options.grid == VolumeGrid::adaptive
+             ? (maps.omni
+                    ? build_adaptive_omni_volume(light, maps.cube, volume, options.adaptive, report)
+                    : build_adaptive_volume(light, maps.image, volume, options.adaptive,
+                                            maps.source, report))
+             : (maps.omni ? build_omni_volume(light, maps.cube, volume)
+                          : build_static_volume(light, maps.image, volume, maps.source));
 }
 
 }  // namespace lightvol

@@ -12,6 +12,7 @@
 #include <lightvol/core/check.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/tessellate/collapse_grid.h>
+#include <lightvol/volume/float32_guard.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
@@ -110,6 +111,8 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   Mesh mesh =
       refinement->build(*bound, options.measure, report, detail, options.tessellation, &memory);
   if (!memory) return memory.error();
+  if (Status s = check_representable(mesh, light, volume.space, volume.light_source); !s)
+    return s.error();
   return mesh;
 }
 

@@ -60,7 +60,9 @@ class OmniRefinement {
 // Builds the adaptive omni volume from six validated equal square faces. `report` (optional)
 // receives the totals (grid_triangles and leaves summed over the faces, the largest
 // max_error_reached when options.measure); `detail` (optional) the per-face and seam counts.
-// Errors name the face's source: unequal faces, an unreachable radial depth.
+// Errors name the face's source: unequal faces, an unreachable radial depth; a volume float32
+// cannot hold is refused with check_representable's Error (volume/float32_guard.h), naming
+// volume.light_source (OmniRefinement::build alone does not run that guard).
 Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cube,
                                         const VolumeOptions& volume, const AdaptiveOptions& options,
                                         AdaptiveReport* report = nullptr,

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/check.h>
+#include <lightvol/volume/float32_guard.h>
 #include <lightvol/volume/omni_volume.h>
 
 namespace lightvol {
@@ -273,6 +274,8 @@ Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
 
   // Grid triangles, seams and corners.
   omni_triangles(light, faces, w, mesh.indices.data());
+  if (Status s = check_representable(mesh, light, options.space, options.light_source); !s)
+    return s.error();
   return mesh;
 }
 

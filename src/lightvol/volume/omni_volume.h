@@ -78,7 +78,8 @@ OmniAdjacency omni_adjacency(const Light& light);
 
 // Builds the static omni volume from six validated equal square faces (validate_cube_faces; an
 // Error otherwise, naming the face). Depths are stored values of the light's encoding; errors name
-// cube.sources.
+// cube.sources. A volume float32 cannot hold is refused with check_representable's Error
+// (volume/float32_guard.h), naming options.light_source.
 Result<Mesh> build_omni_volume(const Light& light, const CubeFaces& cube,
                                const VolumeOptions& options);
 

@@ -2,8 +2,6 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <numbers>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,9 +11,10 @@
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
-#include <lightvol/core/light_side.h>
 #include <lightvol/light/texel.h>
 #include <lightvol/volume/closing.h>
+#include <lightvol/volume/detail/float32_guard.h>
+#include <lightvol/volume/float32_guard.h>
 #include <lightvol/volume/static_volume.h>
 
 namespace lightvol {
@@ -52,6 +51,18 @@ std::vector<std::uint32_t> border_loop(int width, int height, bool standard) {
 }
 
 namespace {
+
+// The float32 guard's passes (volume/detail/float32_guard.h), which the stream runs on its rows.
+using detail::FaceFinding;
+using detail::FaceJudge;
+using detail::FaceTally;
+using detail::guard_light;
+using detail::GuardLight;
+using detail::judge_face;
+using detail::representable_verdict;
+using detail::tally_vertices;
+using detail::vertex_verdict;
+using detail::VertexTally;
 
 // The two triangles of texel quad (col c, row r) of a W-wide grid, wound to face away from the
 // light.
@@ -113,209 +124,11 @@ std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
   return ring;
 }
 
-// The float32 guard (check_representable) judges a volume as check_volume_linear's proof from the
-// light would: in the volume's frame (world, or the light's eye space with the light at the origin,
-// spot and directional looking down −Z), with its tolerance, each face's own corner motion (eight
-// float ulps of its corners' largest coordinate, core/light_side.h). The vertex at the light is
-// known only after every vertex, so the guard runs in two passes,
-// each a tally gathered vertex by vertex or face by face and merged in any order (maxima, minima
-// and counts: the same numbers however the work is split): first the vertices (VertexTally), then
-// the faces judged with what the vertices said (FaceJudge, FaceTally). A held mesh is read twice;
-// StaticVolumeStream makes its rows twice. Both give the same verdict and message.
-
-// The light as the guard sees it, in the volume's frame.
-struct GuardLight {
-  LightType type = LightType::spot;
-  Vec3d position;       // the light's position in the frame
-  Vec3d f;              // directional: the unit direction
-  Vec3d near_origin;    // directional: a point of the near plane
-  double at_light = 0;  // point lights: a vertex this close (max-norm) is at the light (4 ulps)
-};
-
-GuardLight guard_light(const Light& light, Space space) {
-  GuardLight g;
-  g.type = light.type;
-  const bool world = space == Space::world;
-  g.position = world ? light.position : Vec3d{0, 0, 0};
-  if (light.type == LightType::directional) {
-    g.f = normalize(world ? light.direction : Vec3d{0, 0, -1});
-    g.near_origin = g.position + light.near * g.f;
-  }
-  g.at_light = 4 * std::ldexp(std::max({std::abs(g.position.x), std::abs(g.position.y),
-                                        std::abs(g.position.z),
-                                        static_cast<double>(std::numeric_limits<float>::min())}),
-                              -23);
-  return g;
-}
-
-// The first pass: the vertices.
-struct VertexTally {
-  bool finite = true;
-  double largest = 0;  // the largest |coordinate|
-  Vec3d lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-           std::numeric_limits<double>::max()};
-  Vec3d hi{-std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(),
-           -std::numeric_limits<double>::max()};
-  std::uint64_t vertices = 0;
-  // Point lights: the vertices at the light (a spot volume's apex) and one of them (the one, when
-  // there is one), and the squared distance from the light of the nearest other vertex.
-  std::uint64_t at_light = 0;
-  Vec3d apex;
-  double nearest2 = std::numeric_limits<double>::infinity();
-
-  // Adds `n` vertices (x y z floats from `xyz`), in locals the compiler keeps in registers:
-  // branch-free but for the vertices at the light (the rest is of no use once a coordinate is not
-  // finite: the verdict then says only that).
-  void add(const float* xyz, std::size_t n, const GuardLight& g) {
-    constexpr double kMax = std::numeric_limits<double>::max();
-    const bool point = g.type != LightType::directional;
-    bool all_finite = true;
-    double big = largest, near2 = nearest2;
-    double lx = lo.x, ly = lo.y, lz = lo.z, hx = hi.x, hy = hi.y, hz = hi.z;
-    for (std::size_t v = 0; v < n; ++v) {
-      const float* q = xyz + 3 * v;
-      const double x = q[0], y = q[1], z = q[2];
-      const double ax = std::abs(x), ay = std::abs(y), az = std::abs(z);
-      all_finite &= ax <= kMax && ay <= kMax && az <= kMax;  // false for NaN too
-      big = std::max(big, std::max(ax, std::max(ay, az)));
-      lx = std::min(lx, x), ly = std::min(ly, y), lz = std::min(lz, z);
-      hx = std::max(hx, x), hy = std::max(hy, y), hz = std::max(hz, z);
-      if (!point) continue;
-      const double dx = x - g.position.x, dy = y - g.position.y, dz = z - g.position.z;
-      if (std::max(std::abs(dx), std::max(std::abs(dy), std::abs(dz))) <= g.at_light) {
-        ++at_light;
-        apex = {x, y, z};
-      } else {
-        near2 = std::min(near2, dx * dx + dy * dy + dz * dz);
-      }
-    }
-    vertices += n;
-    finite = finite && all_finite;
-    largest = big, nearest2 = near2;
-    lo = {lx, ly, lz}, hi = {hx, hy, hz};
-  }
-  void merge(const VertexTally& o) {
-    finite = finite && o.finite;
-    largest = std::max(largest, o.largest);
-    lo = {std::min(lo.x, o.lo.x), std::min(lo.y, o.lo.y), std::min(lo.z, o.lo.z)};
-    hi = {std::max(hi.x, o.hi.x), std::max(hi.y, o.hi.y), std::max(hi.z, o.hi.z)};
-    vertices += o.vertices;
-    if (o.at_light > 0) apex = o.apex;
-    at_light += o.at_light;
-    nearest2 = std::min(nearest2, o.nearest2);
-  }
-};
-
-// The tally of `n` vertices (x y z floats from `xyz`), in parallel.
-VertexTally tally_vertices(const float* xyz, std::size_t n, const GuardLight& g) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 14), VertexTally{},
-      [&](const tbb::blocked_range<std::size_t>& r, VertexTally acc) {
-        acc.add(xyz + 3 * r.begin(), r.size(), g);
-        return acc;
-      },
-      [](VertexTally a, const VertexTally& b) {
-        a.merge(b);
-        return a;
-      });
-}
-
-// How the second pass judges a face: turned towards the light, as the light proof of
-// check_volume_linear decides it (check/light_proof.cpp), beyond what moving each vertex by `tol`
-// could do. Point lights: the determinant of the face seen from the eye; directional: the face's
-// area projected along the light, exits facing along it, the near plane's faces against it.
-struct FaceJudge {
-  LightType type = LightType::spot;
-  Vec3d eye;  // point lights: the vertex at the light if there is exactly one, else the light
-  Vec3d f, near_origin;
-  double extra = 0;  // the rounding of the frame's own arithmetic (frame_motion), as the proof's
-
-  FaceJudge(const VertexTally& v, const GuardLight& g)
-      : type(g.type),
-        eye(v.at_light == 1 ? v.apex : g.position),
-        f(g.f),
-        near_origin(g.near_origin),
-        extra(g.type == LightType::directional
-                  ? std::max(frame_motion(g.near_origin), frame_motion(g.position))
-                  : frame_motion(eye)) {}
-
-  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), surely faces the right
-  // way, from a test cheap enough for every face: nearly all of them pass it. Point lights:
-  // det(a − eye, b − eye, c − eye) is (a − eye)·n, and a face where that is not negative faces
-  // away (rounding moves it by some 1e-16 of its terms, the tolerance is 1e-6 of them: they could
-  // only disagree for faces a billionth of a radian across, which the texel test of the verdict
-  // refuses anyway). Directional: a face with a vertex off the near plane (beyond the face's
-  // motion `tol`) is an exit, which faces the right way when its projected area is not negative.
-  bool away(const Vec3d& a, const Vec3d& n, double tol) const {
-    if (type == LightType::directional)
-      return std::abs(dot(a - near_origin, f)) > tol && dot(n, f) >= 0;
-    return dot(a - eye, n) >= 0;
-  }
-
-  // Whether face (a, b, c), of normal n = (b − a) × (c − a) (not zero), faces the wrong way: the
-  // proof's own test (core/light_side.h), with the face's motion `tol`. A face of the vertex at
-  // the eye has det 0 exactly: the proof leaves the apex's faces out.
-  [[gnu::noinline]] bool turned(const Vec3d& a, const Vec3d& b, const Vec3d& c, const Vec3d& n,
-                                double tol) const {
-    if (type == LightType::directional) {
-      const auto on_near_plane = [&](const Vec3d& p) {
-        return std::abs(dot(p - near_origin, f)) <= tol;
-      };
-      const bool source = on_near_plane(a) && on_near_plane(b) && on_near_plane(c);
-      return side_along(a, b, c, f, 0.5 * dot(n, f), source, tol) == -1;
-    }
-    const Vec3d pa = a - eye, pb = b - eye, pc = c - eye;
-    const Vec3d bc = cross(pb, pc);
-    return side_from_point(pa, pb, pc, bc, dot(pa, bc), tol) == -1;
-  }
-};
-
-// What the second pass finds of a face of float corners `qa`, `qb`, `qc`.
-enum class FaceFinding { sound, collapsed, turned };
-inline FaceFinding judge_face(const float* qa, const float* qb, const float* qc,
-                              const FaceJudge& judge) {
-  const Vec3d a{qa[0], qa[1], qa[2]}, b{qb[0], qb[1], qb[2]}, c{qc[0], qc[1], qc[2]};
-  const Vec3d n = cross(b - a, c - a);
-  if (n.x == 0 && n.y == 0 && n.z == 0) return FaceFinding::collapsed;
-  const double tol = corner_motion(a, b, c) + judge.extra;
-  if (judge.away(a, n, tol) || !judge.turned(a, b, c, n, tol)) return FaceFinding::sound;
-  return FaceFinding::turned;
-}
-
-// The second pass: the faces.
-struct FaceTally {
-  std::uint64_t triangles = 0, collapsed = 0, turned = 0;
-
-  // Adds faces [0, n); corners(t, k) points to the x y z floats of corner k of face t. Counts in
-  // locals the compiler keeps in registers.
-  template <class Corners>
-  void add(std::size_t n, const Corners& corners, const FaceJudge& judge) {
-    std::uint64_t c = 0, t = 0;
-    for (std::size_t f = 0; f < n; ++f) {
-      const FaceFinding found = judge_face(corners(f, 0), corners(f, 1), corners(f, 2), judge);
-      c += found == FaceFinding::collapsed;
-      t += found == FaceFinding::turned;
-    }
-    triangles += n, collapsed += c, turned += t;
-  }
-  void merge(const FaceTally& o) {
-    triangles += o.triangles;
-    collapsed += o.collapsed;
-    turned += o.turned;
-  }
-};
-
-// Refusals the vertices decide alone: not finite, too large, too small.
-Status vertex_verdict(const VertexTally& vertices, const Light& light,
-                      const std::string& light_source);
-// The whole verdict (vertex_verdict's first).
-Status representable_verdict(const VertexTally& vertices, const FaceTally& faces,
-                             const Light& light, Space space, const std::string& light_source);
-
 }  // namespace
 
-Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
-                                 const VolumeOptions& options, const std::string& source) {
+Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage& depth,
+                                            const VolumeOptions& options,
+                                            const std::string& source) {
   LV_CHECK(light.type != LightType::omni);
   const int w = depth.width, h = depth.height;
   LV_CHECK(w >= 2 && h >= 2);
@@ -341,6 +154,15 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
   return mesh;
 }
 
+Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
+                                 const VolumeOptions& options, const std::string& source) {
+  Result<Mesh> mesh = detail::assemble_static_volume(light, depth, options, source);
+  if (!mesh) return mesh;
+  if (Status s = check_representable(*mesh, light, options.space, options.light_source); !s)
+    return s.error();
+  return mesh;
+}
+
 std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, int height) {
   LV_CHECK(light.type != LightType::omni);
   LV_CHECK(width >= 2 && height >= 2);
@@ -358,128 +180,6 @@ std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, 
   LV_CHECK_EQ(indices.size(), 3 * counts.triangles);
   return indices;
 }
-
-Status check_representable(const Mesh& mesh, const Light& light, Space space,
-                           const std::string& light_source) {
-  const GuardLight guard = guard_light(light, space);
-  const VertexTally vertices = tally_vertices(mesh.positions.data(), mesh.num_vertices(), guard);
-  if (Status s = vertex_verdict(vertices, light, light_source); !s) return s;
-  const FaceJudge judge(vertices, guard);
-  const float* p = mesh.positions.data();
-  const FaceTally faces = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, mesh.num_triangles(), std::size_t{1} << 14), FaceTally{},
-      [&](const tbb::blocked_range<std::size_t>& r, FaceTally acc) {
-        const std::uint32_t* first = mesh.indices.data() + 3 * r.begin();
-        acc.add(
-            r.size(), [&](std::size_t t, int k) { return p + 3 * std::size_t{first[3 * t + k]}; },
-            judge);
-        return acc;
-      },
-      [](FaceTally a, const FaceTally& b) {
-        a.merge(b);
-        return a;
-      });
-  return representable_verdict(vertices, faces, light, space, light_source);
-}
-
-namespace {
-
-std::string shown(double x) {
-  std::ostringstream out;
-  out << x;
-  return out.str();
-}
-
-std::string frustum_keys(const Light& light) {
-  return light.type == LightType::spot   ? "keys 'near', 'far' and 'fov_y_deg'"
-         : light.type == LightType::omni ? "keys 'near' and 'far'"
-                                         : "keys 'ortho', 'near' and 'far'";
-}
-
-Status vertex_verdict(const VertexTally& vertices, const Light& light,
-                      const std::string& light_source) {
-  constexpr double kLargest = 1e18;  // squares stay below float's 3.4e38
-  if (!vertices.finite)
-    return Error{light_source + ": " + frustum_keys(light) +
-                 ": the volume's vertices are not finite numbers (near " + shown(light.near) +
-                 ", far " + shown(light.far) +
-                 ": more than double precision holds); bring far closer to near"};
-  if (vertices.largest > kLargest)
-    return Error{light_source + ": " + frustum_keys(light) + ": the volume reaches coordinate " +
-                 shown(vertices.largest) + "; float32 meshes need coordinates below " +
-                 shown(kLargest) + " (choose the scene's units so that the frustum is smaller)"};
-  const Vec3d span = vertices.hi - vertices.lo;
-  const double across = std::max({span.x, span.y, span.z});
-  // The checks form areas and volumes in float: a volume smaller than this underflows them.
-  constexpr double kSmallest = 1e-12;
-  if (across < kSmallest)
-    return Error{light_source + ": " + frustum_keys(light) + ": the volume is " + shown(across) +
-                 " across; float32 meshes and their checks need at least " + shown(kSmallest) +
-                 " (choose the scene's units, or near and far, so that it is larger)"};
-  return {};
-}
-
-Status representable_verdict(const VertexTally& vertices, const FaceTally& faces,
-                             const Light& light, Space space, const std::string& light_source) {
-  if (Status s = vertex_verdict(vertices, light, light_source); !s) return s;
-  const double largest = vertices.largest;
-  // The float step judged against a texel is that of the largest coordinate, the light's
-  // position's included: a directional light far behind its near plane is refused however small
-  // the volume's own coordinates are (where its faces would be placed is as coarse as that).
-  const GuardLight guard = guard_light(light, space);
-  const double light_largest = std::max(
-      {std::abs(guard.position.x), std::abs(guard.position.y), std::abs(guard.position.z)});
-  const double max_abs = std::max(largest, light_largest);
-  // Faces the proof accepts may still be too fine for float32 to place where they belong, which
-  // the apex's cone and the proof's sums then notice: float steps at those coordinates against the
-  // spacing of the faces across the light's rays, about a texel (the light's field over the square
-  // root of the vertex count per map). Point lights: the angle a step subtends at the vertex
-  // nearest the light against a texel's angle; directional: the step against a texel's width in
-  // the ortho extents. Steps coarser than a sixteenth of that refuse the volume (a spot far from
-  // the origin, a fov of 1e-6 degrees); a thin but wide box (8193 wide, 1 deep) is fine.
-  const double step = max_abs * std::numeric_limits<float>::epsilon();
-  const double maps = light.type == LightType::omni ? double(kOmniFaces) : 1.0;
-  const double texels_across = std::sqrt(std::max(1.0, double(vertices.vertices) / maps));
-  const double px = std::abs(light.projection(0, 0)), py = std::abs(light.projection(1, 1));
-  double ratio = 0;  // a float step over a texel's spacing
-  if (light.type == LightType::directional) {
-    ratio = step / (std::min(2 / px, 2 / py) / texels_across);
-  } else if (std::isfinite(vertices.nearest2)) {
-    const double field = light.type == LightType::omni
-                             ? std::numbers::pi / 2
-                             : std::min(2 * std::atan(1 / px), 2 * std::atan(1 / py));
-    ratio = (step / std::sqrt(vertices.nearest2)) / (field / texels_across);
-  }
-  const bool coarse = ratio > 1.0 / 16;
-  if (faces.collapsed == 0 && faces.turned == 0 && !coarse) return {};
-  const Vec3d extent = vertices.hi - vertices.lo;
-  const double size = std::max({extent.x, extent.y, extent.z});
-  std::string what =
-      light_source + ": float32 cannot hold this volume (coordinates up to " + shown(largest) +
-      (light_largest > largest ? ", the light's position up to " + shown(light_largest)
-                               : std::string()) +
-      ", steps of " + shown(step) + ", " + shown(ratio) + " of a texel's spacing; " +
-      std::to_string(faces.collapsed) + " of " + std::to_string(faces.triangles) +
-      " faces collapse to zero area, " + std::to_string(faces.turned) + " face the light)";
-
-  // A directional light's volume begins `near` from its position, in either frame: far for the
-  // volume's size, only moving the position closer helps.
-  if (light.type == LightType::directional && light.near > 100 * size)
-    return Error{what + ": keys 'position' and 'near': the volume begins " + shown(light.near) +
-                 " from the light's position, far for its size " + shown(size) +
-                 "; move the position along the light's direction towards the volume and reduce "
-                 "near and far by as much"};
-  if (space == Space::world && largest > 100 * size)
-    return Error{what + ": key 'position': the light is far from the origin for the volume's " +
-                 "size " + shown(size) +
-                 "; write it in the light's eye space with --space light and place it with the "
-                 "light's view matrix"};
-  return Error{what + ": " + frustum_keys(light) +
-               ": the frustum is too thin, or far/near too large, for float32; widen it or bring "
-               "near and far closer"};
-}
-
-}  // namespace
 
 struct StaticVolumeStream::State {
   const Light& light;

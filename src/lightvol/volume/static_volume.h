@@ -15,7 +15,8 @@
 namespace lightvol {
 
 struct VolumeOptions {
-  Space space = Space::world;
+  Space space = Space::world;              // frame of the output: world, or the light's eye space
+  std::string light_source = "the light";  // names the light's file in float32 refusals
 };
 
 // Triangle and vertex counts of the static volume of a W×H map, in closed form.
@@ -42,7 +43,9 @@ std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, 
 // grid vertices at each texel centre's ray and depth (Unprojector), triangulated quad by quad;
 // spot: a fan from the border to the light position; directional: the border extruded to the
 // near plane and capped by a fan around the cap's centre. Closed, edge-manifold, outward.
-// `source` names the depth image in errors (a radial depth no parallel ray reaches).
+// `source` names the depth image in errors (a radial depth no parallel ray reaches); a volume
+// float32 cannot hold is refused with check_representable's Error (volume/float32_guard.h),
+// naming options.light_source.
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  const VolumeOptions& options, const std::string& source);
 
@@ -72,23 +75,5 @@ class StaticVolumeStream : public MeshStream {
   Bounds bounds_;
   double volume_ = 0;
 };
-
-// Whether `mesh`, a volume of `light` built in `space`, holds in float32 as it is: every
-// coordinate finite and below 1e18 in magnitude (so that the products the checks and renderers
-// form stay finite), the volume at least 1e-12 across (so that they do not underflow), no face
-// collapsed to zero area by float32 rounding or turned towards the light (judged as the proof from
-// the light of check_volume_linear judges it, in the volume's frame and with its tolerance: eight
-// float ulps of the largest coordinate), and float steps at most a sixteenth of a texel's spacing
-// across the light's rays (point lights: the angle a step subtends at the vertex nearest the light
-// against a texel's angle; directional: against a texel's width in the ortho extents). That
-// refuses a spot far from the origin or a needle of a frustum, but not a thin, wide box. Lights
-// whose volumes cannot be represented are valid lights: the Error says which keys of
-// `light_source` are to blame and what to do (far from the origin: --space light; a frustum too
-// thin, too large, or with far/near beyond what the precision holds: the keys to change).
-// build_volume runs it on every volume it returns, StaticVolumeStream on the volume it streams
-// (the same verdict and message); it never writes NaN. Two parallel passes: the vertices, then the
-// faces.
-Status check_representable(const Mesh& mesh, const Light& light, Space space,
-                           const std::string& light_source);
 
 }  // namespace lightvol
