@@ -24,7 +24,6 @@
 //   reference (its best case); the table says so.
 import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, symlinkSync, writeFileSync } from 'node:fs';
-import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
@@ -47,11 +46,9 @@ const TOLERANCE = 0.01;
 
 const web = fileURLToPath(new URL('../../web', import.meta.url));
 const repository = resolve(web, '..');
-const require = createRequire(join(web, 'package.json'));
-const puppeteer = (await import(pathToFileURL(require.resolve('puppeteer-core')).href)).default;
 const { serve } = await import(pathToFileURL(join(web, 'serve.mjs')).href);
-const EXRLoader = (await import(pathToFileURL(require.resolve('three/addons/loaders/EXRLoader.js')).href)).EXRLoader;
-const THREE = await import(pathToFileURL(join(web, 'node_modules', 'three', 'build', 'three.module.js')).href);
+const { DEMO_LIGHTS, launchChromium, readExr, relativeL2, writePfm } =
+  await import(pathToFileURL(join(web, 'tests', 'support.mjs')).href);
 
 // ---- the peer, in its scratch folder, with its own page --------------------------------------------
 const PEER = { 'three': '0.182.0', 'postprocessing': '6.39.6', 'three-good-godrays': '0.11.2' };
@@ -226,41 +223,13 @@ const run = (...a) => execFileSync(lightvol, [...a, '--quiet'], { cwd: work, std
 run('demo', '--out', '.', '--size', String(demoSize));
 const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
 writeFileSync(join(work, 'camera_radial.json'), JSON.stringify({ ...camera, depth: 'radial' }));
-const LIGHTS = {
-  directional: { type: 'directional', position: [0.5, 10.0, -6.5], direction: [0.2, -0.9, 1], up: [0, 1, 0],
-                 ortho: [-5, 5, -5, 5], near: 0.1, far: 30.0 },
-  point: { type: 'omni', position: [0.5, 3.0, -1.0], near: 0.1, far: 40.0 },
-};
+const LIGHTS = { directional: DEMO_LIGHTS.directional, point: DEMO_LIGHTS.omni };
 for (const [name, json] of Object.entries(LIGHTS)) writeFileSync(join(work, `light_${name}.json`), JSON.stringify(json));
 const SIGMA_S = 1e-5;
 const thin = { scattering: SIGMA_S, absorption: 0, intensity: 4 * Math.PI / SIGMA_S, phase: { type: 'isotropic' } };
 writeFileSync(join(work, 'thin.json'), JSON.stringify(thin));
 const DENSITY = 1 / 128;  // the peer's default ρ
 
-function writePfm(path, values, width, height) {
-  const header = Buffer.from(`Pf\n${width} ${height}\n-1.0\n`, 'latin1');
-  const body = Buffer.alloc(4 * width * height);
-  for (let r = 0; r < height; ++r)
-    for (let c = 0; c < width; ++c) body.writeFloatLE(values[(height - 1 - r) * width + c], 4 * (r * width + c));
-  writeFileSync(path, Buffer.concat([header, body]));
-}
-function readExr(path) {
-  const bytes = readFileSync(path);
-  const loader = new EXRLoader();
-  loader.setDataType(THREE.FloatType);
-  const image = loader.parse(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
-  const { width: w, height: h, data } = image;
-  const channels = data.length / (w * h);
-  const out = new Float64Array(w * h);
-  for (let r = 0; r < h; ++r)
-    for (let c = 0; c < w; ++c) out[r * w + c] = data[((h - 1 - r) * w + c) * channels];
-  return out;
-}
-const relativeL2 = (a, ref) => {
-  let d = 0, n = 0;
-  for (let i = 0; i < ref.length; ++i) { d += (a[i] - ref[i]) ** 2; n += ref[i] ** 2; }
-  return Math.sqrt(d / n);
-};
 // lightvol's reference of a frame: build's volume of its map, the exact sum with its surfaces.
 function reference(tag, c) {
   const faces = c.light.type === 'omni' ? 6 : 1;
@@ -271,7 +240,7 @@ function reference(tag, c) {
   run('build', `${tag}_map.pfm`, '--light', `${tag}_light.json`, '--out', `${tag}_volume.off`);
   run('render', `${tag}_volume.off`, '--light', `${tag}_light.json`, '--camera', 'camera_radial.json',
       '--depth', `${tag}_surface.pfm`, '--medium', 'thin.json', '--method', 'reference', '--out', `${tag}_reference.exr`);
-  const values = readExr(join(work, `${tag}_reference.exr`));
+  const { values } = readExr(join(work, `${tag}_reference.exr`));
   if (process.env.KEEP) writePfm(join(work, `${tag}_reference.pfm`), values, camera.width, camera.height);
   return values;
 }
@@ -279,10 +248,7 @@ function reference(tag, c) {
 const { server, url } = await serve({ data: work });
 const peerServer = await serve({ root: scratch, data: work });
 const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
-const browser = await puppeteer.launch({
-  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', headless: true, userDataDir: profile,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-gpu',
-         '--no-first-run', '--disable-background-networking', '--disable-component-update'] });
+const browser = await launchChromium(profile);
 const open = async (address, done) => {
   const page = await browser.newPage();
   const messages = [];

@@ -6,7 +6,6 @@
 //   node tests/bench/web_live_bench.mjs PATH/TO/lightvol [FRAMES]
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
-import { createRequire } from 'node:module';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
@@ -17,24 +16,20 @@ if (!lightvolArg) {
   process.exit(2);
 }
 const web = fileURLToPath(new URL('../../web', import.meta.url));
-const require = createRequire(join(web, 'package.json'));
-const puppeteer = (await import(pathToFileURL(require.resolve('puppeteer-core')).href)).default;
 const { serve } = await import(pathToFileURL(join(web, 'serve.mjs')).href);
+const { DEMO_LIGHTS, launchChromium } = await import(pathToFileURL(join(web, 'tests', 'support.mjs')).href);
 const frames = Number(framesArg ?? 3);
 const work = mkdtempSync(join(tmpdir(), 'lightvol-live-bench-'));
 execFileSync(resolve(lightvolArg), ['demo', '--out', work, '--size', '512', '--quiet']);
-writeFileSync(join(work, 'light_directional.json'), JSON.stringify({
-  type: 'directional', position: [0.5, 10.0, -6.5], direction: [0.2, -0.9, 1], up: [0, 1, 0],
-  ortho: [-5, 5, -5, 5], near: 0.1, far: 30.0 }));
-writeFileSync(join(work, 'light_omni.json'), JSON.stringify({ type: 'omni', position: [0.5, 3.0, -1.0], near: 0.1, far: 40.0 }));
+writeFileSync(join(work, 'light_directional.json'), JSON.stringify(DEMO_LIGHTS.directional));
+writeFileSync(join(work, 'light_omni.json'), JSON.stringify(DEMO_LIGHTS.omni));
 const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
 const rows = [['light', 'spot', 256], ['light', 'spot', 512], ['light', 'spot', 1024],
               ['light_directional', 'directional', 512], ['light_directional', 'directional', 1024],
               ['light_omni', 'omni', 128], ['light_omni', 'omni', 256], ['light_omni', 'omni', 512]];
 const { server, url } = await serve({ data: work });
-const browser = await puppeteer.launch({
-  executablePath: process.env.CHROMIUM ?? '/usr/bin/chromium', headless: true,
-  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-gpu'] });
+const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
+const browser = await launchChromium(profile);
 try {
   console.log(`camera ${camera.width}x${camera.height}, ${frames} frames a row`);
   console.log('| light, map | triangles | whole frame | volume + airlight |\n|---|---|---|---|');
@@ -54,4 +49,5 @@ try {
   await browser.close();
   server.close();
   rmSync(work, { recursive: true, force: true });
+  rmSync(profile, { recursive: true, force: true });
 }

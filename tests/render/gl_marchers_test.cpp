@@ -23,15 +23,6 @@ namespace {
 
 constexpr int kMap = 96, kW = 64, kH = 48;
 
-Medium medium() {
-  Medium m;
-  m.scattering = 0.06;
-  m.absorption = 0.02;
-  m.intensity = 20;
-  m.phase = {PhaseType::hg, 0.3, 0};
-  return m;
-}
-
 // The gather of the marcher on the CPU: an M-wide box, horizontal then vertical, clamped at
 // borders.
 Image box_gather(const Image& in, int m) {
@@ -68,8 +59,8 @@ TEST(GlRaymarch, ConvergesToTheReferenceAsStepsGrow) {
     const DepthImage map = test::scene_shadow_map(light, kMap, kMap);
     Result<Mesh> volume = build_static_volume(light, map, {}, "shadow");
     ASSERT_TRUE(volume);
-    const RenderScene scene =
-        test::make_render_scene(test::make_camera({6, 3, 6}, {0, 1, 0}, kW, kH), light, medium());
+    const RenderScene scene = test::make_render_scene(
+        test::make_camera({6, 3, 6}, {0, 1, 0}, kW, kH), light, test::render_test_medium(0.3));
     const Image ref = render_reference(*volume, scene);
     double previous = 1e300;
     for (int n : {4, 16, 64, 256, 1024}) {
@@ -113,8 +104,8 @@ TEST(GlRaymarch, OmniFacesConvergeToTheOmniVolume) {
   }
   Result<Mesh> volume = build_omni_volume(light, cube, {});
   ASSERT_TRUE(volume) << volume.error().message;
-  const RenderScene scene =
-      test::make_render_scene(test::make_camera({5, 1.5, 4}, {0, 1, 0}, kW, kH), light, medium());
+  const RenderScene scene = test::make_render_scene(
+      test::make_camera({5, 1.5, 4}, {0, 1, 0}, kW, kH), light, test::render_test_medium(0.3));
   const Image ref = render_reference(*volume, scene);
   // Pixels whose ray passes within 0.2 rad of the light hold the 1/d² peak that a uniform marcher
   // resolves only as 1/N; the faces' lookups are checked on all others.
@@ -204,8 +195,8 @@ TEST(GlRadial, MatchesTheBlurComputedOnTheCpu) {
   REQUIRE_GL_CONTEXT();
   const Light light = test::light_from_json(test::spot_json("linear"));
   // Looking at the light from below, past the box: the light is on screen.
-  const RenderScene scene =
-      test::make_render_scene(test::make_camera({4, 1, 4}, {0, 4, 0}, kW, kH), light, medium());
+  const RenderScene scene = test::make_render_scene(test::make_camera({4, 1, 4}, {0, 4, 0}, kW, kH),
+                                                    light, test::render_test_medium(0.3));
   MarchOptions o;
   o.method = MarchMethod::radial;
   Result<std::unique_ptr<GlMarcher>> m = GlMarcher::create(scene, {}, {}, o);
@@ -224,8 +215,8 @@ TEST(GlRadial, MatchesTheBlurComputedOnTheCpu) {
 TEST(GlRaymarch, RejectsTheWrongNumberOfMaps) {
   REQUIRE_GL_CONTEXT();
   const Light light = test::light_from_json(test::spot_json("linear"));
-  const RenderScene scene =
-      test::make_render_scene(test::make_camera({6, 3, 6}, {0, 1, 0}, 8, 6), light, medium());
+  const RenderScene scene = test::make_render_scene(test::make_camera({6, 3, 6}, {0, 1, 0}, 8, 6),
+                                                    light, test::render_test_medium(0.3));
   const DepthImage map = test::scene_shadow_map(light, 8, 8);
   Result<std::unique_ptr<GlMarcher>> m = GlMarcher::create(scene, {map, map}, {"a", "b"}, {});
   ASSERT_FALSE(m);

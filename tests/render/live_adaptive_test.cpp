@@ -261,48 +261,11 @@ TEST(LiveAdaptive, SaysWhenTheRoundsAllowedDoNotConverge) {
   }
 }
 
-// The render tests' medium (tests/render/gl_volume_test.cpp).
-Medium test_medium() {
-  Medium m;
-  m.scattering = 0.06;
-  m.absorption = 0.02;
-  m.intensity = 20;
-  m.phase = {PhaseType::hg, 0.4, 0};
-  return m;
-}
-
 TEST(LiveAdaptive, DrawsTheAirlightOfTheCpuBuiltAdaptiveVolume) {
   REQUIRE_GL_CONTEXT();
   const test::Box box{{-0.7, 1.0, -0.9}, {0.2, 1.5, 0.1}};
-  struct ImageCase {
-    const char* name;
-    std::string json;
-    DepthEncoding encoding;
-    Vec3d eye, target;
-  };
-  const ImageCase image_cases[] = {
-      {"spot window outside",
-       test::spot_json("linear"),
-       DepthEncoding::window,
-       {6, 3, 6},
-       {0, 1, 0}},
-      {"spot linear inside",
-       test::spot_json("linear"),
-       DepthEncoding::linear,
-       {1.5, 0.6, 1.5},
-       {-1, 0.3, -1}},
-      {"directional window outside",
-       test::directional_json("linear"),
-       DepthEncoding::window,
-       {7, 4, 5},
-       {0, 0.5, 0}},
-      {"directional linear inside",
-       test::directional_json("linear"),
-       DepthEncoding::linear,
-       {2, 1, 2},
-       {-1, 0.5, -2}},
-  };
-  for (const ImageCase& ic : image_cases) {
+  const std::vector<test::LightViewCase> image_cases = test::light_view_cases();
+  for (const test::LightViewCase& ic : image_cases) {
     SCOPED_TRACE(ic.name);
     const Light light = with(ic.json, ic.encoding, false);
     Light linear = light;
@@ -310,8 +273,8 @@ TEST(LiveAdaptive, DrawsTheAirlightOfTheCpuBuiltAdaptiveVolume) {
     const DepthImage linear_map = test::scene_shadow_map(linear, 96, 80, box);
     const Case c{ic.name, light,
                  ic.encoding == DepthEncoding::window ? to_window(light, linear_map) : linear_map};
-    const RenderScene scene =
-        test::make_render_scene(test::make_camera(ic.eye, ic.target, 64, 48), light, test_medium());
+    const RenderScene scene = test::make_render_scene(test::make_camera(ic.eye, ic.target, 64, 48),
+                                                      light, test::render_test_medium());
     Result<std::unique_ptr<GlVolumeRenderer>> mesh_renderer = GlVolumeRenderer::create(scene);
     Result<std::unique_ptr<GlVolumeRenderer>> live_renderer = GlVolumeRenderer::create(scene);
     ASSERT_TRUE(mesh_renderer && live_renderer);

@@ -203,15 +203,6 @@ TEST(LiveVolume, ADepthTextureGivesTheSameVertices) {
 // The render tests' medium and cameras (tests/render/gl_volume_test.cpp).
 constexpr int kImageW = 64, kImageH = 48;
 
-Medium test_medium() {
-  Medium m;
-  m.scattering = 0.06;
-  m.absorption = 0.02;
-  m.intensity = 20;
-  m.phase = {PhaseType::hg, 0.4, 0};
-  return m;
-}
-
 // The airlight of `renderer` drawing build's mesh of `map`.
 Image mesh_image(GlVolumeRenderer& renderer, const Light& light, const DepthImage& map) {
   Result<Mesh> built = build_static_volume(light, map, {}, "map");
@@ -227,39 +218,13 @@ constexpr double kImageTolerance = 1e-4;
 
 TEST(LiveVolume, DrawsTheAirlightOfBuildsMesh) {
   REQUIRE_GL_CONTEXT();
-  struct ImageCase {
-    const char* name;
-    std::string json;
-    DepthEncoding encoding;
-    Vec3d eye, target;
-  };
-  const ImageCase cases[] = {
-      {"spot window outside",
-       test::spot_json("linear"),
-       DepthEncoding::window,
-       {6, 3, 6},
-       {0, 1, 0}},
-      {"spot linear inside",
-       test::spot_json("linear"),
-       DepthEncoding::linear,
-       {1.5, 0.6, 1.5},
-       {-1, 0.3, -1}},
-      {"directional window outside",
-       test::directional_json("linear"),
-       DepthEncoding::window,
-       {7, 4, 5},
-       {0, 0.5, 0}},
-      {"directional linear inside",
-       test::directional_json("linear"),
-       DepthEncoding::linear,
-       {2, 1, 2},
-       {-1, 0.5, -2}},
-  };
-  for (const ImageCase& c : cases) {
+  const std::vector<test::LightViewCase> cases = test::light_view_cases();
+  for (const test::LightViewCase& c : cases) {
     const Light light = with_encoding(c.json, c.encoding, false);
     const DepthImage map = scene_map(light, 80, 64, kOffAxisBox);
-    const RenderScene scene = test::make_render_scene(
-        test::make_camera(c.eye, c.target, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+    const RenderScene scene =
+        test::make_render_scene(test::make_camera(c.eye, c.target, kImageW, kImageH), light,
+                                test::render_test_medium(), kOffAxisBox);
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     ASSERT_TRUE(renderer) << renderer.error().message;
     const Image expected = mesh_image(**renderer, light, map);
@@ -297,8 +262,9 @@ TEST(LiveVolume, DrawsTheAirlightOfBuildsOmniMesh) {
   // Outside the lit space's walls; then inside the box's shadow, looking out of it.
   for (auto [eye, target] :
        {std::pair<Vec3d, Vec3d>{{5, 3, 5}, {0, 1, 0}}, {{0.3, 0.5, 0.2}, {3, 0.9, 1}}}) {
-    const RenderScene scene = test::make_render_scene(
-        test::make_camera(eye, target, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+    const RenderScene scene =
+        test::make_render_scene(test::make_camera(eye, target, kImageW, kImageH), light,
+                                test::render_test_medium(), kOffAxisBox);
     Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
     ASSERT_TRUE(renderer) << renderer.error().message;
     (*renderer)->set_volume(*built);
@@ -324,7 +290,7 @@ TEST(LiveVolume, FollowsTheMapWhenItChangesBetweenFrames) {
   const DepthImage map1 = scene_map(light, kMap, kMap, first);
   const DepthImage map2 = scene_map(light, kMap, kMap, second);
   const RenderScene scene = test::make_render_scene(
-      test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light, test_medium());
+      test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light, test::render_test_medium());
   Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
   ASSERT_TRUE(renderer) << renderer.error().message;
   const Image expected1 = mesh_image(**renderer, light, map1);
@@ -422,8 +388,9 @@ TEST(LiveVolume, ReadsTheSurfaceFromAnEnginesTexture) {
   REQUIRE_GL_CONTEXT();
   const Light light = with_encoding(test::spot_json("linear"), DepthEncoding::window, false);
   const DepthImage map = scene_map(light, 64, 64, kOffAxisBox);
-  const RenderScene scene = test::make_render_scene(
-      test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light, test_medium(), kOffAxisBox);
+  const RenderScene scene =
+      test::make_render_scene(test::make_camera({6, 3, 6}, {0, 1, 0}, kImageW, kImageH), light,
+                              test::render_test_medium(), kOffAxisBox);
   Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
   ASSERT_TRUE(renderer) << renderer.error().message;
   const Image own = mesh_image(**renderer, light, map);

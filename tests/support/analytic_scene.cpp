@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "support/test_support.h"
+
 namespace lightvol::test {
 
 double cast_scene(Vec3d o, Vec3d d, const Box& box) {
@@ -145,6 +147,36 @@ double brute_force_airlight(const RenderScene& scene, int width, int height, int
     sum += m.scattering * rho * radiance * std::exp(-tau_here) * ds;
   }
   return sum;
+}
+
+Medium render_test_medium(double g) {
+  Medium m;
+  m.scattering = 0.06;
+  m.absorption = 0.02;
+  m.intensity = 20;
+  m.phase = {PhaseType::hg, g, 0};
+  return m;
+}
+
+std::vector<LightViewCase> light_view_cases() {
+  return {
+      {"spot window outside", spot_json("linear"), DepthEncoding::window, {6, 3, 6}, {0, 1, 0}},
+      {"spot linear inside",
+       spot_json("linear"),
+       DepthEncoding::linear,
+       {1.5, 0.6, 1.5},
+       {-1, 0.3, -1}},
+      {"directional window outside",
+       directional_json("linear"),
+       DepthEncoding::window,
+       {7, 4, 5},
+       {0, 0.5, 0}},
+      {"directional linear inside",
+       directional_json("linear"),
+       DepthEncoding::linear,
+       {2, 1, 2},
+       {-1, 0.5, -2}},
+  };
 }
 
 }  // namespace lightvol::test

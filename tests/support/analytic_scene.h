@@ -2,6 +2,7 @@
 // maps, camera surface distances and visibility computed by exact ray casting.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <lightvol/airlight/airlight.h>
@@ -34,6 +35,19 @@ bool scene_lit(const Light& light, int width, int height, Vec3d x, const Box& bo
 Camera make_camera(Vec3d position, Vec3d target, int width, int height, double fov_y_deg = 50);
 RenderScene make_render_scene(const Camera& camera, const Light& light, const Medium& medium,
                               const Box& box = {});
+
+// Views the live-volume tests draw: a spot and a directional light (their depth "linear" JSON,
+// read in `encoding`), each seen from outside and from inside its volume.
+struct LightViewCase {
+  const char* name;
+  std::string json;
+  DepthEncoding encoding;
+  Vec3d eye, target;
+};
+std::vector<LightViewCase> light_view_cases();
+
+// The render tests' medium: σs 0.06, σa 0.02, intensity 20, Henyey–Greenstein phase g.
+Medium render_test_medium(double g = 0.4);
 
 // Brute-force airlight of one pixel: midpoint rule with `steps` samples along the ray up to the
 // surface (or `max_t`), each weighted by scene_lit. Direct from docs/design.md §6's integrand;

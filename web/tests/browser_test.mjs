@@ -10,11 +10,10 @@ import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync, mkdirSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
-import puppeteer from 'puppeteer-core';
 import * as THREE from 'three';
-import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { serve, REPOSITORY } from '../serve.mjs';
 import { parseFrame } from '../airlight.js';
+import { launchChromium, readExr, relativeL2 } from './support.mjs';
 
 const args = process.argv.slice(2);
 const lightvol = args[0] && resolve(args[0]);
@@ -29,7 +28,6 @@ if (!lightvol || !existsSync(lightvol)) {
 const demoSize = Number(option('--demo-size', 128));  // the demo's camera: 480x360 x size/512
 const screenshot = option('--screenshot', null);
 const keep = option('--keep', null);
-const chromium = process.env.CHROMIUM ?? '/usr/bin/chromium';
 const TOLERANCE = 0.01;
 
 const work = keep ? resolve(keep) : mkdtempSync(join(tmpdir(), 'lightvol-web-'));
@@ -37,30 +35,7 @@ mkdirSync(work, { recursive: true });
 const data = join(REPOSITORY, 'data');
 const run = (...a) => execFileSync(lightvol, [...a, '--quiet'], { cwd: work, stdio: ['ignore', 'ignore', 'inherit'] });
 
-// An EXR image (lightvol render --out X.exr): first channel, top row first. three's EXRLoader
-// returns RGBA rows bottom row first.
-function readExr(path) {
-  const bytes = readFileSync(path);
-  const loader = new EXRLoader();
-  loader.setDataType(THREE.FloatType);
-  const image = loader.parse(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
-  const { width: w, height: h, data: rgba } = image;
-  const channels = rgba.length / (w * h);
-  const out = new Float32Array(w * h);
-  for (let r = 0; r < h; ++r)
-    for (let c = 0; c < w; ++c) out[r * w + c] = rgba[((h - 1 - r) * w + c) * channels];
-  return { width: w, height: h, values: out };
-}
 
-function relativeL2(a, ref, mask) {
-  let d = 0, n = 0;
-  for (let i = 0; i < ref.length; ++i) {
-    if (mask[i]) continue;
-    d += (a[i] - ref[i]) ** 2;
-    n += ref[i] ** 2;
-  }
-  return Math.sqrt(d) / Math.sqrt(n);
-}
 
 // lightvol's camera depth (window depth, the camera's "depth" encoding here) as distances along
 // the pixel rays, as surface_distances() computes them; Infinity where nothing was hit.
@@ -114,14 +89,7 @@ for (const c of cases)
 // ---- the browser ---------------------------------------------------------------------------------
 const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
 const { server, url } = await serve({ data: work });
-const browser = await puppeteer.launch({
-  executablePath: chromium,
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-         '--disable-gpu', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', `--user-data-dir=${profile}`],
-  userDataDir: profile,
-});
+const browser = await launchChromium(profile);
 let failed = false;
 try {
   for (const c of cases) {

@@ -14,10 +14,8 @@ import { execFileSync } from 'node:child_process';
 import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
-import puppeteer from 'puppeteer-core';
-import * as THREE from 'three';
-import { EXRLoader } from 'three/addons/loaders/EXRLoader.js';
 import { serve, REPOSITORY } from '../serve.mjs';
+import { DEMO_LIGHTS, launchChromium, readExr, relativeL2, writePfm } from './support.mjs';
 
 const args = process.argv.slice(2);
 const lightvol = args[0] && resolve(args[0]);
@@ -33,7 +31,6 @@ const size = Number(option('--size', 96));  // the shadow maps' size (omni: each
 const screenshots = option('--screenshot', null);
 const keep = option('--keep', null);
 const only = option('--only', null);
-const chromium = process.env.CHROMIUM ?? '/usr/bin/chromium';
 const TOLERANCE = 0.01;
 
 const work = keep ? resolve(keep) : mkdtempSync(join(tmpdir(), 'lightvol-live-'));
@@ -41,38 +38,8 @@ mkdirSync(work, { recursive: true });
 if (screenshots) mkdirSync(resolve(screenshots), { recursive: true });
 const run = (...a) => execFileSync(lightvol, [...a, '--quiet'], { cwd: work, stdio: ['ignore', 'ignore', 'inherit'] });
 
-// A PFM image (one channel): lightvol reads it through OpenImageIO; rows are stored bottom first.
-function writePfm(path, values, width, height) {
-  const header = Buffer.from(`Pf\n${width} ${height}\n-1.0\n`, 'latin1');
-  const body = Buffer.alloc(4 * width * height);
-  for (let r = 0; r < height; ++r)
-    for (let c = 0; c < width; ++c) body.writeFloatLE(values[(height - 1 - r) * width + c], 4 * (r * width + c));
-  writeFileSync(path, Buffer.concat([header, body]));
-}
 
-// An EXR image (lightvol render --out X.exr): first channel, top row first.
-function readExr(path) {
-  const bytes = readFileSync(path);
-  const loader = new EXRLoader();
-  loader.setDataType(THREE.FloatType);
-  const image = loader.parse(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.length));
-  const { width: w, height: h, data: rgba } = image;
-  const channels = rgba.length / (w * h);
-  const out = new Float32Array(w * h);
-  for (let r = 0; r < h; ++r)
-    for (let c = 0; c < w; ++c) out[r * w + c] = rgba[((h - 1 - r) * w + c) * channels];
-  return { width: w, height: h, values: out };
-}
 
-function relativeL2(a, ref, mask = null) {
-  let d = 0, n = 0;
-  for (let i = 0; i < ref.length; ++i) {
-    if (mask && mask[i]) continue;
-    d += (a[i] - ref[i]) ** 2;
-    n += ref[i] ** 2;
-  }
-  return Math.sqrt(d) / Math.sqrt(n);
-}
 
 // ---- inputs: the demo's scene, camera and medium; three lights ------------------------------------
 run('demo', '--out', '.', '--size', '128');
@@ -80,23 +47,14 @@ const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
 writeFileSync(join(work, 'camera_radial.json'), JSON.stringify({ ...camera, depth: 'radial' }));
 const lights = {
   spot: JSON.parse(readFileSync(join(work, 'light.json'), 'utf8')),
-  directional: { type: 'directional', position: [0.5, 10.0, -6.5], direction: [0.2, -0.9, 1], up: [0, 1, 0],
-                 ortho: [-5, 5, -5, 5], near: 0.1, far: 30.0 },
-  omni: { type: 'omni', position: [0.5, 3.0, -1.0], near: 0.1, far: 40.0 },
+  ...DEMO_LIGHTS,
 };
 for (const [name, json] of Object.entries(lights)) writeFileSync(join(work, `light_${name}.json`), JSON.stringify(json));
 
 // ---- the browser ----------------------------------------------------------------------------------
 const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
 const { server, url } = await serve({ data: work });
-const browser = await puppeteer.launch({
-  executablePath: chromium,
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
-         '--disable-gpu', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', `--user-data-dir=${profile}`],
-  userDataDir: profile,
-});
+const browser = await launchChromium(profile);
 
 async function open(name, extra = '', before = null) {
   const page = await browser.newPage();

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <lightvol/core/detail/json_keys.h>
 #include <lightvol/core/jobs_file.h>
 #include <lightvol/core/path.h>
 
@@ -16,13 +17,6 @@ namespace {
 
 using nlohmann::json;
 
-constexpr int kMaxDepth = 32;
-
-// Thrown from the parser's callback: the line is JSON, but not a job.
-struct Refused {
-  std::string why;
-};
-
 // One job line, parsed; `where` is "<source>:<line>".
 JobLine parse_job_line(std::string_view text, const std::string& where) {
   JobLine job;
@@ -30,29 +24,13 @@ JobLine parse_job_line(std::string_view text, const std::string& where) {
     job.error = where + ": " + why;
     return job;
   };
-  // The callback sees the line as it is parsed: a key repeated in one object (else the last
-  // would win silently) and the nesting depth (else a line of '[' nests without bound).
-  std::vector<std::vector<std::string>> open_keys;
-  const json::parser_callback_t check = [&](int depth, json::parse_event_t event, json& parsed) {
-    if (depth > kMaxDepth)
-      throw Refused{"nested deeper than " + std::to_string(kMaxDepth) + " levels"};
-    if (event == json::parse_event_t::object_start) {
-      open_keys.emplace_back();
-    } else if (event == json::parse_event_t::object_end) {
-      if (!open_keys.empty()) open_keys.pop_back();
-    } else if (event == json::parse_event_t::key && !open_keys.empty()) {
-      const std::string& key = parsed.get_ref<const std::string&>();
-      std::vector<std::string>& seen = open_keys.back();
-      if (std::find(seen.begin(), seen.end(), key) != seen.end())
-        throw Refused{"key '" + key + "': given twice (a job gives each key once)"};
-      seen.push_back(key);
-    }
-    return true;
-  };
+  const json::parser_callback_t check = strict_json_check([](const std::string& key) {
+    return "key '" + key + "': given twice (a job gives each key once)";
+  });
   json j;
   try {
     j = json::parse(text.begin(), text.end(), check);
-  } catch (const Refused& r) {
+  } catch (const JsonRefused& r) {
     return bad(r.why);
   } catch (const json::parse_error& e) {
     return bad("not valid JSON (at byte " + std::to_string(e.byte) + ")");

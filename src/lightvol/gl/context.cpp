@@ -258,6 +258,18 @@ Result<GLuint> compile_shader(GLenum stage, const std::string& source, const std
   return Error{name + ": " + kind + " shader does not compile: " + log.c_str()};
 }
 
+// The link of program `id` as a value: its log on failure.
+Status link_status(GLuint id, const std::string& name) {
+  GLint ok = GL_FALSE;
+  glGetProgramiv(id, GL_LINK_STATUS, &ok);
+  if (ok == GL_TRUE) return {};
+  GLint length = 0;
+  glGetProgramiv(id, GL_INFO_LOG_LENGTH, &length);
+  std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
+  glGetProgramInfoLog(id, static_cast<GLsizei>(log.size()), nullptr, log.data());
+  return Error{name + ": program does not link: " + log.c_str()};
+}
+
 }  // namespace
 
 Result<Program> Program::compile(const std::string& vertex_source,
@@ -284,15 +296,7 @@ Result<Program> Program::compile(const std::string& vertex_source,
   glLinkProgram(id);
   glDeleteShader(*vs);
   glDeleteShader(*fs);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(id, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    GLint length = 0;
-    glGetProgramiv(id, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
-    glGetProgramInfoLog(id, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    return Error{name + ": program does not link: " + log.c_str()};
-  }
+  if (Status linked = link_status(id, name); !linked) return linked.error();
   return program;
 }
 
@@ -305,15 +309,7 @@ Result<Program> Program::compile_compute(const std::string& source, const std::s
   glAttachShader(id, *cs);
   glLinkProgram(id);
   glDeleteShader(*cs);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(id, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    GLint length = 0;
-    glGetProgramiv(id, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
-    glGetProgramInfoLog(id, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    return Error{name + ": program does not link: " + log.c_str()};
-  }
+  if (Status linked = link_status(id, name); !linked) return linked.error();
   return program;
 }
 

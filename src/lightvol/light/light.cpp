@@ -284,6 +284,23 @@ Light light_in_space(const Light& light, Space space) {
   return out;
 }
 
+EyeBox light_eye_box(const Light& light) {
+  if (light.type == LightType::omni)
+    return {{-light.far, -light.far, -light.far}, {light.far, light.far, light.far}};
+  bool ok = false;
+  const Mat4d inv = inverse(light.projection, &ok);
+  LV_CHECK(ok);
+  EyeBox box{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  for (int k = 0; k < 8; ++k) {
+    const Vec3d c =
+        inv.transform_point({k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0});
+    box.lo = {std::min(box.lo.x, c.x), std::min(box.lo.y, c.y), std::min(box.lo.z, c.z)};
+    box.hi = {std::max(box.hi.x, c.x), std::max(box.hi.y, c.y), std::max(box.hi.z, c.z)};
+  }
+  if (light.is_perspective()) box.hi.z = 0;
+  return box;
+}
+
 Mat4d omni_face_view(const Light& light, int face) {
   static constexpr Vec3d look[kOmniFaces] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
                                              {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};

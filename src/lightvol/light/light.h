@@ -61,6 +61,13 @@ std::string_view omni_face_tag(int face);
 // World → eye of omni face `face`: a 90° camera at the light with the look/up of docs/design.md §2.
 Mat4d omni_face_view(const Light& light, int face);
 
+// The box around all the light reaches, in its eye space: the frustum's box (a perspective
+// pyramid's reaches its apex, z = 0); for an omni light the cube of half-size `far` around it.
+struct EyeBox {
+  Vec3d lo, hi;
+};
+EyeBox light_eye_box(const Light& light);
+
 // Output frame of a volume.
 enum class Space { world, light };
 

@@ -212,21 +212,9 @@ int automatic_tile(const RenderScene& scene, int slices) {
 // ---- light bounds -------------------------------------------------------------------------------
 
 double light_bounds_exit(const Light& light, const Vec3d& origin, const Vec3d& direction) {
-  Vec3d lo{-light.far, -light.far, -light.far}, hi{light.far, light.far, light.far};
+  const auto [lo, hi] = light_eye_box(light);
   Vec3d o = origin - light.position, d = direction;
   if (light.type != LightType::omni) {
-    bool ok = false;
-    const Mat4d inv = inverse(light.projection, &ok);
-    LV_CHECK(ok);
-    lo = {1e300, 1e300, 1e300};
-    hi = {-1e300, -1e300, -1e300};
-    for (int k = 0; k < 8; ++k) {
-      const Vec3d c =
-          inv.transform_point({k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0});
-      lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
-      hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
-    }
-    if (light.is_perspective()) hi.z = 0;
     o = light.view.transform_point(origin);
     d = light.view.transform_vector(direction);
   }

@@ -319,21 +319,7 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
     set_matrix(s.first, "light_projection", light.projection);
     // Bounds: omni, a cube of half-size `far` around the light; else the frustum's box in eye
     // space.
-    Vec3d lo{-light.far, -light.far, -light.far}, hi{light.far, light.far, light.far};
-    if (light.type != LightType::omni) {
-      bool ok = false;
-      const Mat4d inv = inverse(light.projection, &ok);
-      LV_CHECK(ok);
-      lo = {1e300, 1e300, 1e300};
-      hi = {-1e300, -1e300, -1e300};
-      for (int k = 0; k < 8; ++k) {
-        const Vec3d c =
-            inv.transform_point({k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0});
-        lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
-        hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
-      }
-      if (light.is_perspective()) hi.z = 0;  // the pyramid reaches the apex
-    }
+    const auto [lo, hi] = light_eye_box(light);
     set_matrix(s.first, "bounds_view", light.view);
     glUniform3f(s.first.uniform("bounds_lo"), float(lo.x), float(lo.y), float(lo.z));
     glUniform3f(s.first.uniform("bounds_hi"), float(hi.x), float(hi.y), float(hi.z));

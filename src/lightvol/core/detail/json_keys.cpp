@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <sstream>
 #include <vector>
 
@@ -49,12 +50,29 @@ std::string describe(const json& v) { return describe_json(v); }
 
 constexpr int kMaxDepth = 32;
 
-// Thrown from the parser's callback: the text is valid JSON but not an acceptable description.
-struct Refused {
-  std::string why;
-};
-
 }  // namespace
+
+json::parser_callback_t strict_json_check(
+    std::function<std::string(const std::string& key)> repeated) {
+  // Keys per open object, shared by the copies the parser makes of the callback.
+  auto open_keys = std::make_shared<std::vector<std::vector<std::string>>>();
+  return [open_keys, repeated = std::move(repeated)](int depth, json::parse_event_t event,
+                                                     json& parsed) {
+    if (depth > kMaxDepth)
+      throw JsonRefused{"nested deeper than " + std::to_string(kMaxDepth) + " levels"};
+    if (event == json::parse_event_t::object_start) {
+      open_keys->emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      if (!open_keys->empty()) open_keys->pop_back();
+    } else if (event == json::parse_event_t::key && !open_keys->empty()) {
+      const std::string& key = parsed.get_ref<const std::string&>();
+      std::vector<std::string>& seen = open_keys->back();
+      if (std::find(seen.begin(), seen.end(), key) != seen.end()) throw JsonRefused{repeated(key)};
+      seen.push_back(key);
+    }
+    return true;
+  };
+}
 
 std::string describe_json(const json& v) {
   std::string s;
@@ -80,28 +98,12 @@ Result<json> parse_json_object(std::string_view text, const std::string& source,
     return Error{source + ": byte " + std::to_string(nul) +
                  " is NUL; a description is JSON text, which has none"};
   json root;
-  // The callback sees the document as it is parsed: keys per open object (a repeated key would
-  // otherwise be resolved silently, the last one winning) and the nesting depth.
-  std::vector<std::vector<std::string>> open_keys;
-  const json::parser_callback_t check = [&](int depth, json::parse_event_t event, json& parsed) {
-    if (depth > kMaxDepth)
-      throw Refused{"nested deeper than " + std::to_string(kMaxDepth) + " levels"};
-    if (event == json::parse_event_t::object_start) {
-      open_keys.emplace_back();
-    } else if (event == json::parse_event_t::object_end) {
-      if (!open_keys.empty()) open_keys.pop_back();
-    } else if (event == json::parse_event_t::key && !open_keys.empty()) {
-      const std::string& key = parsed.get_ref<const std::string&>();
-      std::vector<std::string>& seen = open_keys.back();
-      if (std::find(seen.begin(), seen.end(), key) != seen.end())
-        throw Refused{"key " + quote_text(key) + " appears twice in one object"};
-      seen.push_back(key);
-    }
-    return true;
-  };
+  const json::parser_callback_t check = strict_json_check([](const std::string& key) {
+    return "key " + quote_text(key) + " appears twice in one object";
+  });
   try {
     root = json::parse(text.begin(), text.end(), check);
-  } catch (const Refused& r) {
+  } catch (const JsonRefused& r) {
     return Error{source + ": " + r.why};
   } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
     const std::string message = e.what();

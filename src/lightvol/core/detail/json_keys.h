@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <initializer_list>
 #include <string>
 #include <string_view>
@@ -24,6 +25,17 @@ std::string format_number(double x);
 std::string describe_json(const nlohmann::json& v);
 // A string from the input as a message quotes it: at most about 80 characters, in double quotes.
 std::string quote_text(std::string_view s);
+
+// Thrown by strict_json_check's callback: the text is JSON, but refused (`why`).
+struct JsonRefused {
+  std::string why;
+};
+
+// A callback for nlohmann::json::parse that throws JsonRefused for nesting deeper than 32 levels
+// (else a line of '[' nests without bound) and for a key repeated in one object (else the last
+// would win silently), worded by `repeated(key)`. It keeps its own state: one per parse.
+nlohmann::json::parser_callback_t strict_json_check(
+    std::function<std::string(const std::string& key)> repeated);
 
 // `text` as a JSON object. Malformed JSON, numbers beyond double's range (1e99999), a NUL byte,
 // a key repeated in one object, nesting deeper than 32 levels and anything but an object are
