@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -190,7 +191,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     messages.emplace_back(missing.error().message, valid_utf8(path));
 
   for (const auto& [message, from_utf8] : messages) {
-    if (from_utf8) LV_CHECK(valid_utf8(message));
+    if (from_utf8 && !valid_utf8(message)) {
+      std::fprintf(stderr, "a message made of UTF-8 is not UTF-8: %s\n", message.c_str());
+      LV_CHECK(false);
+    }
     check_report(name, key, message);
   }
   return 0;

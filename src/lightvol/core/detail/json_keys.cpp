@@ -106,7 +106,9 @@ Result<json> parse_json_object(std::string_view text, const std::string& source,
   } catch (const JsonRefused& r) {
     return Error{source + ": " + r.why};
   } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1e99999
-    const std::string message = e.what();
+    // The parser quotes what it last read as raw bytes, which may end inside a UTF-8 character:
+    // each byte that is not UTF-8 becomes U+FFFD.
+    const std::string message = json::parse(dump_text(json(e.what()))).get<std::string>();
     const auto at = message.find("parse error");
     return Error{source +
                  ": not valid JSON: " + (at == std::string::npos ? message : message.substr(at))};
