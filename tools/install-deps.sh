@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev clang-format
   chromium  # the web viewer's browser test (headless, SwiftShader's WebGL2)
+  blender python3-numpy  # a real client of the GLB (its glTF importer needs numpy)
 )
 # Node.js for the web viewer's tests (Khronos' glTF validator, puppeteer-core): Debian's, unless a
 # node is installed already (e.g. from NodeSource, whose nodejs package brings its own npm).
