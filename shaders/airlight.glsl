@@ -20,9 +20,10 @@
 //   LIGHTVOL_SURFACE_VERTEX, LIGHTVOL_SURFACE_FRAGMENT  for hosts without a distance buffer: draw
 //       the scene with the depth test on into an R32F target cleared to 3e38; each fragment writes
 //       its distance along the pixel's ray, the `surface` texture pass 1 reads.
-//   LIGHTVOL_DENSITY  (with the volume and resolve fragment stages, OpenGL 4.5 only) a medium of
-//       varying density: pass 1 also writes each fragment's signed D(t), read from the per-frame
-//       grid lightvol's GlDensityGrid makes, to a second R32F target that pass 2 adds.
+//   LIGHTVOL_DENSITY  (with the volume and resolve fragment stages) a medium of varying density:
+//       pass 1 also writes each fragment's signed D(t), read from the per-frame grid (lightvol's
+//       GlDensityGrid in OpenGL 4.5, web/density.js in WebGL2), to a second target that pass 2
+//       adds.
 //   LIGHTVOL_LIVE_VOLUME_VERTEX  pass 1's vertex stage for a live volume (docs/engines.md): the
 //       static volume of a light made from its shadow map(s) as it is drawn, with no vertex
 //       attributes. Vertex gl_VertexID is vertex gl_VertexID of `lightvol build`'s static volume
@@ -306,25 +307,36 @@ uniform int baseline;
 uniform int panels;
 uniform float facing_sign;
 #ifdef LIGHTVOL_DENSITY
-// Media of varying density (OpenGL 4.5 only; docs/design.md 6): a per-frame grid of columns, one
-// per grid_tile x grid_tile pixels, each holding D(t) = F(t) - F_hom(t) and its derivative at
-// grid_slices distances uniform on [0, grid_t1[column]]: the heterogeneous cumulative in-scattering
-// along the column's ray minus the homogeneous one that this fragment computes exactly. Each
-// fragment adds its signed D(t) (bilinear across columns, cubic Hermite across slices) to a
-// second target.
-layout(std430, binding = 4) readonly buffer DensityGrid { vec2 grid_d[]; };
-layout(std430, binding = 5) readonly buffer DensityColumns { float grid_t1[]; };
+// Media of varying density (docs/design.md 6): a per-frame grid of columns, one per grid_tile x
+// grid_tile pixels, each holding D(t) = F(t) - F_hom(t) and its derivative at grid_slices
+// distances uniform on [0, t1 of the column]: the heterogeneous cumulative in-scattering along the
+// column's ray minus the homogeneous one that this fragment computes exactly. Each fragment adds
+// its signed D(t) (bilinear across columns, cubic Hermite across slices) to a second target.
+// OpenGL 4.5 (lightvol's GlDensityGrid) keeps the grid in shader storage buffers; WebGL2 (the web
+// viewer's web/density.js, GL_ES) in textures: grid_texture RG32F (D, D') at (column x, column y,
+// slice), grid_reach R32F t1 at (column x, column y).
 uniform ivec2 grid_columns;
 uniform int grid_tile;
 uniform int grid_slices;
+#ifdef GL_ES
+uniform highp sampler3D grid_texture;
+uniform highp sampler2D grid_reach;
+float grid_t1(ivec2 c) { return texelFetch(grid_reach, c, 0).r; }
+vec2 grid_d(ivec2 c, int k) { return texelFetch(grid_texture, ivec3(c, k), 0).rg; }
+#else
+layout(std430, binding = 4) readonly buffer DensityGrid { vec2 grid_d_buffer[]; };
+layout(std430, binding = 5) readonly buffer DensityColumns { float grid_t1_buffer[]; };
+float grid_t1(ivec2 c) { return grid_t1_buffer[c.y * grid_columns.x + c.x]; }
+vec2 grid_d(ivec2 c, int k) { return grid_d_buffer[(c.y * grid_columns.x + c.x) * grid_slices + k]; }
+#endif
 layout(location = 1) out float varying_part;
-float grid_column(int column, float t) {
-  float t1 = grid_t1[column];
+float grid_column(ivec2 c, float t) {
+  float t1 = grid_t1(c);
   if (!(t1 > 0.0)) return 0.0;
   float k = clamp(t / t1, 0.0, 1.0) * float(grid_slices - 1);
   int k0 = min(int(k), grid_slices - 2);
-  vec2 a = grid_d[column * grid_slices + k0];
-  vec2 b = grid_d[column * grid_slices + k0 + 1];
+  vec2 a = grid_d(c, k0);
+  vec2 b = grid_d(c, k0 + 1);
   float u = k - float(k0), h = t1 / float(grid_slices - 1);
   float u2 = u * u, u3 = u2 * u;
   return (2.0 * u3 - 3.0 * u2 + 1.0) * a.x + (u3 - 2.0 * u2 + u) * h * a.y +
@@ -335,10 +347,10 @@ float grid_lookup(float t) {
   ivec2 i = ivec2(q);
   ivec2 j = min(i + 1, grid_columns - 1);
   vec2 f = q - vec2(i);
-  float d00 = grid_column(i.y * grid_columns.x + i.x, t);
-  float d10 = grid_column(i.y * grid_columns.x + j.x, t);
-  float d01 = grid_column(j.y * grid_columns.x + i.x, t);
-  float d11 = grid_column(j.y * grid_columns.x + j.x, t);
+  float d00 = grid_column(i, t);
+  float d10 = grid_column(ivec2(j.x, i.y), t);
+  float d01 = grid_column(ivec2(i.x, j.y), t);
+  float d11 = grid_column(j, t);
   float y0 = d00 + f.x * (d10 - d00);
   float y1 = d01 + f.x * (d11 - d01);
   return y0 + f.y * (y1 - y0);

@@ -6,8 +6,8 @@ import * as THREE from 'three';
 // docs/engines.md: the WebGL2 version of shaders/airlight.glsl is the file behind this prefix and
 // one #define naming the stage (three.js adds "#version 300 es" for GLSL3 raw shader materials).
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
-export function stageSource(glsl, stage) {
-  return `${PREFIX}#define ${stage}\n${glsl}`;
+export function stageSource(glsl, stage, density = false) {
+  return `${PREFIX}#define ${stage}\n${density ? '#define LIGHTVOL_DENSITY\n' : ''}${glsl}`;
 }
 
 // ---- lightvol's matrices (row-major arrays of 16, as in src/lightvol/core/math.cpp) -----------
@@ -96,9 +96,9 @@ export function sunTable() {
 
 const PHASES = { isotropic: 0, hg: 1, schlick: 2 };
 
-function floatTarget(width, height, format, depth) {
+function floatTarget(width, height, format, depth, count = 1) {
   const target = new THREE.WebGLRenderTarget(width, height, {
-    type: THREE.FloatType, format, depthBuffer: depth, stencilBuffer: false,
+    type: THREE.FloatType, format, depthBuffer: depth, stencilBuffer: false, count,
     minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false,
   });
   return target;
@@ -106,9 +106,14 @@ function floatTarget(width, height, format, depth) {
 
 // Renders the airlight of a light volume for one camera, as `lightvol render --method volume`:
 // the scene's distances along the pixel rays (surface pass), the volume with additive float
-// blending (RG32F), the resolve (R32F).
+// blending (RG32F), the resolve (R32F). With `density: true` (a medium of varying density), the
+// volume and resolve stages are airlight.glsl's LIGHTVOL_DENSITY ones: the volume pass also sums
+// each fragment's signed D(t) from a DensityGrid (web/density.js, setDensityGrid) into a second
+// target, which the resolve adds.
 export class AirlightRenderer {
-  constructor(renderer, glsl, { width, height }) {
+  constructor(renderer, glsl, { width, height, density = false }) {
+    this.density = density;
+    this.densityGrid = null;
     this.renderer = renderer;
     this.width = width;
     this.height = height;
@@ -119,7 +124,7 @@ export class AirlightRenderer {
     this.depthClamp = gl.getExtension('EXT_depth_clamp');
     this.table = sunTable();
     this.surfaceTarget = floatTarget(width, height, THREE.RedFormat, true);
-    this.accumulateTarget = floatTarget(width, height, THREE.RGFormat, false);
+    this.accumulateTarget = floatTarget(width, height, THREE.RGFormat, false, density ? 2 : 1);
     this.airlightTarget = floatTarget(width, height, THREE.RedFormat, false);
     this.common = {
       inv_projection: { value: new THREE.Matrix4() },
@@ -144,10 +149,10 @@ export class AirlightRenderer {
       profile_cos_outer: { value: 1 },
       view_projection: { value: new THREE.Matrix4() },
     };
-    const material = (stage, extra, options) => new THREE.RawShaderMaterial({
+    const material = (stage, extra, options, withDensity = false) => new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3,
       vertexShader: stageSource(glsl, `LIGHTVOL_${stage}_VERTEX`),
-      fragmentShader: stageSource(glsl, `LIGHTVOL_${stage}_FRAGMENT`),
+      fragmentShader: stageSource(glsl, `LIGHTVOL_${stage}_FRAGMENT`, withDensity),
       uniforms: { ...this.common, ...extra },
       ...options,
     });
@@ -162,16 +167,26 @@ export class AirlightRenderer {
       blendEquationAlpha: THREE.AddEquation, blendSrcAlpha: THREE.OneFactor,
       blendDstAlpha: THREE.OneFactor,
     };
+    // The density grid's uniforms (airlight.glsl's LIGHTVOL_DENSITY, GL_ES branch).
+    this.gridUniforms = {
+      grid_columns: { value: new THREE.Vector2(1, 1) },
+      grid_tile: { value: 1 },
+      grid_slices: { value: 2 },
+      grid_texture: { value: null },
+      grid_reach: { value: null },
+    };
     this.volumeMaterial = material('VOLUME', {
       surface: { value: this.surfaceTarget.texture },
       baseline: { value: 1 },
       panels: { value: 2 },
       facing_sign: { value: -1 },
-    }, this.volumeState);
+      ...(density ? this.gridUniforms : {}),
+    }, this.volumeState, density);
     this.resolveMaterial = material('RESOLVE', {
-      accumulated: { value: this.accumulateTarget.texture },
+      accumulated: { value: this.accumulateTarget.textures[0] },
+      ...(density ? { accumulated_density: { value: this.accumulateTarget.textures[1] } } : {}),
       baseline: { value: 1 },
-    }, { depthTest: false, depthWrite: false });
+    }, { depthTest: false, depthWrite: false }, density);
     // Three vertices, positions unused: the resolve's full-screen triangle comes from gl_VertexID.
     const triangle = new THREE.BufferGeometry();
     triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
@@ -236,8 +251,21 @@ export class AirlightRenderer {
     this.volumeMaterial.uniforms.panels.value = useProfile ? 8 : 2;
   }
 
+  // The DensityGrid whose grid the volume pass reads (made each frame in render()).
+  setDensityGrid(grid) {
+    if (!this.density) throw new Error('AirlightRenderer: constructed without density: true');
+    this.densityGrid = grid;
+    const g = this.gridUniforms, u = grid.uniforms;
+    g.grid_columns.value.copy(u.grid_columns.value);
+    g.grid_tile.value = u.grid_tile.value;
+    g.grid_slices.value = u.grid_slices.value;
+    g.grid_texture.value = u.grid_texture.value;
+    g.grid_reach.value = u.grid_reach.value;
+  }
+
   // camera: {view, projection (THREE.Matrix4), flipY}.
   setCamera(camera) {
+    this.camera = camera;
     const u = this.common;
     const invView = camera.view.clone().invert();
     u.inv_projection.value.copy(camera.projection).invert();
@@ -280,9 +308,13 @@ export class AirlightRenderer {
     gl.clearBufferfi(gl.DEPTH_STENCIL, 0, 1, 0);
     if (drawSurfaces) drawSurfaces();
     else renderer.render(this.surfaceScene, this.dummyCamera);
+    // A varying density: this frame's opacity map and grid, for this camera and these surfaces.
+    if (this.densityGrid)
+      this.densityGrid.update({ ...this.camera, width: this.width, height: this.height }, this.readSurface());
 
     renderer.setRenderTarget(this.accumulateTarget);
     gl.clearBufferfv(gl.COLOR, 0, new Float32Array([0, 0, 0, 0]));
+    if (this.density) gl.clearBufferfv(gl.COLOR, 1, new Float32Array([0, 0, 0, 0]));
     if (this.depthClamp) gl.enable(this.depthClamp.DEPTH_CLAMP_EXT);
     renderer.render(this.volumeScene, this.dummyCamera);
     if (this.depthClamp) gl.disable(this.depthClamp.DEPTH_CLAMP_EXT);

@@ -252,6 +252,14 @@ export function missingFloatSupport(gl) {
   return null;
 }
 
+// A medium of varying density needs its per-frame grid (web/density.js), which the live volume does
+// not make yet (as lightvol's LiveVolume): refused, never drawn as if homogeneous.
+function refuseDensity(medium) {
+  if (medium && medium.density !== undefined)
+    throw new Error('LightVolume: the medium has a "density": live volumes render homogeneous media only ' +
+                    '(the viewer, index.html, renders noise densities)');
+}
+
 export class LightVolume {
   // The text of shaders/airlight.glsl (fetched beside this module: ../shaders/airlight.glsl).
   static async loadShader(url = SHADER_URL) {
@@ -277,6 +285,7 @@ export class LightVolume {
     if (renderer.shadowMap.type === THREE.VSMShadowMap && light.isPointLight)
       throw new Error('LightVolume: three.js makes no point-light shadow maps with VSMShadowMap');
     if (!glsl) throw new Error('LightVolume: options.glsl is empty (LightVolume.loadShader() gives it)');
+    refuseDensity(medium);
     const gl = renderer.getContext();
     const missing = missingFloatSupport(gl);
     if (missing) throw new Error(missing);
@@ -357,7 +366,10 @@ export class LightVolume {
   get surfaceTexture() { return this.airlight.surfaceTarget.texture; }
   get triangles() { return this.geometry.index ? this.geometry.index.count / 3 : 0; }
 
-  setMedium(medium) { this.medium = medium; }
+  setMedium(medium) {
+    refuseDensity(medium);
+    this.medium = medium;
+  }
   // The camera's new image size in pixels (renderer.getDrawingBufferSize()); the textures stay the
   // same objects.
   setSize(width, height) { this.airlight.setSize(width, height); }

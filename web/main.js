@@ -14,6 +14,7 @@ import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
 import { AirlightRenderer, parseFrame } from './airlight.js';
+import { DensityGrid, parseDensity } from './density.js';
 
 const status = document.getElementById('status');
 const say = (text) => { status.textContent = text; };
@@ -84,6 +85,11 @@ async function main() {
   let medium = mediumUrl ? await fetchJson(mediumUrl) : extras.medium;
   if (!medium) throw new Error('no medium: give medium=URL (or build the GLB with --medium)');
   medium = structuredClone(medium);
+  // A medium of varying density ("density": {"type": "noise", ...}): rendered as `lightvol render
+  // --method volume` renders it, with shaders/density.glsl and a per-frame grid (web/density.js).
+  const noise = parseDensity(medium, mediumUrl ?? 'the GLB\'s medium');
+  const densityGlsl = noise
+    ? await fetchText(new URL('../shaders/density.glsl', import.meta.url).href) : null;
 
   const camera = parseFrame(cameraJson);
   const width = camera.width, height = camera.height;
@@ -97,10 +103,11 @@ async function main() {
   THREE.ColorManagement.enabled = false;
   renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
 
-  const airlight = new AirlightRenderer(renderer, glsl, { width, height });
+  const airlight = new AirlightRenderer(renderer, glsl, { width, height, density: !!noise });
   const light = parseFrame(extras.light);
   airlight.setLight(light);
   airlight.setMedium(medium);
+  if (noise) airlight.setDensityGrid(new DensityGrid(airlight, glsl, densityGlsl, extras.light, light, noise));
   const volumeGeometries = worldGeometries(gltf.scene);
   const volumeGeometry = volumeGeometries[0];
   airlight.setVolume(volumeGeometry);
@@ -247,7 +254,8 @@ async function main() {
       renderer.autoClear = true;
     }
     ui.info.textContent = `${triangles.toLocaleString('en')} triangles · airlight ${ms.toFixed(1)} ms · ` +
-                          `${width}×${height}` + (airlight.depthClamp ? '' : ' · no depth clamp');
+                          `${width}×${height}` + (airlight.depthClamp ? '' : ' · no depth clamp') +
+                          (noise ? ` · noise density, grid ${airlight.densityGrid.options.slices} slices` : '');
   }
 
   function onMedium() {

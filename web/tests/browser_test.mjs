@@ -2,7 +2,10 @@
 // puppeteer-core. On `lightvol demo`'s outputs (static and adaptive volumes, scene, camera, medium),
 // a Draco-compressed volume and an omni volume of the bundled scene, the viewer's airlight (window.lightvolAirlight()) must match `lightvol render --method volume` of the
 // same camera within 1 % relative L2; without `scene=` (no surface: the airlight runs through the
-// whole volume) it must match `render` with a camera depth of 1 everywhere.
+// whole volume) it must match `render` with a camera depth of 1 everywhere. With a noise medium
+// ("density": {"type": "noise"}; spot and omni volumes) likewise, and the homogeneous medium's
+// render must be at least 5 % away (the density matters); a density lightvol refuses (octaves 13)
+// gives lightvol:error and the message naming the key on the page and in the console.
 //   node web/tests/browser_test.mjs PATH/TO/lightvol [--demo-size N] [--only CASE] [--screenshot FILE.png]
 //                                   [--keep DIR]
 // Exit 0 when every case passes, 1 when one fails, 2 when something could not run.
@@ -72,6 +75,12 @@ const lightvolSurface = surfaceDistances(readExr(join(work, 'camera_depth_rgb.ex
 execFileSync('oiiotool', ['--pattern', 'constant:color=1', `${camera.width}x${camera.height}`, '1',
                           '--chnames', 'Z', '-d', 'float', '-o', 'empty_depth.exr'], { cwd: work });
 const noSurface = new Float64Array(camera.width * camera.height).fill(Infinity);
+// A noise medium (docs/design.md §6): the demo's medium with a varying density whose features (a
+// wavelength of 1/0.6 units at the first octave, 1/2.4 at the third) are well inside the view.
+const medium = JSON.parse(readFileSync(join(work, 'medium.json'), 'utf8'));
+writeFileSync(join(work, 'medium_noise.json'), JSON.stringify({
+  ...medium, density: { type: 'noise', seed: 7, frequency: 0.6, octaves: 3, lacunarity: 2, gain: 0.5,
+                        offset: 1, scale: 0.9 } }));
 const only = option('--only', null);
 const allCases = [
   { name: 'static', volume: 'volume_static.glb', light: spot },
@@ -79,12 +88,23 @@ const allCases = [
   { name: 'draco', volume: 'volume_draco.glb', light: spot },
   { name: 'omni', volume: 'volume_omni.glb', light: join(work, 'omni.json') },
   { name: 'no-scene', volume: 'volume_static.glb', light: spot, noScene: true },
+  { name: 'noise', volume: 'volume_static.glb', light: spot, medium: 'medium_noise.json' },
+  { name: 'noise-omni', volume: 'volume_omni.glb', light: join(work, 'omni.json'), medium: 'medium_noise.json' },
+  { name: 'noise-bad', volume: 'volume_static.glb', light: spot, medium: 'medium_noise_bad.json',
+    error: /medium_noise_bad\.json: density\.octaves: must be an integer in \[1, 12\], got 13/ },
 ];
+writeFileSync(join(work, 'medium_noise_bad.json'), JSON.stringify({
+  ...medium, density: { type: 'noise', octaves: 13 } }));
 const cases = allCases.filter((c) => !only || c.name === only);
-for (const c of cases)
+for (const c of cases.filter((c) => !c.error)) {
+  // A noise case must test the density: its reference differs from the homogeneous medium's.
+  if (c.medium)
+    run('render', c.volume, '--light', c.light, '--camera', 'camera.json', '--depth', 'camera_depth.exr',
+        '--medium', 'medium.json', '--method', 'volume', '--out', `${c.name}_homogeneous.exr`);
   run('render', c.volume, '--light', c.light, '--camera', 'camera.json',
       '--depth', c.noScene ? 'empty_depth.exr' : 'camera_depth.exr',
-      '--medium', 'medium.json', '--method', 'volume', '--out', `${c.name}_reference.exr`);
+      '--medium', c.medium ?? 'medium.json', '--method', 'volume', '--out', `${c.name}_reference.exr`);
+}
 
 // ---- the browser ---------------------------------------------------------------------------------
 const profile = mkdtempSync(join(tmpdir(), 'lightvol-chromium-'));
@@ -99,12 +119,21 @@ try {
     page.on('console', (m) => messages.push(m.text()));
     page.on('pageerror', (e) => messages.push(e.message));
     const address = url(`/web/index.html?volume=/data/${c.volume}&camera=/data/camera.json` +
-                        `&medium=/data/medium.json` + (c.noScene ? '' : '&scene=/data/scene.glb'));
+                        `&medium=/data/${c.medium ?? 'medium.json'}` + (c.noScene ? '' : '&scene=/data/scene.glb'));
     const started = Date.now();
     await page.goto(address);
     await page.waitForFunction(() => document.title.startsWith('lightvol:') &&
                                      document.title !== 'lightvol viewer', { timeout: 300000 });
     const title = await page.title();
+    if (c.error) {
+      // Bad input: the page says what is wrong (status line and console), never a silent image.
+      const status = await page.evaluate(() => document.getElementById('status').textContent);
+      const ok = title === 'lightvol:error' && c.error.test(status) && messages.some((m) => c.error.test(m));
+      console.log(`${c.name}: ${title}, the page says "${status}"` + (ok ? '' : `  FAILED (want ${c.error})`));
+      if (!ok) failed = true;
+      await page.close();
+      continue;
+    }
     if (title !== 'lightvol:done') {
       console.log(`${c.name}: the viewer failed (${title}): ${messages.join(' | ')}`);
       failed = true;
@@ -141,7 +170,16 @@ try {
     const reference = readExr(join(work, `${c.name}_reference.exr`));
     const info = await page.evaluate(() => document.getElementById('info').textContent);
     const l2 = airlight.length === reference.values.length ? relativeL2(airlight, reference.values, mask) : Infinity;
-    const ok = l2 <= TOLERANCE && disagree + cracks <= 0.01 * mask.length;
+    let ok = l2 <= TOLERANCE && disagree + cracks <= 0.01 * mask.length;
+    if (c.medium) {
+      // The density must matter: the homogeneous medium's image is at least 5 % away.
+      const homogeneous = readExr(join(work, `${c.name}_homogeneous.exr`)).values;
+      const apart = relativeL2(airlight, homogeneous, mask);
+      const matters = apart >= 0.05;
+      console.log(`${c.name}: the homogeneous medium's render is ${(100 * apart).toFixed(1)} % away` +
+                  (matters ? '' : '  FAILED (want >= 5 %: the case would not test the density)'));
+      ok = ok && matters;
+    }
     console.log(`${c.name}: relative L2 ${(100 * l2).toFixed(4)} % against lightvol render --method volume ` +
                 `(${reference.width}x${reference.height}, left out: ${disagree} pixels whose scene surfaces differ, ${cracks} whose face count is not the camera's ${inside}; ${info}; page ${((Date.now() - started) / 1000).toFixed(1)} s)` +
                 (ok ? '' : '  FAILED'));

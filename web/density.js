@@ -1,0 +1,514 @@
+// Media of varying density in WebGL2 (docs/design.md §6, docs/web.md): what
+// src/lightvol/render/gl_density.cpp does with compute shaders, done with fragment passes that
+// render into the layers of 3D textures. Per frame:
+//   - the opacity map: the light-side optical depth τ_L = σt ∫ρ along the light's rays, `size`²
+//     columns per face (omni: six) by `layers` samples uniform in the distance from the light
+//     (directional: the depth below its near plane), cumulative: one pass per layer carries the
+//     running sum in a 2D target and copies it into that layer of an R32F 3D texture;
+//   - the in-scattering grid: per column of `tile`×`tile` pixels, D(t) = F(t) − F_hom(t) and its
+//     derivative at `slices` distances uniform on [0, t1], t1 the farthest any pixel interpolated
+//     from the column needs (its surface, or where its ray leaves the light's bounds): one pass per
+//     slice carries (D, eye-side optical depth) and writes (D, D') into an RG32F 3D texture, which
+//     shaders/airlight.glsl's LIGHTVOL_DENSITY stage reads (its GL_ES branch).
+// The density ρ(x) is shaders/density.glsl itself (fetched, never copied); the ray and phase
+// function are airlight.glsl's LIGHTVOL_COMMON part. Defaults as `lightvol render --method volume`:
+// 128 slices of 2 substeps, an opacity map of 64² × 64 layers of 4 substeps, the automatic tile.
+import * as THREE from 'three';
+import { lookAt, stageSource } from './airlight.js';
+
+// ---- the medium's "density" (as parse_density in src/lightvol/airlight/airlight.cpp) ----------
+
+const NOISE_KEYS = {
+  seed: [0, 4294967295, true, 'an integer in [0, 4294967295]', 0],
+  frequency: [0, Infinity, false, '> 0', 1],
+  octaves: [1, 12, true, 'an integer in [1, 12]', 4],
+  lacunarity: [1, 16, false, 'in [1, 16]', 2],
+  gain: [0, 1, false, 'in [0, 1]', 0.5],
+  offset: [0, Infinity, false, '>= 0', 1],
+  scale: [0, Infinity, false, '>= 0', 0.5],
+};
+
+// The medium's density as {seed, frequency, ...}, or null for a homogeneous medium (no "density").
+// Throws an Error naming the key for anything lightvol would refuse.
+export function parseDensity(medium, source = 'medium') {
+  if (medium.density === undefined) return null;
+  const d = medium.density;
+  const where = `${source}: density`;
+  if (d === null || typeof d !== 'object' || Array.isArray(d)) throw new Error(`${where}: expected an object`);
+  if (d.type === 'vdb') throw new Error(`${where}.type: OpenVDB densities ("vdb") are not supported in the browser; use "noise"`);
+  if (d.type !== 'noise') throw new Error(`${where}.type: expected "noise", got ${JSON.stringify(d.type)}`);
+  const noise = {};
+  for (const key of Object.keys(d))
+    if (key !== 'type' && !(key in NOISE_KEYS)) throw new Error(`${where}.${key}: unknown key`);
+  for (const [key, [lo, hi, integer, range, fallback]] of Object.entries(NOISE_KEYS)) {
+    const x = d[key] ?? fallback;
+    if (typeof x !== 'number' || !(x >= lo && x <= hi) || (integer && Math.floor(x) !== x) ||
+        (key === 'frequency' && !(x > 0)))
+      throw new Error(`${where}.${key}: must be ${range}, got ${JSON.stringify(d[key])}`);
+    noise[key] = x;
+  }
+  return noise;
+}
+
+// ---- the light's bounds (light_eye_box, light_bounds_exit, light_reach in C++) ----------------
+
+const OMNI_LOOK = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]];
+const OMNI_UP = [[0, -1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [0, -1, 0], [0, -1, 0]];
+
+function eyeBox(light) {
+  if (light.type === 'omni') {
+    const f = light.far;
+    return { lo: [-f, -f, -f], hi: [f, f, f] };
+  }
+  const inv = light.projection.clone().invert();
+  const lo = [1e300, 1e300, 1e300], hi = [-1e300, -1e300, -1e300];
+  for (let k = 0; k < 8; ++k) {
+    const c = new THREE.Vector3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1).applyMatrix4(inv);
+    const a = [c.x, c.y, c.z];
+    for (let i = 0; i < 3; ++i) { lo[i] = Math.min(lo[i], a[i]); hi[i] = Math.max(hi[i], a[i]); }
+  }
+  if (light.perspective) hi[2] = 0;
+  return { lo, hi };
+}
+
+// ---- the passes -----------------------------------------------------------------------------
+
+// The opacity map's uniforms and look-up, with the map in a 3D texture: x = column, y = face ×
+// size + row, z = layer.
+const OPACITY_COMMON = `
+uniform int om_size;
+uniform int om_layers;
+uniform int om_faces;
+uniform int om_point;
+uniform float om_range;
+uniform vec3 om_light_position;
+uniform vec3 om_light_direction;
+uniform float om_near;
+uniform mat4 om_world_to_clip[6];
+uniform mat4 om_clip_to_world[6];
+`;
+
+const OPACITY_LOOKUP = `
+uniform highp sampler3D om_tau;
+float om_fetch(int face, int c, int r, int k) {
+  return texelFetch(om_tau, ivec3(c, face * om_size + r, k), 0).r;
+}
+float light_optical_depth(vec3 x) {
+  int face = 0;
+  if (om_faces == 6) {
+    vec3 d = x - om_light_position;
+    vec3 a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) face = d.x > 0.0 ? 0 : 1;
+    else if (a.y >= a.z) face = d.y > 0.0 ? 2 : 3;
+    else face = d.z > 0.0 ? 4 : 5;
+  }
+  vec4 c = om_world_to_clip[face] * vec4(x, 1.0);
+  vec2 ndc = c.xy / max(c.w, 1e-30);
+  float r = om_point == 1 ? length(x - om_light_position)
+                          : dot(x - om_light_position, om_light_direction) - om_near;
+  vec3 g = vec3(clamp((ndc + 1.0) * 0.5 * float(om_size) - 0.5, 0.0, float(om_size - 1)),
+                clamp(r / om_range * float(om_layers - 1), 0.0, float(om_layers - 1)));
+  ivec3 i = min(ivec3(g), ivec3(om_size - 2, om_size - 2, om_layers - 2));
+  vec3 f = g - vec3(i);
+  float v[4];
+  for (int k = 0; k < 4; ++k) {
+    int cc = i.x + (k & 1), rr = i.y + (k >> 1);
+    float a = om_fetch(face, cc, rr, i.z), b = om_fetch(face, cc, rr, i.z + 1);
+    v[k] = a + f.z * (b - a);
+  }
+  float y0 = v[0] + f.x * (v[1] - v[0]);
+  float y1 = v[2] + f.x * (v[3] - v[2]);
+  return y0 + f.y * (y1 - y0);
+}
+`;
+
+// One layer k ≥ 1 of the opacity map: τ at layer k − 1 (om_previous) plus σt × the layer's
+// midpoint samples of ρ. Fragment (x, face × size + row) is that face's column (x, row).
+const OPACITY_STEP = `
+uniform highp sampler2D om_previous;
+uniform int om_layer;
+uniform int om_substeps;
+uniform float om_sigma_t;
+layout(location = 0) out vec4 out_tau;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  int face = p.y / om_size;
+  ivec2 id = ivec2(p.x, p.y - face * om_size);
+  vec2 ndc = (2.0 * vec2(id) + 1.0) / float(om_size) - 1.0;
+  vec4 n = om_clip_to_world[face] * vec4(ndc, -1.0, 1.0);
+  vec4 f = om_clip_to_world[face] * vec4(ndc, 1.0, 1.0);
+  vec3 pn = n.xyz / n.w, pf = f.xyz / f.w;
+  vec3 origin = om_point == 1 ? om_light_position : pn;
+  vec3 dir = normalize(om_point == 1 ? pn - om_light_position : pf - pn);
+  float layer = om_range / float(om_layers - 1);
+  float h = layer / float(om_substeps);
+  float sum = 0.0;
+  for (int j = 0; j < om_substeps; ++j)
+    sum += density(origin + ((float(om_layer - 1) + (float(j) + 0.5) / float(om_substeps)) * layer) * dir);
+  out_tau = vec4(texelFetch(om_previous, p, 0).r + om_sigma_t * sum * h, 0.0, 0.0, 1.0);
+}
+`;
+
+// Copies a 2D target into the bound layer of a 3D target.
+const COPY = `
+uniform highp sampler2D source;
+layout(location = 0) out vec4 out_value;
+void main() { out_value = texelFetch(source, ivec2(gl_FragCoord.xy), 0); }
+`;
+
+// The grid: the integrand of D as gl_density.cpp's d_integrand, and two passes per slice.
+// gl_FragCoord is the column's centre in pixels (airlight.glsl's pixel_ray reads it).
+const GRID_COMMON = `
+uniform int grid_tile;
+uniform int grid_slices;
+uniform int grid_substeps;
+uniform highp sampler2D grid_reach;
+uniform highp sampler2D grid_state;   // (D, eye-side optical depth) at the previous slice
+vec3 g_ray_origin;
+vec3 g_ray_dir;
+float d_integrand(float t, float rho, float tau_e) {
+  vec3 x = g_ray_origin + t * g_ray_dir;
+  float light_part, hom_depth;
+  if (light_type == 1) {
+    light_part = sigma_s * intensity * phase(-dot(g_ray_dir, light_direction));
+    hom_depth = clamp(dot(x - light_position, light_direction) - light_near, 0.0, om_range);
+  } else {
+    vec3 to_x = x - light_position;
+    float dist = length(to_x);
+    light_part = sigma_s * intensity * phase(dot(to_x / dist, -g_ray_dir)) * profile(to_x) /
+                 (dist * dist);
+    hom_depth = min(dist, om_range);
+  }
+  float het = rho * exp(-light_optical_depth(x) - tau_e);
+  float hom = exp(-sigma_t * (hom_depth + t));
+  return light_part * (het - hom);
+}
+`;
+
+const GRID_STEP = `
+uniform int grid_slice;
+layout(location = 0) out vec4 out_state;
+void main() {
+  ivec2 id = ivec2(lv_column_coord.xy);
+  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
+  pixel_ray(g_ray_origin, g_ray_dir);
+  vec2 state = texelFetch(grid_state, id, 0).rg;
+  float d = state.x, tau_e = state.y;
+  float slice = texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
+  float dt = slice / float(grid_substeps);
+  for (int j = 0; j < grid_substeps; ++j) {
+    float t = (float(grid_slice - 1) + (float(j) + 0.5) / float(grid_substeps)) * slice;
+    float rho = density(g_ray_origin + t * g_ray_dir);
+    d += d_integrand(t, rho, tau_e + 0.5 * sigma_t * rho * dt) * dt;
+    tau_e += sigma_t * rho * dt;
+  }
+  out_state = vec4(d, tau_e, 0.0, 1.0);
+}
+`;
+
+const GRID_LAYER = `
+uniform int grid_slice;
+layout(location = 0) out vec4 out_d;
+void main() {
+  ivec2 id = ivec2(lv_column_coord.xy);
+  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
+  pixel_ray(g_ray_origin, g_ray_dir);
+  vec2 state = texelFetch(grid_state, id, 0).rg;
+  float t = float(grid_slice) * texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
+  out_d = vec4(state.x, d_integrand(t, density(g_ray_origin + t * g_ray_dir), state.y), 0.0, 1.0);
+}
+`;
+
+const FULL_SCREEN_VERTEX = `
+void main() {
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+`;
+
+const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
+
+function floatTarget(width, height, format, depth = 0) {
+  const options = {
+    type: THREE.FloatType, format, depthBuffer: false, stencilBuffer: false,
+    minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false,
+  };
+  return depth > 0 ? new THREE.WebGL3DRenderTarget(width, height, depth, options)
+                   : new THREE.WebGLRenderTarget(width, height, options);
+}
+
+export const DENSITY_DEFAULTS = { tile: 0, slices: 128, substeps: 2,
+                                  opacity: { size: 64, layers: 64, substeps: 4 } };
+
+// The per-frame density grid for AirlightRenderer (constructed with { density: true }).
+// glsl: shaders/airlight.glsl; densityGlsl: shaders/density.glsl; lightJson: the light's lightvol
+// JSON (the GLB's extras) and light its parseFrame(); noise: parseDensity()'s result.
+export class DensityGrid {
+  constructor(airlight, glsl, densityGlsl, lightJson, light, noise, options = DENSITY_DEFAULTS) {
+    this.airlight = airlight;
+    this.renderer = airlight.renderer;
+    this.gl = airlight.gl;
+    this.options = { ...DENSITY_DEFAULTS, ...options,
+                     opacity: { ...DENSITY_DEFAULTS.opacity, ...(options.opacity ?? {}) } };
+    const { size, layers } = this.options.opacity;
+    if (!(size >= 2 && size <= 1024 && layers >= 2 && layers <= 4096))
+      throw new Error(`opacity map: size must be in [2, 1024], layers in [2, 4096], got ${size} and ${layers}`);
+    if (!(this.options.slices >= 2 && this.options.slices <= 4096))
+      throw new Error(`density grid: slices must be in [2, 4096], got ${this.options.slices}`);
+    this.light = light;
+    const omni = light.type === 'omni';
+    this.faces = omni ? 6 : 1;
+    // far from the projection (lightvol's GLB extras give view and projection only).
+    const p = light.projection.elements, p22 = p[10], p23 = p[14];
+    const far = lightJson.far ?? (light.perspective ? p23 / (p22 + 1) : (p23 - 1) / p22);
+    this.light = { ...light, far };
+    this.worldToClip = [];
+    for (let f = 0; f < this.faces; ++f) {
+      const view = omni ? new THREE.Matrix4().set(...lookAt([light.position.x, light.position.y, light.position.z],
+                                                             OMNI_LOOK[f], OMNI_UP[f]))
+                        : light.view;
+      this.worldToClip.push(new THREE.Matrix4().multiplyMatrices(light.projection, view));
+    }
+    // The opacity map's full range: the farthest frustum corner (omni: the cube's), or the depth range.
+    if (light.type === 'directional') {
+      this.fullRange = far - light.near;
+    } else {
+      const inv = this.worldToClip[0].clone().invert();
+      this.fullRange = 0;
+      for (let k = 0; k < 4; ++k) {
+        const c = new THREE.Vector3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, 1).applyMatrix4(inv);
+        this.fullRange = Math.max(this.fullRange, c.distanceTo(light.position));
+      }
+    }
+    this.box = eyeBox(this.light);
+
+    const u = airlight.common;
+    const identity = () => Array.from({ length: 6 }, () => new THREE.Matrix4());
+    this.uniforms = {
+      density_type: { value: 1 },
+      density_seed: { value: noise.seed >>> 0 },
+      density_frequency: { value: noise.frequency },
+      density_octaves: { value: noise.octaves },
+      density_lacunarity: { value: noise.lacunarity },
+      density_gain: { value: noise.gain },
+      density_offset: { value: noise.offset },
+      density_scale: { value: noise.scale },
+      om_size: { value: size },
+      om_layers: { value: layers },
+      om_faces: { value: this.faces },
+      om_point: { value: light.perspective ? 1 : 0 },
+      om_range: { value: this.fullRange },
+      om_light_position: { value: light.position.clone() },
+      om_light_direction: { value: light.direction.clone() },
+      om_near: { value: light.near },
+      om_world_to_clip: { value: identity() },
+      om_clip_to_world: { value: identity() },
+      om_substeps: { value: this.options.opacity.substeps },
+      om_sigma_t: u.sigma_t,
+      om_tau: { value: null },
+      om_previous: { value: null },
+      om_layer: { value: 0 },
+      grid_tile: { value: 1 },
+      grid_slices: { value: this.options.slices },
+      grid_substeps: { value: this.options.substeps },
+      grid_columns: { value: new THREE.Vector2(1, 1) },
+      grid_reach: { value: null },
+      grid_state: { value: null },
+      grid_slice: { value: 0 },
+      grid_texture: { value: null },
+      source: { value: null },
+    };
+    for (let f = 0; f < this.faces; ++f) {
+      this.uniforms.om_world_to_clip.value[f].copy(this.worldToClip[f]);
+      this.uniforms.om_clip_to_world.value[f].copy(this.worldToClip[f]).invert();
+    }
+    const material = (fragment) => new THREE.RawShaderMaterial({
+      glslVersion: THREE.GLSL3,
+      vertexShader: PREFIX + FULL_SCREEN_VERTEX,
+      fragmentShader: fragment,
+      uniforms: { ...u, ...this.uniforms },
+      depthTest: false, depthWrite: false,
+    });
+    // The grid passes use airlight.glsl's common part (pixel_ray, phase, profile) with the
+    // column's centre for gl_FragCoord, as gl_density.cpp's compute shader does.
+    const common = glsl.replace(/gl_FragCoord/g, 'lv_frag_coord');
+    this.opacityStep = material(PREFIX + densityGlsl + OPACITY_COMMON + OPACITY_STEP);
+    this.copy = material(PREFIX + COPY);
+    const gridSource = (main) =>
+      `${PREFIX}#define LIGHTVOL_COMMON\nvec4 lv_frag_coord;\n#define lv_column_coord gl_FragCoord\n` +
+      `${common}\n${densityGlsl}${OPACITY_COMMON}${OPACITY_LOOKUP}${GRID_COMMON}${main}`;
+    this.gridStep = material(gridSource(GRID_STEP));
+    this.gridLayer = material(gridSource(GRID_LAYER));
+    const triangle = new THREE.BufferGeometry();
+    triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
+    this.quad = new THREE.Mesh(triangle, this.copy);
+    this.quad.frustumCulled = false;
+    this.scene = new THREE.Scene();
+    this.scene.add(this.quad);
+    this.camera = new THREE.Camera();
+
+    const rows = size * this.faces;
+    this.opacityState = [floatTarget(size, rows, THREE.RedFormat), floatTarget(size, rows, THREE.RedFormat)];
+    this.opacity = floatTarget(size, rows, THREE.RedFormat, layers);
+    this.uniforms.om_tau.value = this.opacity.texture;
+    this.columns = null;
+  }
+
+  draw(material, target, layer = 0) {
+    this.quad.material = material;
+    this.renderer.setRenderTarget(target, layer);
+    this.renderer.render(this.scene, this.camera);
+  }
+
+  clear(target) {
+    this.renderer.setRenderTarget(target);
+    this.gl.clearBufferfv(this.gl.COLOR, 0, new Float32Array([0, 0, 0, 0]));
+  }
+
+  // The automatic tile: one column per pixel while the grid stays within 2^25 samples.
+  tileFor(width, height) {
+    if (this.options.tile > 0) return this.options.tile;
+    let tile = 1;
+    const samples = (t) => Math.ceil(width / t) * Math.ceil(height / t) * this.options.slices;
+    while (samples(tile) > 33554432 && tile < 256) ++tile;
+    return tile;
+  }
+
+  // Recomputes the opacity map and the grid for a camera {view, projection, flipY, width,
+  // height} and the scene's distances along its pixel rays (AirlightRenderer.readSurface(): top
+  // row first, ≥ 1e38 where nothing is hit). Then binds the grid to the airlight's materials.
+  update(camera, surface) {
+    const { renderer } = this;
+    const { width: w, height: h } = camera;
+    const light = this.light;
+    // What each pixel needs: its surface, or where its ray leaves the light's bounds if nearer;
+    // and the farthest from the light any of them gets (the opacity map's reach).
+    const inv = new THREE.Matrix4().multiplyMatrices(camera.projection, camera.view).invert();
+    const lightView = light.view.elements;  // column-major
+    const toLight = (v, w1) => [
+      lightView[0] * v[0] + lightView[4] * v[1] + lightView[8] * v[2] + w1 * lightView[12],
+      lightView[1] * v[0] + lightView[5] * v[1] + lightView[9] * v[2] + w1 * lightView[13],
+      lightView[2] * v[0] + lightView[6] * v[1] + lightView[10] * v[2] + w1 * lightView[14]];
+    const lp = [light.position.x, light.position.y, light.position.z];
+    const ld = [light.direction.x, light.direction.y, light.direction.z];
+    const perspectiveCamera = camera.projection.elements[11] !== 0;
+    const eye = new THREE.Vector3(0, 0, 0).applyMatrix4(camera.view.clone().invert());
+    const lightDistance = (x) => (light.perspective
+      ? Math.hypot(x[0] - lp[0], x[1] - lp[1], x[2] - lp[2])
+      : (x[0] - lp[0]) * ld[0] + (x[1] - lp[1]) * ld[1] + (x[2] - lp[2]) * ld[2] - light.near);
+    const need = new Float64Array(w * h);
+    let reach = 0;
+    const near = new THREE.Vector3(), far = new THREE.Vector3();
+    for (let row = 0; row < h; ++row)
+      for (let col = 0; col < w; ++col) {
+        const x = 2 * (col + 0.5) / w - 1;
+        const yy = 1 - 2 * (row + 0.5) / h;
+        const y = camera.flipY ? -yy : yy;
+        near.set(x, y, -1).applyMatrix4(inv);
+        far.set(x, y, 1).applyMatrix4(inv);
+        const dir = far.clone().sub(near).normalize();
+        const origin = perspectiveCamera ? eye : near;
+        const o = [origin.x, origin.y, origin.z], d = [dir.x, dir.y, dir.z];
+        // light_bounds_exit
+        let lo, dd;
+        if (light.type === 'omni') {
+          lo = [o[0] - lp[0], o[1] - lp[1], o[2] - lp[2]];
+          dd = d;
+        } else {
+          lo = toLight(o, 1);
+          dd = toLight(d, 0);
+        }
+        let t0 = 0, t1 = Infinity, hit = true;
+        for (let a = 0; a < 3 && hit; ++a) {
+          if (dd[a] === 0) {
+            if (lo[a] < this.box.lo[a] || lo[a] > this.box.hi[a]) hit = false;
+            continue;
+          }
+          let ta = (this.box.lo[a] - lo[a]) / dd[a], tb = (this.box.hi[a] - lo[a]) / dd[a];
+          if (ta > tb) [ta, tb] = [tb, ta];
+          t0 = Math.max(t0, ta);
+          t1 = Math.min(t1, tb);
+        }
+        const exit = hit && t1 > t0 ? t1 : 0;
+        const s = surface[row * w + col];
+        const n = Math.min(s >= 1e38 ? Infinity : s, exit);
+        need[row * w + col] = n;
+        if (!(n > 0)) continue;
+        reach = Math.max(reach, lightDistance(o),
+                         lightDistance([o[0] + n * d[0], o[1] + n * d[1], o[2] + n * d[2]]));
+      }
+    reach *= 1.001;
+    const tile = this.tileFor(w, h);
+    const cx = Math.ceil(w / tile), cy = Math.ceil(h / tile);
+    const t1 = new Float32Array(cx * cy);
+    for (let row = 0; row < h; ++row) {
+      const glRow = camera.flipY ? row : h - 1 - row;
+      for (let col = 0; col < w; ++col) {
+        const n = need[row * w + col];
+        if (!(n > 0)) continue;
+        const qx = (col + 0.5) / tile - 0.5, qy = (glRow + 0.5) / tile - 0.5;
+        const x0 = Math.min(Math.max(Math.floor(qx), 0), cx - 1);
+        const y0 = Math.min(Math.max(Math.floor(qy), 0), cy - 1);
+        const v = Math.fround(n * (1 + 1e-6));
+        for (let dy = 0; dy < 2; ++dy)
+          for (let dx = 0; dx < 2; ++dx) {
+            const i = Math.min(y0 + dy, cy - 1) * cx + Math.min(x0 + dx, cx - 1);
+            t1[i] = Math.max(t1[i], v);
+          }
+      }
+    }
+    const u = this.uniforms;
+    u.om_range.value = reach > 0 ? Math.min(this.fullRange, reach) : this.fullRange;
+    u.grid_tile.value = tile;
+    u.grid_columns.value.set(cx, cy);
+    if (!this.columns || this.columns.width !== cx || this.columns.height !== cy) {
+      for (const t of [this.columns, this.gridState?.[0], this.gridState?.[1], this.grid]) t?.dispose();
+      this.columns = { width: cx, height: cy };
+      this.gridState = [floatTarget(cx, cy, THREE.RGFormat), floatTarget(cx, cy, THREE.RGFormat)];
+      this.grid = floatTarget(cx, cy, THREE.RGFormat, this.options.slices);
+      this.reachTexture?.dispose();
+      this.reachTexture = new THREE.DataTexture(t1, cx, cy, THREE.RedFormat, THREE.FloatType);
+      this.reachTexture.minFilter = this.reachTexture.magFilter = THREE.NearestFilter;
+    }
+    this.reachTexture.image.data.set(t1);
+    this.reachTexture.needsUpdate = true;
+    u.grid_reach.value = this.reachTexture;
+    u.grid_texture.value = this.grid.texture;
+
+    const previousTarget = renderer.getRenderTarget();
+    const autoClear = renderer.autoClear;
+    renderer.autoClear = false;
+    // The opacity map, layer by layer.
+    let [a, b] = this.opacityState;
+    this.clear(a);
+    u.source.value = a.texture;
+    this.draw(this.copy, this.opacity, 0);
+    for (let k = 1; k < this.options.opacity.layers; ++k) {
+      u.om_previous.value = a.texture;
+      u.om_layer.value = k;
+      this.draw(this.opacityStep, b);
+      u.source.value = b.texture;
+      this.draw(this.copy, this.opacity, k);
+      [a, b] = [b, a];
+    }
+    // The grid, slice by slice.
+    [a, b] = this.gridState;
+    this.clear(a);
+    u.grid_state.value = a.texture;
+    u.grid_slice.value = 0;
+    this.draw(this.gridLayer, this.grid, 0);
+    for (let k = 1; k < this.options.slices; ++k) {
+      u.grid_state.value = a.texture;
+      u.grid_slice.value = k;
+      this.draw(this.gridStep, b);
+      u.grid_state.value = b.texture;
+      this.draw(this.gridLayer, this.grid, k);
+      [a, b] = [b, a];
+    }
+    renderer.setRenderTarget(previousTarget);
+    renderer.autoClear = autoClear;
+    this.airlight.setDensityGrid(this);
+  }
+}
+
+export { stageSource };
