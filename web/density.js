@@ -10,8 +10,9 @@
 //     from the column needs (its surface, or where its ray leaves the light's bounds): one pass per
 //     slice carries (D, eye-side optical depth) and writes (D, D') into an RG32F 3D texture, which
 //     shaders/airlight.glsl's LIGHTVOL_DENSITY stage reads (its GL_ES branch).
-// The density ρ(x) is shaders/density.glsl itself (fetched, never copied); the ray and phase
-// function are airlight.glsl's LIGHTVOL_COMMON part. Defaults as `lightvol render --method volume`:
+// The density ρ(x) is shaders/density.glsl and the opacity map's look-up and the integrand of D
+// shaders/density_grid.glsl, the files lightvol's OpenGL renderer compiles (fetched, never
+// copied); the ray and phase function are airlight.glsl's LIGHTVOL_COMMON part. Defaults as `lightvol render --method volume`:
 // 128 slices of 2 substeps, an opacity map of 64² × 64 layers of 4 substeps, the automatic tile.
 import * as THREE from 'three';
 import { lookAt, stageSource } from './airlight.js';
@@ -73,55 +74,6 @@ function eyeBox(light) {
 
 // ---- the passes -----------------------------------------------------------------------------
 
-// The opacity map's uniforms and look-up, with the map in a 3D texture: x = column, y = face ×
-// size + row, z = layer.
-const OPACITY_COMMON = `
-uniform int om_size;
-uniform int om_layers;
-uniform int om_faces;
-uniform int om_point;
-uniform float om_range;
-uniform vec3 om_light_position;
-uniform vec3 om_light_direction;
-uniform float om_near;
-uniform mat4 om_world_to_clip[6];
-uniform mat4 om_clip_to_world[6];
-`;
-
-const OPACITY_LOOKUP = `
-uniform highp sampler3D om_tau;
-float om_fetch(int face, int c, int r, int k) {
-  return texelFetch(om_tau, ivec3(c, face * om_size + r, k), 0).r;
-}
-float light_optical_depth(vec3 x) {
-  int face = 0;
-  if (om_faces == 6) {
-    vec3 d = x - om_light_position;
-    vec3 a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) face = d.x > 0.0 ? 0 : 1;
-    else if (a.y >= a.z) face = d.y > 0.0 ? 2 : 3;
-    else face = d.z > 0.0 ? 4 : 5;
-  }
-  vec4 c = om_world_to_clip[face] * vec4(x, 1.0);
-  vec2 ndc = c.xy / max(c.w, 1e-30);
-  float r = om_point == 1 ? length(x - om_light_position)
-                          : dot(x - om_light_position, om_light_direction) - om_near;
-  vec3 g = vec3(clamp((ndc + 1.0) * 0.5 * float(om_size) - 0.5, 0.0, float(om_size - 1)),
-                clamp(r / om_range * float(om_layers - 1), 0.0, float(om_layers - 1)));
-  ivec3 i = min(ivec3(g), ivec3(om_size - 2, om_size - 2, om_layers - 2));
-  vec3 f = g - vec3(i);
-  float v[4];
-  for (int k = 0; k < 4; ++k) {
-    int cc = i.x + (k & 1), rr = i.y + (k >> 1);
-    float a = om_fetch(face, cc, rr, i.z), b = om_fetch(face, cc, rr, i.z + 1);
-    v[k] = a + f.z * (b - a);
-  }
-  float y0 = v[0] + f.x * (v[1] - v[0]);
-  float y1 = v[2] + f.x * (v[3] - v[2]);
-  return y0 + f.y * (y1 - y0);
-}
-`;
-
 // One layer k ≥ 1 of the opacity map: τ at layer k − 1 (om_previous) plus σt × the layer's
 // midpoint samples of ρ. Fragment (x, face × size + row) is that face's column (x, row).
 const OPACITY_STEP = `
@@ -156,33 +108,22 @@ layout(location = 0) out vec4 out_value;
 void main() { out_value = texelFetch(source, ivec2(gl_FragCoord.xy), 0); }
 `;
 
-// The grid: the integrand of D as gl_density.cpp's d_integrand, and two passes per slice.
-// gl_FragCoord is the column's centre in pixels (airlight.glsl's pixel_ray reads it).
+// The opacity map in a 3D texture for shaders/density_grid.glsl's look-up: x = column, y = face ×
+// size + row, z = layer.
+const OPACITY_LOOKUP = `#define LIGHTVOL_OPACITY_LOOKUP
+#define LIGHTVOL_DENSITY_INTEGRAND
+uniform highp sampler3D om_tau;
+#define om_fetch(f_, c_, r_, k_) texelFetch(om_tau, ivec3((c_), (f_) * om_size + (r_), (k_)), 0).x
+`;
+
+// The grid: two passes per slice with density_grid.glsl's d_integrand. gl_FragCoord is the
+// column's centre in pixels (airlight.glsl's pixel_ray reads it).
 const GRID_COMMON = `
 uniform int grid_tile;
 uniform int grid_slices;
 uniform int grid_substeps;
 uniform highp sampler2D grid_reach;
 uniform highp sampler2D grid_state;   // (D, eye-side optical depth) at the previous slice
-vec3 g_ray_origin;
-vec3 g_ray_dir;
-float d_integrand(float t, float rho, float tau_e) {
-  vec3 x = g_ray_origin + t * g_ray_dir;
-  float light_part, hom_depth;
-  if (light_type == 1) {
-    light_part = sigma_s * intensity * phase(-dot(g_ray_dir, light_direction));
-    hom_depth = clamp(dot(x - light_position, light_direction) - light_near, 0.0, om_range);
-  } else {
-    vec3 to_x = x - light_position;
-    float dist = length(to_x);
-    light_part = sigma_s * intensity * phase(dot(to_x / dist, -g_ray_dir)) * profile(to_x) /
-                 (dist * dist);
-    hom_depth = min(dist, om_range);
-  }
-  float het = rho * exp(-light_optical_depth(x) - tau_e);
-  float hom = exp(-sigma_t * (hom_depth + t));
-  return light_part * (het - hom);
-}
 `;
 
 const GRID_STEP = `
@@ -240,11 +181,24 @@ function floatTarget(width, height, format, depth = 0) {
 export const DENSITY_DEFAULTS = { tile: 0, slices: 128, substeps: 2,
                                   opacity: { size: 64, layers: 64, substeps: 4 } };
 
+// The shader files a DensityGrid needs besides airlight.glsl, fetched as they are.
+export async function loadDensityShaders(base = new URL('../shaders/', import.meta.url)) {
+  const text = async (name) => {
+    const url = new URL(name, base).href;
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+    return response.text();
+  };
+  const [density, grid] = await Promise.all([text('density.glsl'), text('density_grid.glsl')]);
+  return { density, grid };
+}
+
 // The per-frame density grid for AirlightRenderer (constructed with { density: true }).
-// glsl: shaders/airlight.glsl; densityGlsl: shaders/density.glsl; lightJson: the light's lightvol
-// JSON (the GLB's extras) and light its parseFrame(); noise: parseDensity()'s result.
+// glsl: shaders/airlight.glsl; shaders: loadDensityShaders()'s {density, grid} (density.glsl,
+// density_grid.glsl); lightJson: the light's lightvol JSON (the GLB's extras) and light its
+// parseFrame(); noise: parseDensity()'s result.
 export class DensityGrid {
-  constructor(airlight, glsl, densityGlsl, lightJson, light, noise, options = DENSITY_DEFAULTS) {
+  constructor(airlight, glsl, shaders, lightJson, light, noise, options = DENSITY_DEFAULTS) {
     this.airlight = airlight;
     this.renderer = airlight.renderer;
     this.gl = airlight.gl;
@@ -332,11 +286,11 @@ export class DensityGrid {
     // The grid passes use airlight.glsl's common part (pixel_ray, phase, profile) with the
     // column's centre for gl_FragCoord, as gl_density.cpp's compute shader does.
     const common = glsl.replace(/gl_FragCoord/g, 'lv_frag_coord');
-    this.opacityStep = material(PREFIX + densityGlsl + OPACITY_COMMON + OPACITY_STEP);
+    this.opacityStep = material(PREFIX + shaders.density + shaders.grid + OPACITY_STEP);
     this.copy = material(PREFIX + COPY);
     const gridSource = (main) =>
       `${PREFIX}#define LIGHTVOL_COMMON\nvec4 lv_frag_coord;\n#define lv_column_coord gl_FragCoord\n` +
-      `${common}\n${densityGlsl}${OPACITY_COMMON}${OPACITY_LOOKUP}${GRID_COMMON}${main}`;
+      `${common}\n${shaders.density}${OPACITY_LOOKUP}${shaders.grid}${GRID_COMMON}${main}`;
     this.gridStep = material(gridSource(GRID_STEP));
     this.gridLayer = material(gridSource(GRID_LAYER));
     const triangle = new THREE.BufferGeometry();

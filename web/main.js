@@ -14,7 +14,7 @@ import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
 import { AirlightRenderer, parseFrame } from './airlight.js';
-import { DensityGrid, parseDensity } from './density.js';
+import { DensityGrid, loadDensityShaders, parseDensity } from './density.js';
 
 const status = document.getElementById('status');
 const say = (text) => { status.textContent = text; };
@@ -88,8 +88,7 @@ async function main() {
   // A medium of varying density ("density": {"type": "noise", ...}): rendered as `lightvol render
   // --method volume` renders it, with shaders/density.glsl and a per-frame grid (web/density.js).
   const noise = parseDensity(medium, mediumUrl ?? 'the GLB\'s medium');
-  const densityGlsl = noise
-    ? await fetchText(new URL('../shaders/density.glsl', import.meta.url).href) : null;
+  const densityShaders = noise ? await loadDensityShaders() : null;
 
   const camera = parseFrame(cameraJson);
   const width = camera.width, height = camera.height;
@@ -102,12 +101,19 @@ async function main() {
   renderer.shadowMap.enabled = true;
   THREE.ColorManagement.enabled = false;
   renderer.outputColorSpace = THREE.LinearSRGBColorSpace;
+  // A shader that does not compile stops the page with its log (three would only log it and draw
+  // nothing with it: an image without, say, the density's part, silently).
+  let shaderError = null;
+  renderer.debug.onShaderError = (gl, program, vertex, fragment) => {
+    const log = [vertex, fragment].map((sh) => gl.getShaderInfoLog(sh)).filter((t) => t).join(' ');
+    shaderError ??= `a shader did not compile: ${log || gl.getProgramInfoLog(program)}`;
+  };
 
   const airlight = new AirlightRenderer(renderer, glsl, { width, height, density: !!noise });
   const light = parseFrame(extras.light);
   airlight.setLight(light);
   airlight.setMedium(medium);
-  if (noise) airlight.setDensityGrid(new DensityGrid(airlight, glsl, densityGlsl, extras.light, light, noise));
+  if (noise) airlight.setDensityGrid(new DensityGrid(airlight, glsl, densityShaders, extras.light, light, noise));
   const volumeGeometries = worldGeometries(gltf.scene);
   const volumeGeometry = volumeGeometries[0];
   airlight.setVolume(volumeGeometry);
@@ -277,6 +283,7 @@ async function main() {
   });
 
   draw();
+  if (shaderError) throw new Error(shaderError);
   const first = frame.slice(), surface = airlight.readSurface(), counts = airlight.readFaceCounts();
   window.lightvolAirlight = () => first;
   window.lightvolSurface = () => surface;

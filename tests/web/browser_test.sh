@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # A browser test of web/ in headless chromium (SwiftShader's WebGL2), after checking that what it
 # needs is installed:
-#   browser_test.mjs  the viewer against `lightvol render --method volume`: static, adaptive, Draco
-#                     and omni volumes of the bundled scene, relative L2 <= 1 %;
+#   browser_test.mjs  the viewer against `lightvol render --method volume`: static, adaptive, Draco,
+#                     omni volumes and noise media (spot, omni) of the bundled scene, relative L2
+#                     <= 1 %;
 #   live_test.mjs     the live page (web/live.html, web/light_volume.js) for a spot, a directional
 #                     and an omni light, frames 0 and 30 against `lightvol render --method volume` of
 #                     the volume `lightvol build` makes from the page's own map and light, <= 1 %.

@@ -6,6 +6,7 @@
 
 #include <lightvol/core/check.h>
 #include <lightvol/render/detail/density_glsl.h>
+#include <lightvol/render/detail/density_grid_glsl.h>
 #include <lightvol/render/gl_density.h>
 #include <lightvol/render/gl_volume.h>
 
@@ -45,20 +46,7 @@ BufferHandle make_storage(std::size_t floats, const float* data) {
   return BufferHandle(id);
 }
 
-// The opacity map's uniforms, shared by the compute shader that makes it and the lookup.
-const char* const kOpacityUniforms = R"(
-uniform int om_size;            // columns per face side
-uniform int om_layers;          // samples along a column
-uniform int om_faces;           // 1, or 6 for an omni light
-uniform int om_point;           // 1 spot or omni (columns from the light), 0 directional
-uniform float om_range;         // distance (directional: depth below the near plane) of the last layer
-uniform vec3 om_light_position;
-uniform vec3 om_light_direction;
-uniform float om_near;
-uniform mat4 om_world_to_clip[6];
-uniform mat4 om_clip_to_world[6];
-)";
-
+// The opacity map's compute shader (after density.glsl and density_grid.glsl's uniforms).
 const char* const kOpacityBuild = R"(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 3) writeonly buffer OpacityMap { float om_tau[]; };
@@ -88,43 +76,18 @@ void main() {
 }
 )";
 
-const std::string kOpacityLookupSource = std::string(kOpacityUniforms) + R"(
-layout(std430, binding = 3) readonly buffer OpacityMap { float om_tau[]; };
-float om_fetch(int face, int c, int r, int k) {
-  return om_tau[((face * om_size + r) * om_size + c) * om_layers + k];
-}
-// tau_L(x) = sigma_t * integral of the density along the light's path to x.
-float light_optical_depth(vec3 x) {
-  int face = 0;
-  if (om_faces == 6) {
-    vec3 d = x - om_light_position;
-    vec3 a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) face = d.x > 0.0 ? 0 : 1;
-    else if (a.y >= a.z) face = d.y > 0.0 ? 2 : 3;
-    else face = d.z > 0.0 ? 4 : 5;
-  }
-  vec4 c = om_world_to_clip[face] * vec4(x, 1.0);
-  vec2 ndc = c.xy / max(c.w, 1e-30);
-  float r = om_point == 1 ? length(x - om_light_position)
-                          : dot(x - om_light_position, om_light_direction) - om_near;
-  vec3 g = vec3(clamp((ndc + 1.0) * 0.5 * float(om_size) - 0.5, 0.0, float(om_size - 1)),
-                clamp(r / om_range * float(om_layers - 1), 0.0, float(om_layers - 1)));
-  ivec3 i = min(ivec3(g), ivec3(om_size - 2, om_size - 2, om_layers - 2));
-  vec3 f = g - vec3(i);
-  float v[4];
-  for (int k = 0; k < 4; ++k) {
-    int cc = i.x + (k & 1), rr = i.y + (k >> 1);
-    float a = om_fetch(face, cc, rr, i.z), b = om_fetch(face, cc, rr, i.z + 1);
-    v[k] = a + f.z * (b - a);
-  }
-  float y0 = v[0] + f.x * (v[1] - v[0]);
-  float y1 = v[2] + f.x * (v[3] - v[2]);
-  return y0 + f.y * (y1 - y0);
-}
-)";
+// The opacity map's look-up, shaders/density_grid.glsl's, reading the map from storage buffer 3.
+const std::string kOpacityLookupSource =
+    std::string(
+        "#define LIGHTVOL_OPACITY_LOOKUP\n"
+        "layout(std430, binding = 3) readonly buffer OpacityMap { float om_tau[]; };\n"
+        "#define om_fetch(face, c, r, k) "
+        "om_tau[(((face) * om_size + (r)) * om_size + (c)) * om_layers + (k)]\n") +
+    detail::kDensityGridGlsl;
 
 // The grid's compute shader: airlight.glsl's common part (its pixel_ray reads gl_FragCoord, which
-// a compute shader does not have: here it is the column's centre), the density, the opacity map.
+// a compute shader does not have: here it is the column's centre), the density, the opacity map
+// and density_grid.glsl's d_integrand.
 const char* const kGridBuild = R"(
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 4) writeonly buffer DensityGrid { vec2 grid_d[]; };
@@ -133,28 +96,6 @@ uniform ivec2 grid_columns;
 uniform int grid_tile;
 uniform int grid_slices;
 uniform int grid_substeps;
-vec3 g_ray_origin;
-vec3 g_ray_dir;
-// The integrand of D at distance t: (heterogeneous - homogeneous) in-scattering, given the density
-// there and the eye-side optical depth up to it.
-float d_integrand(float t, float rho, float tau_e) {
-  vec3 x = g_ray_origin + t * g_ray_dir;
-  float light_part, hom_depth;
-  if (light_type == 1) {
-    light_part = sigma_s * intensity * phase(-dot(g_ray_dir, light_direction));
-    // Clamped as the opacity map clamps, so that D stays 0 where the density is constant.
-    hom_depth = clamp(dot(x - light_position, light_direction) - light_near, 0.0, om_range);
-  } else {
-    vec3 to_x = x - light_position;
-    float dist = length(to_x);
-    light_part = sigma_s * intensity * phase(dot(to_x / dist, -g_ray_dir)) * profile(to_x) /
-                 (dist * dist);
-    hom_depth = min(dist, om_range);
-  }
-  float het = rho * exp(-light_optical_depth(x) - tau_e);
-  float hom = exp(-sigma_t * (hom_depth + t));
-  return light_part * (het - hom);
-}
 void main() {
   ivec2 id = ivec2(gl_GlobalInvocationID.xy);
   if (id.x >= grid_columns.x || id.y >= grid_columns.y) return;
@@ -285,7 +226,7 @@ Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(const Light& light, c
   s.options = options;
   s.faces = light.type == LightType::omni ? 6 : 1;
   Result<Program> build = Program::compile_compute(
-      "#version 450 core\n" + std::string(kGlslDensity) + kOpacityUniforms + kOpacityBuild,
+      "#version 450 core\n" + std::string(kGlslDensity) + detail::kDensityGridGlsl + kOpacityBuild,
       "opacity map");
   if (!build) return build.error();
   s.build = std::move(*build);
@@ -409,9 +350,10 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
       GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene));
   if (!opacity) return opacity.error();
   s.opacity = std::move(*opacity);
-  Result<Program> build = Program::compile_compute(
-      compute_header() + kGlslCommon + kGlslDensity + kGlslOpacityLookup + kGridBuild,
-      "density grid");
+  Result<Program> build = Program::compile_compute(compute_header() + kGlslCommon + kGlslDensity +
+                                                       "#define LIGHTVOL_DENSITY_INTEGRAND\n" +
+                                                       kGlslOpacityLookup + kGridBuild,
+                                                   "density grid");
   if (!build) return build.error();
   s.build = std::move(*build);
   s.columns = make_storage(t1.size(), t1.data());

@@ -32,7 +32,9 @@ struct OpacityMapOptions {
 };
 
 // GLSL (no #version line) of `float light_optical_depth(vec3 x)`, reading the map bound by
-// GlOpacityMap::bind (shader storage binding 3).
+// GlOpacityMap::bind (shader storage binding 3): shaders/density_grid.glsl (the web viewer's
+// too) with LIGHTVOL_OPACITY_LOOKUP and its om_fetch on that buffer. Goes after kGlslDensity; a
+// "#define LIGHTVOL_DENSITY_INTEGRAND" before it adds the file's d_integrand.
 extern const char* const kGlslOpacityLookup;
 
 class GlOpacityMap {
