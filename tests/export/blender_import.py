@@ -37,6 +37,7 @@
 import json
 import math
 import sys
+import time
 
 import bmesh
 import bpy
@@ -74,7 +75,9 @@ def check(glb, light_path, report_path):
     with open(report_path) as f:
         report = json.load(f)
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    started = time.monotonic()
     bpy.ops.import_scene.gltf(filepath=glb, import_shading="FLAT")
+    seconds = time.monotonic() - started
     objects = list(bpy.data.objects)
     lights = [o for o in objects if o.type == "LIGHT"]
     meshes = [o for o in objects if o.type == "MESH"]
@@ -142,7 +145,8 @@ def check(glb, light_path, report_path):
     expect(abs(volume - report["volume"]) <= 1e-4 * abs(report["volume"]),
            f"{glb}: signed volume {volume}, build's report says {report['volume']}")
     print(f"{line}; {len(mesh.vertices)} vertices, {len(mesh.polygons)} faces,"
-          f" {len(mesh.edges)} edges, volume {volume:.6g} (build: {report['volume']:.6g})")
+          f" {len(mesh.edges)} edges, volume {volume:.6g} (build: {report['volume']:.6g});"
+          f" import {seconds:.2f} s")
 
 
 for i in range(0, len(args), 3):

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A real client of lightvol's GLB: Blender's own glTF importer (Debian's blender 3.4), headless.
-# Builds a spot, a directional and an omni volume from shadow maps of the bundled Sponza crop
+# Builds a spot, a directional and an omni volume (and the spot's adaptive volume) from shadow maps of the bundled Sponza crop
 # (`lightvol shadowmap --cpu`, small maps: Blender's import stays around a second per volume),
 # writes each as a GLB with its build report, and imports all three in one Blender run
 # (tests/export/blender_import.py, whose header lists what it asserts: the light's type, pose,
@@ -49,17 +49,21 @@ run build spot.exr --light spot.json --out spot.glb --report spot.report.json
 run build directional.exr --light directional.json --out directional.glb \
   --report directional.report.json
 run build 'omni_{face}.exr' --light omni.json --out omni.glb --report omni.report.json
+# An adaptive volume too: fewer, irregular triangles, the same closed mesh for the importer.
+run build spot.exr --light spot.json --out adaptive.glb --adaptive --max-error 0.01 \
+  --report adaptive.report.json
 
 # --python-exit-code: an exception in the script fails the run (Blender exits 0 otherwise).
 # --factory-startup: no user preferences or add-ons of this machine's user.
 "$blender" -b --factory-startup --python-exit-code 1 --python "$here/blender_import.py" -- \
   spot.glb spot.json spot.report.json \
   directional.glb directional.json directional.report.json \
-  omni.glb omni.json omni.report.json > blender.log 2>&1 || {
+  omni.glb omni.json omni.report.json \
+  adaptive.glb spot.json adaptive.report.json > blender.log 2>&1 || {
   cat blender.log
   echo "blender_import.py failed (Blender's log above)" >&2
   exit 1
 }
 grep '^blender_import' blender.log
-grep -q '^blender_import: 3 volumes passed$' blender.log ||
-  { cat blender.log; echo "blender_import.py did not report 3 volumes passed" >&2; exit 1; }
+grep -q '^blender_import: 4 volumes passed$' blender.log ||
+  { cat blender.log; echo "blender_import.py did not report 4 volumes passed" >&2; exit 1; }
