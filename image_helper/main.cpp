@@ -1,11 +1,13 @@
-// lightvol-image: decodes and encodes images for the lightvol library, answering requests one after
-// another on file descriptor 3 (core/detail/isolated.h IsolatedServer; the requests are
-// core/detail/image_helper.h's, the answers depth/detail/image_codec.h's) until it closes. The only program of
-// lightvol that links OpenImageIO; not meant to be run by hand.
+// lightvol-image: decodes and encodes images, and reads OpenVDB density grids, for the lightvol
+// library, answering requests one after another on file descriptor 3 (core/detail/isolated.h
+// IsolatedServer; the requests are core/detail/image_helper.h's, the answers
+// depth/detail/image_codec.h's and airlight/detail/vdb_codec.h's) until it closes. The only program
+// of lightvol that links OpenImageIO and OpenVDB; not meant to be run by hand.
 #include <cstdio>
 #include <cstring>
 #include <new>
 
+#include <lightvol/airlight/detail/vdb_codec.h>
 #include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/detail/isolated.h>
 #include <lightvol/depth/detail/image_codec.h>
@@ -22,7 +24,12 @@ int main(int argc, char** argv) {
   try {
     // Loaded, or done with a request: the parent sets the limits for the next one now.
     channel.write_value(lightvol::kProgramReady);
-    while (lightvol::detail::serve_image_request(channel, 0))
+    using lightvol::detail::ImageRequest;
+    ImageRequest request{};
+    while (channel.read_value(&request) &&
+           (request == ImageRequest::vdb
+                ? lightvol::detail::serve_vdb_request(channel)
+                : lightvol::detail::serve_image_request(channel, 0, request)))
       channel.write_value(lightvol::kProgramReady);
   } catch (const std::bad_alloc&) {
     return lightvol::kChildOutOfMemory;

@@ -2,9 +2,11 @@
 // density.cpp (docs/design.md §6, "Media of varying density"), the same integer-hashed fBm of value
 // noise, in float. No #version line: hosts prepend it (GLSL 4.50 or GLSL ES 3.00 with highp).
 //
-//   density(x) = max(0, density_offset + density_scale * fbm(x)), or 1 when density_type is 0.
+//   density(x) = max(0, density_offset + density_scale * fbm(x)), or 1 when density_type is 0, or
+//   a voxel grid's value, trilinear in its index space (voxel centres at integers; the background
+//   outside its box), when density_type is 2.
 
-uniform int density_type;          // 0 constant (rho = 1), 1 noise
+uniform int density_type;          // 0 constant (rho = 1), 1 noise, 2 voxel grid
 uniform uint density_seed;
 uniform float density_frequency;
 uniform int density_octaves;
@@ -58,7 +60,39 @@ float noise_fbm(vec3 x) {
   return sum / norm;
 }
 
+// The voxel grid: R32F texels fetched one by one (the filtering is ours, in float, as the C++ one).
+uniform highp sampler3D density_grid;
+uniform mat4 density_world_to_texel;  // the grid's world-to-index map, less its box's first index
+uniform vec3 density_grid_size;         // voxels along each axis
+uniform float density_grid_background;
+
+float density_voxel(ivec3 i) {
+  if (any(lessThan(i, ivec3(0))) || any(greaterThanEqual(i, ivec3(density_grid_size))))
+    return density_grid_background;
+  return texelFetch(density_grid, i, 0).r;
+}
+
+float grid_density(vec3 x) {
+  vec3 p = (density_world_to_texel * vec4(x, 1.0)).xyz;
+  vec3 fl = floor(p);
+  if (any(lessThan(fl, vec3(-1.0))) || any(greaterThan(fl, density_grid_size)))
+    return density_grid_background;
+  ivec3 i = ivec3(fl);
+  vec3 u = p - fl;
+  float c[4];
+  for (int k = 0; k < 4; ++k) {
+    ivec3 j = i + ivec3(0, k & 1, k >> 1);
+    float a = density_voxel(j);
+    float b = density_voxel(j + ivec3(1, 0, 0));
+    c[k] = a + u.x * (b - a);
+  }
+  float y0 = c[0] + u.y * (c[1] - c[0]);
+  float y1 = c[2] + u.y * (c[3] - c[2]);
+  return y0 + u.z * (y1 - y0);
+}
+
 float density(vec3 x) {
   if (density_type == 0) return 1.0;
+  if (density_type == 2) return grid_density(x);
   return max(0.0, density_offset + density_scale * noise_fbm(x));
 }

@@ -5,6 +5,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git time bc python3
   libopenmesh-dev libdraco-dev libtinygltf-dev libopenimageio-dev openimageio-tools
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtbb-dev libxxhash-dev
+  libopenvdb-dev  # OpenVDB density grids (lightvol-image reads them)
+  python3-openvdb  # the density tests write their OpenVDB files with it (/usr/bin/python3)
   parallel  # lightvol batch --shard across hosts, in its test
   nlohmann-json3-dev libcli11-dev
   libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri

@@ -13,6 +13,7 @@
 #include <map>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 namespace lightvol::test {
 namespace fs = std::filesystem;
@@ -137,6 +138,23 @@ CommandResult run_lightvol(const std::string& args) {
   r.err = se.str();
   return r;
 #endif
+}
+
+std::string test_vdb_folder() {
+  static TempDir* const folder = new TempDir;  // kept to the end of the process
+  static const std::string made = [] {
+    std::vector<std::string> pythons = {"/usr/bin/python3", "python3"};
+    if (const char* env = std::getenv("LIGHTVOL_TEST_PYTHON"); env && *env)
+      pythons.insert(pythons.begin(), env);
+    for (const std::string& python : pythons) {
+      const std::string command =
+          q(python) + " " + q(std::string(LIGHTVOL_SOURCE_DIR) + "/tests/airlight/make_vdbs.py") +
+          " " + q(folder->path()) + " >/dev/null 2>&1";
+      if (std::system(command.c_str()) == 0) return folder->path();
+    }
+    return std::string();
+  }();
+  return made;
 }
 
 std::string q(const std::string& text) {

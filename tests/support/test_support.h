@@ -66,6 +66,17 @@ std::string slurp(const std::string& path);
 // killed passes at once and one that lives on fails after the minute.
 bool process_dies(int pid);
 
+// The folder of the density tests' OpenVDB files (tests/airlight/make_vdbs.py lists them), written
+// once per test process by that script with a Python that has OpenVDB's module (Debian's
+// python3-openvdb): $LIGHTVOL_TEST_PYTHON, /usr/bin/python3 or python3. "" when none has it (the
+// caller skips, saying so).
+std::string test_vdb_folder();
+#define REQUIRE_TEST_VDBS(folder)                                                             \
+  const std::string folder = ::lightvol::test::test_vdb_folder();                             \
+  if (folder.empty())                                                                         \
+  GTEST_SKIP() << "no Python with OpenVDB's module (pyopenvdb: Debian's python3-openvdb) to " \
+                  "write the test's OpenVDB files"
+
 // The file a fuzz target read from regression input tests/fuzz/corpus/TARGET/NAME: the input
 // without its first byte, which the depth_image and mesh targets spend on choosing the extension.
 std::string fuzz_regression_file(const std::string& target, const std::string& name);

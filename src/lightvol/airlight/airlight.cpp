@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <numbers>
 #include <sstream>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <lightvol/airlight/airlight.h>
+#include <lightvol/airlight/detail/vdb_file.h>
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/json_keys.h>
 #include <lightvol/light/texel.h>
@@ -68,16 +70,56 @@ Result<double> bounded_number(const KeyReader& reader, const char* key, double l
   return *x;
 }
 
+// {"type": "vdb", "file", "grid", "scale"}: the grid read from the file (a relative path is
+// relative to the folder of `source`, the medium's file), its values and background times `scale`.
+Result<Density> parse_vdb_density(const KeyReader& d, const std::string& source) {
+  if (Status s = d.only({"type", "file", "grid", "scale"}); !s) return s.error();
+  Result<std::string> file = d.string("file");
+  if (!file) return file.error();
+  if (file->empty()) return d.error("file", "must name an OpenVDB file");
+  std::string grid = "density";
+  if (d.has("grid")) {
+    Result<std::string> name = d.string("grid");
+    if (!name) return name.error();
+    grid = *name;
+  }
+  double scale = 1;
+  if (d.has("scale")) {
+    Result<double> x =
+        bounded_number(d, "scale", 0, std::numeric_limits<double>::max(), false, ">= 0");
+    if (!x) return x.error();
+    scale = *x;
+  }
+  std::filesystem::path path(*file);
+  if (path.is_relative()) path = std::filesystem::path(source).parent_path() / path;
+  Result<std::shared_ptr<const VoxelGrid>> read = detail::read_vdb_grid(path.string(), grid);
+  if (!read) return read.error();
+  std::shared_ptr<const VoxelGrid> voxels = *read;
+  if (scale != 1) {
+    auto scaled = std::make_shared<VoxelGrid>(*voxels);
+    for (float& v : scaled->values) v = static_cast<float>(v * scale);
+    scaled->background *= scale;
+    for (float v : scaled->values)
+      if (!std::isfinite(v))
+        return d.error("scale", "makes a voxel of " + voxels->source + " beyond float's range");
+    voxels = std::move(scaled);
+  }
+  Density density;
+  density.type = DensityType::grid;
+  density.grid = std::move(voxels);
+  return density;
+}
+
 // The medium's "density" object (docs/design.md §6).
-Result<Density> parse_density(const KeyReader& keys) {
+Result<Density> parse_density(const KeyReader& keys, const std::string& source) {
   Result<KeyReader> object = keys.object("density");
   if (!object) return object.error();
   const KeyReader& d = *object;
   Result<std::string> type = d.string("type");
   if (!type) return type.error();
-  if (*type == "vdb")
-    return d.error("type", "OpenVDB densities (\"vdb\") are not supported yet; use \"noise\"");
-  if (*type != "noise") return d.error("type", "expected \"noise\", got " + quote_text(*type));
+  if (*type == "vdb") return parse_vdb_density(d, source);
+  if (*type != "noise")
+    return d.error("type", "expected \"noise\" or \"vdb\", got " + quote_text(*type));
   if (Status s =
           d.only({"type", "seed", "frequency", "octaves", "lacunarity", "gain", "offset", "scale"});
       !s)
@@ -183,7 +225,7 @@ Result<Medium> parse_medium(std::string_view json_text, const std::string& sourc
                                        format_number(medium.profile.outer_deg));
   }
   if (keys.has("density")) {
-    Result<Density> density = parse_density(keys);
+    Result<Density> density = parse_density(keys, source);
     if (!density) return density.error();
     medium.density = *density;
   }

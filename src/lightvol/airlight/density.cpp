@@ -62,17 +62,100 @@ double noise_fbm(const NoiseDensity& noise, const Vec3d& x) {
   return sum / norm;
 }
 
+// ---- voxel grids
+// ---------------------------------------------------------------------------------
+
+bool VoxelGrid::set_transform(const Mat4d& to_world) {
+  bool ok = false;
+  const Mat4d inv = inverse(to_world, &ok);
+  if (!ok || !std::isfinite(determinant(to_world)) || determinant(to_world) == 0) return false;
+  index_to_world = to_world;
+  world_to_index = inv;
+  return true;
+}
+
+double VoxelGrid::voxel(int i, int j, int k) const {
+  i -= origin[0];
+  j -= origin[1];
+  k -= origin[2];
+  if (i < 0 || j < 0 || k < 0 || i >= dims[0] || j >= dims[1] || k >= dims[2]) return background;
+  return values[(static_cast<std::size_t>(k) * dims[1] + j) * dims[0] + i];
+}
+
+double VoxelGrid::operator()(const Vec3d& world) const {
+  const Vec3d p = world_to_index.transform_point(world);
+  const double fx = std::floor(p.x), fy = std::floor(p.y), fz = std::floor(p.z);
+  // Far outside the box (and beyond int): the background.
+  const auto outside = [](double f, int lo, int n) { return f < lo - 1.0 || f > lo + n * 1.0; };
+  if (outside(fx, origin[0], dims[0]) || outside(fy, origin[1], dims[1]) ||
+      outside(fz, origin[2], dims[2]))
+    return background;
+  const int ix = static_cast<int>(fx), iy = static_cast<int>(fy), iz = static_cast<int>(fz);
+  const double ux = p.x - fx, uy = p.y - fy, uz = p.z - fz;
+  double c[2][2];
+  for (int dz = 0; dz < 2; ++dz)
+    for (int dy = 0; dy < 2; ++dy) {
+      const double a = voxel(ix, iy + dy, iz + dz), b = voxel(ix + 1, iy + dy, iz + dz);
+      c[dz][dy] = a + ux * (b - a);
+    }
+  const double y0 = c[0][0] + uy * (c[0][1] - c[0][0]);
+  const double y1 = c[1][0] + uy * (c[1][1] - c[1][0]);
+  return y0 + uz * (y1 - y0);
+}
+
+double VoxelGrid::max_value() const {
+  double m = background;
+  for (float v : values) m = std::max(m, static_cast<double>(v));
+  return m;
+}
+
+double VoxelGrid::voxel_size() const {
+  double size = std::numeric_limits<double>::infinity();
+  for (const Vec3d axis : {Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, 0, 1}})
+    size = std::min(size, length(index_to_world.transform_vector(axis)));
+  return size;
+}
+
+bool VoxelGrid::clip(const Vec3d& o, const Vec3d& d, double lo, double hi, double* t0,
+                     double* t1) const {
+  // An affine map keeps the line's parameter: clip in index space, to the box grown by a voxel
+  // (trilinear blends the last voxels with the background over one more).
+  const Vec3d io = world_to_index.transform_point(o), id = world_to_index.transform_vector(d);
+  const double os[3] = {io.x, io.y, io.z}, ds[3] = {id.x, id.y, id.z};
+  double a = lo, b = hi;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double box_lo = origin[axis] - 1.0, box_hi = origin[axis] + dims[axis] * 1.0;
+    if (ds[axis] == 0) {
+      if (os[axis] < box_lo || os[axis] > box_hi) return false;
+      continue;
+    }
+    double ta = (box_lo - os[axis]) / ds[axis], tb = (box_hi - os[axis]) / ds[axis];
+    if (ta > tb) std::swap(ta, tb);
+    a = std::max(a, ta);
+    b = std::min(b, tb);
+  }
+  if (!(b > a)) return false;
+  *t0 = a;
+  *t1 = b;
+  return true;
+}
+
+// ---- the density --------------------------------------------------------------------------------
+
 double Density::operator()(const Vec3d& x) const {
   if (type == DensityType::constant) return 1.0;
+  if (type == DensityType::grid) return (*grid)(x);
   return std::max(0.0, noise.offset + noise.scale * noise_fbm(noise, x));
 }
 
 double Density::max_density() const {
+  if (type == DensityType::grid) return grid->max_value();
   return type == DensityType::constant ? 1.0 : noise.offset + noise.scale;
 }
 
 double Density::finest_wavelength() const {
   if (type == DensityType::constant) return std::numeric_limits<double>::infinity();
+  if (type == DensityType::grid) return grid->voxel_size();
   return 1.0 / (noise.frequency * std::pow(noise.lacunarity, noise.octaves - 1));
 }
 

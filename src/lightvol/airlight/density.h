@@ -15,16 +15,24 @@
 //   density        ρ(x) = max(0, offset + scale·b(x))
 //
 // Lattice coordinates are meant to stay within ±2²³ (float keeps them exact there).
+//
+// The voxel field (`"type": "vdb"`) is an OpenVDB grid's voxels made dense over its active
+// bounding box: trilinear in the grid's own index space (voxel centres at integer coordinates,
+// OpenVDB's BoxSampler), the grid's background value outside the box, mapped to the world by the
+// grid's linear transform.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <lightvol/core/math.h>
 
 namespace lightvol {
 
-enum class DensityType { constant, noise };
+enum class DensityType { constant, noise, grid };
 
 struct NoiseDensity {
   std::uint32_t seed = 0;
@@ -36,16 +44,41 @@ struct NoiseDensity {
   double scale = 0.5;
 };
 
+// A scalar field on a voxel grid: `dims` voxels from index `origin` (x fastest in `values`), the
+// background outside them, and the affine map from index space to the world.
+struct VoxelGrid {
+  std::string source;  // "smoke.vdb: grid 'density'", for messages
+  std::array<int, 3> origin{0, 0, 0};
+  std::array<int, 3> dims{0, 0, 0};
+  std::vector<float> values;  // dims[0]·dims[1]·dims[2], all finite and ≥ 0
+  double background = 0;      // finite, ≥ 0
+  Mat4d index_to_world;       // affine (last row 0 0 0 1), invertible
+  Mat4d world_to_index;
+
+  // Sets world_to_index from index_to_world; false when it is not invertible.
+  bool set_transform(const Mat4d& to_world);
+  double voxel(int i, int j, int k) const;      // background outside the box
+  double operator()(const Vec3d& world) const;  // trilinear
+  double max_value() const;
+  // The shortest world length of a voxel's edges.
+  double voxel_size() const;
+  // The part [t0, t1] of the line o + t·d within one voxel of the box (where the field may differ
+  // from the background), for t in [lo, hi]; false when none of it is.
+  bool clip(const Vec3d& o, const Vec3d& d, double lo, double hi, double* t0, double* t1) const;
+};
+
 struct Density {
   DensityType type = DensityType::constant;  // constant: ρ ≡ 1 (the homogeneous medium)
   NoiseDensity noise;
+  std::shared_ptr<const VoxelGrid> grid;  // type grid
 
   bool varying() const { return type != DensityType::constant; }
   double operator()(const Vec3d& x) const;  // ρ(x) ≥ 0
-  // The largest ρ can be: offset + scale for noise, 1 when constant.
+  // The largest ρ can be: offset + scale for noise, the largest voxel (or the background) of a
+  // grid, 1 when constant.
   double max_density() const;
-  // The lattice spacing of the finest octave (world units): the field's finest feature.
-  // +infinity for a constant field.
+  // The field's finest feature (world units): the lattice spacing of the finest octave, a grid's
+  // voxel size; +infinity for a constant field.
   double finest_wavelength() const;
 };
 

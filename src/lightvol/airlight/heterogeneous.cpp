@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <lightvol/airlight/heterogeneous.h>
 #include <lightvol/core/check.h>
@@ -39,8 +40,19 @@ double light_optical_depth(const Light& light, const Medium& medium, const Vec3d
   }
   const double len = length(x - from);
   if (!(len > 0)) return 0;
+  const Density& rho = medium.density;
+  if (rho.type == DensityType::grid) {
+    // The background beyond the grid's box exactly; quadrature over the part within it.
+    const Vec3d d = (1.0 / len) * (x - from);
+    double t0 = 0, t1 = 0;
+    if (!rho.grid->clip(from, d, 0, len, &t0, &t1))
+      return medium.extinction() * rho.grid->background * len;
+    const int panels = std::max(1, static_cast<int>(std::ceil((t1 - t0) / step)));
+    return medium.extinction() * (rho.grid->background * (len - (t1 - t0)) +
+                                  segment_density(rho, from + t0 * d, from + t1 * d, panels));
+  }
   const int panels = std::max(1, static_cast<int>(std::ceil(len / step)));
-  return medium.extinction() * segment_density(medium.density, from, x, panels);
+  return medium.extinction() * segment_density(rho, from, x, panels);
 }
 
 std::vector<LitInterval> lit_intervals(std::vector<std::pair<double, double>> t_and_sign) {
@@ -83,7 +95,19 @@ double heterogeneous_airlight(const Light& light, const Medium& medium, const Ra
            std::exp(-tau_l) / d2;
   };
   double tau_e = 0, sum = 0, s = 0;
-  for (const LitInterval& piece : lit) {
+  // A grid of background 0 scatters nothing and hides nothing outside its box: only the part of
+  // the ray within it counts.
+  double support_end = std::numeric_limits<double>::infinity();
+  if (rho.type == DensityType::grid && rho.grid->background == 0) {
+    double t0 = 0, t1 = 0;
+    if (!rho.grid->clip(ray.origin, ray.direction, 0, lit.back().b, &t0, &t1)) return 0;
+    s = t0;
+    support_end = t1;
+  }
+  for (LitInterval piece : lit) {
+    piece.a = std::max(piece.a, s);
+    piece.b = std::min(piece.b, support_end);
+    if (!(piece.b > piece.a)) continue;
     // Dark stretch before the piece: only the eye-side optical depth.
     while (s < piece.a) {
       const double b = std::min(piece.a, s + step);

@@ -16,9 +16,26 @@ using namespace gl;
 
 const char* const kGlslDensity = detail::kDensityGlsl;
 
+namespace {
+void set_matrix(const Program& p, const std::string& name, const Mat4d& m);
+}  // namespace
+
 void set_density_uniforms(const Program& program, const Density& density) {
   const NoiseDensity& n = density.noise;
-  glUniform1i(program.uniform("density_type"), density.varying() ? 1 : 0);
+  const bool grid = density.type == DensityType::grid;
+  glUniform1i(program.uniform("density_type"), grid ? 2 : density.varying() ? 1 : 0);
+  glUniform1i(program.uniform("density_grid"), kDensityTextureUnit);
+  if (grid) {
+    const VoxelGrid& g = *density.grid;
+    Mat4d to_texel;  // the index map less the box's first index, in double before float
+    to_texel(0, 3) = -g.origin[0];
+    to_texel(1, 3) = -g.origin[1];
+    to_texel(2, 3) = -g.origin[2];
+    set_matrix(program, "density_world_to_texel", to_texel * g.world_to_index);
+    glUniform3f(program.uniform("density_grid_size"), static_cast<float>(g.dims[0]),
+                static_cast<float>(g.dims[1]), static_cast<float>(g.dims[2]));
+    glUniform1f(program.uniform("density_grid_background"), static_cast<float>(g.background));
+  }
   glUniform1ui(program.uniform("density_seed"), n.seed);
   glUniform1f(program.uniform("density_frequency"), static_cast<float>(n.frequency));
   glUniform1i(program.uniform("density_octaves"), n.octaves);
@@ -26,6 +43,51 @@ void set_density_uniforms(const Program& program, const Density& density) {
   glUniform1f(program.uniform("density_gain"), static_cast<float>(n.gain));
   glUniform1f(program.uniform("density_offset"), static_cast<float>(n.offset));
   glUniform1f(program.uniform("density_scale"), static_cast<float>(n.scale));
+}
+
+// ---- the density field -------------------------------------------------------------------------
+
+GlDensityField::~GlDensityField() = default;
+
+Result<std::shared_ptr<const GlDensityField>> GlDensityField::create(const Density& density) {
+  std::shared_ptr<GlDensityField> field(new GlDensityField());
+  field->density_ = density;
+  if (density.type != DensityType::grid) return std::shared_ptr<const GlDensityField>(field);
+  const VoxelGrid& g = *density.grid;
+  GLint most = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &most);
+  for (int axis = 0; axis < 3; ++axis)
+    if (g.dims[axis] > most)
+      return Error{g.source + ": " + std::to_string(g.dims[0]) + "x" + std::to_string(g.dims[1]) +
+                   "x" + std::to_string(g.dims[2]) + " voxels; this OpenGL driver's 3D textures " +
+                   "hold at most " + std::to_string(most) + " along each axis"};
+  GLuint id = 0;
+  glGenTextures(1, &id);
+  field->texture_ = TextureHandle(id);
+  glActiveTexture(GL_TEXTURE0 + kDensityTextureUnit);
+  glBindTexture(GL_TEXTURE_3D, id);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexImage3D(GL_TEXTURE_3D, 0, GL_R32F, g.dims[0], g.dims[1], g.dims[2], 0, GL_RED, GL_FLOAT,
+               g.values.data());
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
+  glActiveTexture(GL_TEXTURE0);
+  if (std::string e = pending_error(); !e.empty())
+    return Error{g.source + ": OpenGL: uploading the grid as a 3D texture: " + e};
+  return std::shared_ptr<const GlDensityField>(field);
+}
+
+void GlDensityField::bind(const Program& program) const {
+  set_density_uniforms(program, density_);
+  bind_texture();
+}
+
+void GlDensityField::bind_texture() const {
+  if (!texture_.id()) return;
+  glActiveTexture(GL_TEXTURE0 + kDensityTextureUnit);
+  glBindTexture(GL_TEXTURE_3D, texture_.id());
+  glActiveTexture(GL_TEXTURE0);
 }
 
 namespace {
@@ -201,6 +263,7 @@ double light_reach(const RenderScene& scene) {
 struct GlOpacityMap::State {
   Light light;
   Medium medium;
+  std::shared_ptr<const GlDensityField> field;
   OpacityMapOptions options;
   Program build;
   BufferHandle tau;
@@ -211,9 +274,9 @@ struct GlOpacityMap::State {
 
 GlOpacityMap::~GlOpacityMap() = default;
 
-Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(const Light& light, const Medium& medium,
-                                                           const OpacityMapOptions& options,
-                                                           double reach) {
+Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(
+    const Light& light, const Medium& medium, const OpacityMapOptions& options, double reach,
+    std::shared_ptr<const GlDensityField> field) {
   if (options.size < 2 || options.size > 1024 || options.layers < 2 || options.layers > 4096 ||
       options.substeps < 1)
     return Error{"opacity map: size must be in [2, 1024], layers in [2, 4096], got " +
@@ -225,6 +288,12 @@ Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(const Light& light, c
   s.medium = medium;
   s.options = options;
   s.faces = light.type == LightType::omni ? 6 : 1;
+  if (!field) {
+    Result<std::shared_ptr<const GlDensityField>> made = GlDensityField::create(medium.density);
+    if (!made) return made.error();
+    field = *made;
+  }
+  s.field = std::move(field);
   Result<Program> build = Program::compile_compute(
       "#version 450 core\n" + std::string(kGlslDensity) + detail::kDensityGridGlsl + kOpacityBuild,
       "opacity map");
@@ -250,7 +319,7 @@ Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(const Light& light, c
                             static_cast<std::size_t>(options.layers);
   s.tau = make_storage(count, nullptr);
   s.build.use();
-  set_density_uniforms(s.build, medium.density);
+  s.field->bind(s.build);
   glUniform1i(s.build.uniform("om_substeps"), options.substeps);
   glUniform1f(s.build.uniform("om_sigma_t"), static_cast<float>(medium.extinction()));
   r->bind(s.build);
@@ -263,6 +332,7 @@ Result<std::unique_ptr<GlOpacityMap>> GlOpacityMap::create(const Light& light, c
 void GlOpacityMap::update() const {
   const State& s = *state_;
   s.build.use();
+  s.field->bind_texture();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, s.tau.id());
   const GLuint groups = static_cast<GLuint>((s.options.size + 7) / 8);
   glDispatchCompute(groups, groups, static_cast<GLuint>(s.faces));
@@ -294,6 +364,7 @@ void GlOpacityMap::bind(const Program& program) const {
 
 struct GlDensityGrid::State {
   DensityGridOptions options;
+  std::shared_ptr<const GlDensityField> field;
   std::unique_ptr<GlOpacityMap> opacity;
   Program build;
   BufferHandle grid, columns;
@@ -346,8 +417,12 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
         }
     }
   }
+  Result<std::shared_ptr<const GlDensityField>> field =
+      GlDensityField::create(scene.medium.density);
+  if (!field) return field.error();
+  s.field = *field;
   Result<std::unique_ptr<GlOpacityMap>> opacity =
-      GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene));
+      GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene), s.field);
   if (!opacity) return opacity.error();
   s.opacity = std::move(*opacity);
   Result<Program> build = Program::compile_compute(compute_header() + kGlslCommon + kGlslDensity +
@@ -360,7 +435,7 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
   s.grid = make_storage(2 * t1.size() * static_cast<std::size_t>(options.slices), nullptr);
   s.build.use();
   set_scene_uniforms(s.build, scene);
-  set_density_uniforms(s.build, scene.medium.density);
+  s.field->bind(s.build);
   glUniform1i(s.build.uniform("f_table"), 1);  // declared by the common part; unused here
   glUniform1i(s.build.uniform("grid_substeps"), options.substeps);
   r->bind(s.build);
@@ -375,6 +450,7 @@ void GlDensityGrid::update() const {
   const State& s = *state_;
   s.opacity->update();
   s.build.use();
+  s.field->bind_texture();
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, 0);
   s.opacity->bind(s.build);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, s.grid.id());

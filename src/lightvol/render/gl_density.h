@@ -16,7 +16,31 @@ namespace lightvol {
 // uniforms.
 extern const char* const kGlslDensity;
 // Sets the uniforms of kGlslDensity (density_type, density_seed, ...). The program must be in use.
+// A voxel grid's texture is GlDensityField's: this sets its sampler to kDensityTextureUnit only.
 void set_density_uniforms(const gl::Program& program, const Density& density);
+
+// The texture unit of a voxel grid's 3D texture (units below it are the renderers' own).
+constexpr int kDensityTextureUnit = 8;
+
+// A density on the GPU: kGlslDensity's uniforms and, for a voxel grid, its voxels as an R32F 3D
+// texture (fetched texel by texel: the trilinear filtering is kGlslDensity's, in float, as the C++
+// one).
+class GlDensityField {
+ public:
+  // Errors: a grid larger than the driver's 3D textures, naming the grid's source.
+  static Result<std::shared_ptr<const GlDensityField>> create(const Density& density);
+  ~GlDensityField();
+  // Sets kGlslDensity's uniforms in `program` (in use) and binds the texture.
+  void bind(const gl::Program& program) const;
+  // Binds the grid's texture to kDensityTextureUnit (nothing for other densities): before each
+  // draw or dispatch of a program that samples the density.
+  void bind_texture() const;
+
+ private:
+  GlDensityField() = default;
+  Density density_;
+  gl::TextureHandle texture_;
+};
 
 // ---- the opacity map ----------------------------------------------------------------------------
 
@@ -42,9 +66,11 @@ class GlOpacityMap {
   // Compiles the compute program. Errors: a shader that does not compile (a driver problem).
   // `reach`, when positive, limits the layers to that distance from the light (directional: depth
   // below its near plane), the farthest point a renderer will look up.
-  static Result<std::unique_ptr<GlOpacityMap>> create(const Light& light, const Medium& medium,
-                                                      const OpacityMapOptions& options,
-                                                      double reach = 0);
+  // `field`, when given, is the medium's density on the GPU, shared with the caller's programs
+  // (else the map makes its own).
+  static Result<std::unique_ptr<GlOpacityMap>> create(
+      const Light& light, const Medium& medium, const OpacityMapOptions& options, double reach = 0,
+      std::shared_ptr<const GlDensityField> field = nullptr);
   ~GlOpacityMap();
   // Recomputes the map (a compute dispatch and a barrier).
   void update() const;

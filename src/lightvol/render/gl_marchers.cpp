@@ -245,6 +245,7 @@ struct GlMarcher::State {
   VertexArrayHandle vao;
   bool light_behind = false;
   std::unique_ptr<GlOpacityMap> opacity;  // media of varying density
+  std::shared_ptr<const GlDensityField> field;
 };
 
 GlMarcher::~GlMarcher() = default;
@@ -326,12 +327,16 @@ Result<std::unique_ptr<GlMarcher>> GlMarcher::create(const RenderScene& scene,
     glUniform1i(s.first.uniform("samples"), options.samples);
     glUniform1i(s.first.uniform("interleave"), options.interleave);
     if (varying) {
+      Result<std::shared_ptr<const GlDensityField>> field =
+          GlDensityField::create(scene.medium.density);
+      if (!field) return field.error();
+      s.field = *field;
       Result<std::unique_ptr<GlOpacityMap>> opacity =
-          GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene));
+          GlOpacityMap::create(light, scene.medium, options.opacity, light_reach(scene), s.field);
       if (!opacity) return opacity.error();
       s.opacity = std::move(*opacity);
       s.first.use();
-      set_density_uniforms(s.first, scene.medium.density);
+      s.field->bind(s.first);
       s.opacity->bind(s.first);
     }
     s.gather.use();
@@ -370,6 +375,7 @@ Image GlMarcher::render(double* seconds) {
   s.a.bind();
   s.first.use();
   if (s.opacity) s.opacity->bind(s.first);
+  if (s.field) s.field->bind_texture();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, s.surface.id());
   glActiveTexture(GL_TEXTURE1);

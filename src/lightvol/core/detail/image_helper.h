@@ -19,7 +19,7 @@
 namespace lightvol::detail {
 
 // The first byte of a request.
-enum class ImageRequest : std::uint8_t { read = 'R', write = 'W' };
+enum class ImageRequest : std::uint8_t { read = 'R', write = 'W', vdb = 'V' };
 
 // The program's path, the first of these that is an executable file: $LIGHTVOL_IMAGE_HELPER;
 // lightvol-image beside the running executable (/proc/self/exe); ../libexec/lightvol/ relative

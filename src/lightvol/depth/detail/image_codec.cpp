@@ -216,6 +216,10 @@ bool serve_image_request(ChildOutput& channel, int threads) {
   (void)exr_core;
   ImageRequest request{};
   if (!channel.read_value(&request)) return false;
+  return serve_image_request(channel, threads, request);
+}
+
+bool serve_image_request(ChildOutput& channel, int threads, ImageRequest request) {
   if (request == ImageRequest::read) serve_read(channel, threads);
   if (request == ImageRequest::write) serve_write(channel, threads);
   return request == ImageRequest::read || request == ImageRequest::write;

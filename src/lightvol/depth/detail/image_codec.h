@@ -3,6 +3,7 @@
 // targets, which serve images in process: core/detail/image_helper.h).
 #pragma once
 
+#include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/detail/isolated.h>
 
 namespace lightvol::detail {
@@ -21,5 +22,8 @@ namespace lightvol::detail {
 // parent names the channel to read (or -1); the server reads it as floats and answers with a last
 // verdict and the pixels.
 bool serve_image_request(ChildOutput& channel, int threads);
+// The same for a request whose first byte was read already (lightvol-image's loop, which also
+// serves ImageRequest::vdb); false for one that is not an image request.
+bool serve_image_request(ChildOutput& channel, int threads, ImageRequest request);
 
 }  // namespace lightvol::detail
