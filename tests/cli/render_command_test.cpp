@@ -380,7 +380,7 @@ TEST(RenderCommand, RendersAnOpenVdbGrid) {
       test::run_lightvol("--max-memory 100K render '" + dir + "/volume.ply' " + args +
                          " --medium '" + dir + "/smoke.json' --out '" + dir + "/bad.exr'");
   EXPECT_EQ(small.exit_code, 2);
-  EXPECT_NE(small.err.find("more than the budget of 100 KiB; raise it with --max-memory"),
+  EXPECT_NE(small.err.find("more than the budget of 100.0 KiB; raise it with --max-memory"),
             std::string::npos)
       << small.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.exr"));
