@@ -28,6 +28,7 @@
 #include <lightvol/scene/scene.h>
 #include <lightvol/volume/build_volume.h>
 #ifdef LIGHTVOL_HAS_SHADOWMAP
+#include <lightvol/render/fog_picture.h>
 #include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/scene/shadowmap.h>
@@ -100,6 +101,7 @@ struct DemoScene {
   Light light;
   Camera camera;
   Medium medium;
+  Medium fog;  // the medium of varying density beside it (demo_fog.png)
 };
 
 Result<DemoScene> load_demo_scene(const std::string& data, int size) {
@@ -116,6 +118,9 @@ Result<DemoScene> load_demo_scene(const std::string& data, int size) {
   Result<Medium> medium = load_medium(data + "/sponza_demo_medium.json");
   if (!medium) return medium.error();
   s.medium = *medium;
+  Result<Medium> fog = load_medium(data + "/sponza_demo_fog.json");
+  if (!fog) return fog.error();
+  s.fog = *fog;
   // Smaller shadow maps (tests) get a proportionally smaller camera image.
   if (size < 512) {
     s.camera.width = std::max(16, s.camera.width * size / 512);
@@ -228,9 +233,10 @@ constexpr double kDemoExposure = 1.2;
 
 // The airlight of each volume and of ray marching, and the picture: lit surfaces plus the static
 // volume's airlight. Every PNG uses the static volume's exposure, so that they compare by eye.
-Status render_pictures(const RenderScene& scene, const std::vector<Volume>& volumes,
-                       const ShadowMaps& shadow, const RenderedPasses& shadow_pass,
-                       const std::string& out_dir, Progress& progress, Summary& summary) {
+Status render_pictures(const RenderScene& scene, const Medium& fog,
+                       const std::vector<Volume>& volumes, const ShadowMaps& shadow,
+                       const RenderedPasses& shadow_pass, const std::string& out_dir,
+                       Progress& progress, Summary& summary) {
   const auto out = [&](const std::string& name) { return out_dir + "/" + name; };
   const std::string size = size_text(scene.camera.width, scene.camera.height);
   Result<std::unique_ptr<GlVolumeRenderer>> volume_renderer = GlVolumeRenderer::create(scene);
@@ -297,6 +303,15 @@ Status render_pictures(const RenderScene& scene, const std::vector<Volume>& volu
       !s)
     return s;
   summary.add("picture", "demo.png", size, "lit surfaces + static volume's airlight");
+  progress.begin("fog picture");
+  const Result<FogPicture> fog_picture =
+      write_fog_picture(scene, volumes[0].mesh, fog, shadow_pass.window[0], map.width, map.height,
+                        out("demo_fog.png"), {}, &images[0]);
+  if (!fog_picture) return fog_picture.error();
+  std::snprintf(text, sizeof text, "GPU %.1f ms; noise fog (right) beside demo.png's medium",
+                fog_picture->fog_seconds * 1e3);
+  summary.add("fog picture", "demo_fog.png", size_text(2 * scene.camera.width, scene.camera.height),
+              text);
   return {};
 }
 #endif
@@ -365,8 +380,8 @@ int run_demo(const DemoOptions& o) {
         camera, camera_depth.values, camera_depth.width, camera_depth.height, "camera_depth.exr");
     if (!surface) return fail(surface.error());
     render_scene.surface = std::move(*surface);
-    if (Status s = render_pictures(render_scene, *volumes, shadow, *shadow_pass, o.out_dir,
-                                   progress, summary);
+    if (Status s = render_pictures(render_scene, scene->fog, *volumes, shadow, *shadow_pass,
+                                   o.out_dir, progress, summary);
         !s)
       return fail(s.error());
   } else {

@@ -25,8 +25,8 @@ TEST(Demo, RunsOnTheBundledSceneAtSize64) {
   const test::CommandResult r = test::run_lightvol("demo --out " + dir.path() + " --size 64");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // The summary names every step.
-  for (const char* step :
-       {"shadow map 64x64", "static volume", "adaptive volume", "check static", "check adaptive"})
+  for (const char* step : {"shadow map 64x64", "static volume", "adaptive volume", "check static",
+                           "check adaptive", "fog picture"})
     EXPECT_NE(r.out.find(step), std::string::npos) << step << "\n" << r.out;
   EXPECT_EQ(r.out.find("INVALID"), std::string::npos) << r.out;
 
@@ -82,7 +82,7 @@ TEST(Demo, RunsOnTheBundledSceneAtSize64) {
             std::string::npos)
       << r.out;
 
-  for (const char* png : {"shadow_map.png", "camera_depth.png"})
+  for (const char* png : {"shadow_map.png", "camera_depth.png", "demo_fog.png"})
     EXPECT_TRUE(std::filesystem::exists(dir.file(png))) << png;
   REQUIRE_GL_CONTEXT();  // without OpenGL the demo skips rendering
   // The airlight images against the CPU reference (double precision) of the static volume, in the

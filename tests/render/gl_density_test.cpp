@@ -9,10 +9,13 @@
 
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/airlight/density.h>
+#include <lightvol/render/fog_picture.h>
 #include <lightvol/render/gl_density.h>
 #include <lightvol/render/gl_marchers.h>
 #include <lightvol/render/gl_volume.h>
+#include <lightvol/render/image_io.h>
 #include <lightvol/render/reference.h>
+#include <lightvol/render/surfaces.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/analytic_scene.h"
@@ -223,6 +226,65 @@ TEST(GlDensity, RaymarchConvergesToTheReference) {
     }
     EXPECT_LT(previous, 0.02) << c.name;
   }
+}
+
+// ---- the demo's fog picture
+// ----------------------------------------------------------------------
+
+// write_fog_picture: the homogeneous medium on the left (its colours from lit_surfaces), the fog
+// on the right, from the same exposure; the fog's airlight is the volume method's.
+TEST(FogPicture, TheTwoMediaSideBySide) {
+  REQUIRE_GL_CONTEXT();
+  Mesh volume;
+  const RenderScene scene = scene_of(kCases[0], {}, &volume);
+  Medium fog = scene.medium;
+  fog.density = noise(0.5, 0.8);
+  const std::vector<float> window(static_cast<std::size_t>(kMap) * kMap, 1.0f);  // all lit
+  test::TempDir dir;
+  Result<FogPicture> picture =
+      write_fog_picture(scene, volume, fog, window, kMap, kMap, dir.file("fog.exr"));
+  ASSERT_TRUE(picture) << picture.error().message;
+  Result<Image> red = read_image(dir.file("fog.exr"));  // the first channel: red
+  ASSERT_TRUE(red) << red.error().message;
+  ASSERT_EQ(red->width, 2 * kW);
+  ASSERT_EQ(red->height, kH);
+  // The left half: the light's colour (red 1.0) times airlight and lit surfaces, plus the
+  // ambient's (red 0.5) times the ambient surfaces.
+  const FogPictureOptions o;
+  const Image airlight = render_volume(scene, volume);
+  SurfaceShading direct, ambient;
+  direct.ambient = 0;
+  ambient.albedo = 0;
+  ambient.ambient = o.ambient;
+  Image dark = airlight;
+  std::fill(dark.values.begin(), dark.values.end(), 0.0);
+  const Image lit = lit_surfaces(scene, window, kMap, kMap, airlight, direct);
+  const Image sky = lit_surfaces(scene, window, kMap, kMap, dark, ambient);
+  Image left = lit, right = lit;
+  for (int row = 0; row < kH; ++row)
+    for (int col = 0; col < kW; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * kW + col;
+      left.values[i] = red->at(col, row);
+      right.values[i] = red->at(kW + col, row);
+    }
+  Image expected = lit;
+  for (std::size_t i = 0; i < expected.values.size(); ++i)
+    expected.values[i] = o.light_colour[0] * lit.values[i] + o.ambient_colour[0] * sky.values[i];
+  EXPECT_LT(compare_images(left, expected).relative_l2, 1e-6);  // float storage
+  EXPECT_GT(compare_images(right, left).relative_l2, 0.05);
+  // The fog's airlight (tile 2) against the same renderer's.
+  RenderScene foggy = scene;
+  foggy.medium = fog;
+  GlVolumeOptions tile2;
+  tile2.density.tile = 2;
+  const Image fog_airlight = render_volume(foggy, volume, tile2);
+  double a = 0, b = 0;
+  for (std::size_t i = 0; i < airlight.values.size(); ++i) {
+    a += fog_airlight.values[i];
+    b += airlight.values[i];
+  }
+  EXPECT_NEAR(picture->fog_airlight_ratio, a / b, 1e-9);
+  EXPECT_GT(picture->fog_seconds, 0);
 }
 
 // ---- OpenVDB grids

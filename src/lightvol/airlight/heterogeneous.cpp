@@ -32,6 +32,12 @@ double segment_density(const Density& density, const Vec3d& p, const Vec3d& q, i
 
 double reference_step(const Medium& medium) { return 0.25 * medium.density.finest_wavelength(); }
 
+double segment_optical_depth(const Medium& medium, const Vec3d& a, const Vec3d& b, double step) {
+  LV_CHECK(step > 0);
+  const int panels = std::max(1, static_cast<int>(std::ceil(length(b - a) / step)));
+  return medium.extinction() * segment_density(medium.density, a, b, panels);
+}
+
 double light_optical_depth(const Light& light, const Medium& medium, const Vec3d& x, double step) {
   Vec3d from = light.position;
   if (light.type == LightType::directional) {

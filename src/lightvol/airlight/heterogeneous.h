@@ -23,6 +23,9 @@ double reference_step(const Medium& medium);
 // τ_L(x) = σt ∫ρ along the light's path to x, 4-point Gauss–Legendre on panels of at most `step`.
 double light_optical_depth(const Light& light, const Medium& medium, const Vec3d& x, double step);
 
+// σt ∫ρ over the segment a → b, 4-point Gauss–Legendre on panels of at most `step`.
+double segment_optical_depth(const Medium& medium, const Vec3d& a, const Vec3d& b, double step);
+
 // A piece [a, b] of the ray with lit weight w (Σ of the light volume's crossing signs beyond it).
 struct LitInterval {
   double a = 0, b = 0, weight = 0;

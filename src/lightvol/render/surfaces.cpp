@@ -2,6 +2,10 @@
 #include <cmath>
 #include <cstddef>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <lightvol/airlight/heterogeneous.h>
 #include <lightvol/core/math.h>
 #include <lightvol/render/surfaces.h>
 
@@ -29,6 +33,24 @@ Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_wi
       hit[i] = std::isfinite(scene.surface[i]);
       if (hit[i]) points[i] = ray.origin + scene.surface[i] * ray.direction;
     }
+  // A varying density: each point's optical depths toward the light and the eye, else e^(−σt·d).
+  std::vector<double> tau_light, tau_eye;
+  if (scene.medium.density.varying()) {
+    const double step = 2 * scene.medium.density.finest_wavelength();
+    tau_light.assign(points.size(), 0.0);
+    tau_eye.assign(points.size(), 0.0);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, points.size()),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            if (!hit[i]) continue;
+            const Ray ray = pixel_ray(cam, static_cast<int>(i % w), static_cast<int>(i / w));
+            if (shading.albedo != 0)  // else the light's side is not seen
+              tau_light[i] = light_optical_depth(light, scene.medium, points[i], step);
+            tau_eye[i] = segment_optical_depth(scene.medium, ray.origin, points[i], step);
+          }
+        });
+  }
   Image image = airlight;
   for (int row = 0; row < h; ++row)
     for (int col = 0; col < w; ++col) {
@@ -66,10 +88,11 @@ Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_wi
         if (here <= eye_depth(stored) * 1.01 + 0.02) lit = 1;
       }
       const double cos_l = std::max(0.0, dot(n, (1.0 / dist) * to_light));
-      const double irradiance =
-          lit * scene.medium.intensity * cos_l / (dist * dist) * std::exp(-st * dist);
+      const double irradiance = lit * scene.medium.intensity * cos_l / (dist * dist) *
+                                std::exp(tau_light.empty() ? -st * dist : -tau_light[i]);
       const double radiance = shading.albedo / 3.14159265358979 * irradiance + shading.ambient;
-      image.values[i] += radiance * std::exp(-st * scene.surface[i]);
+      image.values[i] +=
+          radiance * std::exp(tau_eye.empty() ? -st * scene.surface[i] : -tau_eye[i]);
     }
   return image;
 }

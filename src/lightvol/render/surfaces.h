@@ -20,7 +20,10 @@ struct SurfaceShading {
 // within 1% + 0.02 of the map's), reflected by a Lambert surface; normals from the camera's
 // surface distances (the cross product of the tangents toward the nearer neighbour in depth
 // along each axis, turned to face the camera). `shadow_window`: the light's W×H shadow map as
-// window depth (DepthPasses::window_depth). The airlight image has the camera's size.
+// window depth (DepthPasses::window_depth). The airlight image has the camera's size. In a medium
+// of varying density both attenuations are e^(−σt ∫ρ) along the segments (4-point Gauss–Legendre
+// panels of twice the density's finest wavelength: a picture's accuracy), each pixel on its own
+// (TBB); the light's side only when `shading.albedo` is not 0.
 Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_window, int width,
                    int height, const Image& airlight, const SurfaceShading& shading = {});
 
