@@ -237,7 +237,7 @@ TEST(Medium, RejectsBadInputNamingFileAndKey) {
       {R"({"scattering": 0.1, "density": {"type": "perlin"}})",
        "m.json: key 'density.type': expected \"noise\""},
       {R"({"scattering": 0.1, "density": {"type": "vdb", "file": "a.vdb"}})",
-       "a.vdb: no such file"},
+       "m.json: key 'density.file': a.vdb: no such file"},
       {R"({"scattering": 0.1, "density": {"type": "vdb"}})", "m.json: key 'density.file': missing"},
       {R"({"scattering": 0.1, "density": {"type": "vdb", "file": "a.vdb", "seed": 1}})",
        "m.json: key 'density.seed': unknown key"},

@@ -147,7 +147,9 @@ TEST(VdbDensity, BadFilesAreRefusedWithOneLineNamingThem) {
     Result<Medium> m = parse_medium(medium_json(file), dir.file("m.json"));
     ASSERT_FALSE(m) << file;
     const std::string& message = m.error().message;
-    EXPECT_EQ(message.rfind(expected, 0), 0u) << message;
+    // The medium's file and key, then the grid's file and what is wrong with it.
+    EXPECT_EQ(message.rfind(dir.file("m.json") + ": key 'density.file': " + expected, 0), 0u)
+        << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
     EXPECT_LT(message.size(), 400u) << message;
     std::printf("  %s\n", message.c_str());

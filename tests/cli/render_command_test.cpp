@@ -371,7 +371,10 @@ TEST(RenderCommand, RendersAnOpenVdbGrid) {
         test::run_lightvol("render '" + dir + "/volume.ply' " + args + " --medium '" + dir +
                            "/bad.json' --out '" + dir + "/bad.exr'");
     EXPECT_EQ(r.exit_code, 2) << density;
-    EXPECT_EQ(r.err.rfind("lightvol: " + dir + "/" + why, 0), 0u) << r.err;
+    EXPECT_EQ(
+        r.err.rfind("lightvol: " + dir + "/bad.json: key 'density.file': " + dir + "/" + why, 0),
+        0u)
+        << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir + "/bad.exr"));
   }

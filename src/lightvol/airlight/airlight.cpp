@@ -93,7 +93,7 @@ Result<Density> parse_vdb_density(const KeyReader& d, const std::string& source)
   std::filesystem::path path(*file);
   if (path.is_relative()) path = std::filesystem::path(source).parent_path() / path;
   Result<std::shared_ptr<const VoxelGrid>> read = detail::read_vdb_grid(path.string(), grid);
-  if (!read) return read.error();
+  if (!read) return d.error("file", read.error().message);
   std::shared_ptr<const VoxelGrid> voxels = *read;
   if (scale != 1) {
     auto scaled = std::make_shared<VoxelGrid>(*voxels);
