@@ -61,6 +61,9 @@ float noise_fbm(vec3 x) {
 }
 
 // The voxel grid: R32F texels fetched one by one (the filtering is ours, in float, as the C++ one).
+// Not under GL_ES: the web viewer reads no grids (web/density.js refuses "vdb"), and a sampler left
+// on unit 0 beside a 2D one there would fail its draws.
+#ifndef GL_ES
 uniform highp sampler3D density_grid;
 uniform mat4 density_world_to_texel;  // the grid's world-to-index map, less its box's first index
 uniform vec3 density_grid_size;         // voxels along each axis
@@ -90,6 +93,9 @@ float grid_density(vec3 x) {
   float y1 = c[2] + u.y * (c[3] - c[2]);
   return y0 + u.z * (y1 - y0);
 }
+#else
+float grid_density(vec3 x) { return 1.0; }
+#endif
 
 float density(vec3 x) {
   if (density_type == 0) return 1.0;
