@@ -13,7 +13,6 @@
 #include <nlohmann/json.hpp>
 
 #include <lightvol/airlight/airlight.h>
-#include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/depth_image.h>
@@ -21,12 +20,12 @@
 #include <lightvol/export/export.h>
 #include <lightvol/light/camera.h>
 #include <lightvol/light/light.h>
+#include <lightvol/pipeline/build_file.h>
 #include <lightvol/render/image_io.h>
 #include <lightvol/render/scene.h>
 #include <lightvol/render/surfaces.h>
 #include <lightvol/scene/depth_passes.h>
 #include <lightvol/scene/scene.h>
-#include <lightvol/volume/build_volume.h>
 #ifdef LIGHTVOL_HAS_SHADOWMAP
 #include <lightvol/render/fog_picture.h>
 #include <lightvol/render/gl_marchers.h>
@@ -72,6 +71,12 @@ class Summary {
     progress_.end();
     rows_.push_back({step, file, count, result, progress_.log().stages().back().seconds});
   }
+  struct Row {
+    std::string step, file, count, result;
+    double seconds = 0;
+  };
+  // A row for steps the library timed.
+  void row(Row r) { rows_.push_back(std::move(r)); }
   // A row for a step that did not run.
   void skipped(const std::string& step, const std::string& why) {
     rows_.push_back({step, "", "", "skipped: " + why, 0});
@@ -87,10 +92,6 @@ class Summary {
   }
 
  private:
-  struct Row {
-    std::string step, file, count, result;
-    double seconds = 0;
-  };
   Progress& progress_;
   std::vector<Row> rows_;
 };
@@ -157,36 +158,41 @@ Result<RenderedPasses> depth_pass(DepthPasses& passes, const Light& view, MapSiz
   return pass;
 }
 
-std::string check_text(const CheckReport& report) {
-  if (!report.valid()) return "INVALID: " + report.first_failure();
-  return "valid (" + std::string(to_string(report.proof)) + ")";
-}
-
 struct Volume {
   std::string name;
   Mesh mesh;
 };
 
-// The static and the adaptive volume of the shadow map, each written as volume_NAME.ply.
+// The static and the adaptive volume of the shadow map, each checked from the light and written
+// as volume_NAME.ply (build_volume_file: nothing written when it fails its checks). The rows of
+// their checks go to `checks`, for the table after the viewer's inputs.
 Result<std::vector<Volume>> build_volumes(const Light& light, const ShadowMaps& shadow,
-                                          double max_error, const std::string& out_dir,
-                                          Progress& progress, Summary& summary) {
+                                          const std::string& light_path, double max_error,
+                                          const std::string& out_dir, Progress& progress,
+                                          Summary& summary, std::vector<Summary::Row>* checks) {
   std::vector<Volume> volumes;
   for (const bool adaptive : {false, true}) {
     const std::string name = adaptive ? "adaptive" : "static";
-    progress.begin(name + " volume");
-    BuildVolumeOptions options;
-    options.grid = adaptive ? VolumeGrid::adaptive : VolumeGrid::static_grid;
-    options.adaptive.max_error = max_error;
-    Result<Mesh> mesh = build_volume(light, shadow, options);
-    if (!mesh) return mesh.error();
     const std::string file = "volume_" + name + ".ply";
-    if (Status s = write_mesh(out_dir + "/" + file, *mesh); !s) return s.error();
+    BuildFileOptions options;
+    options.light = &light;
+    options.maps = &shadow;
+    options.light_path = light_path;
+    options.depth_paths = {out_dir + "/shadow_map.exr"};
+    options.out_path = out_dir + "/" + file;
+    options.volume.grid = adaptive ? VolumeGrid::adaptive : VolumeGrid::static_grid;
+    options.volume.adaptive.max_error = max_error;
+    options.keep_mesh = true;
+    BuildFileResult built = build_volume_file(options, progress.log());
+    if (!built.status) return built.status.error();
     char error_text[64];
     std::snprintf(error_text, sizeof error_text, "max error %g", max_error);
-    summary.add(name + " volume", file, thousands(mesh->num_triangles()) + " tris",
-                adaptive ? error_text : "");
-    volumes.push_back({name, std::move(*mesh)});
+    summary.row({name + " volume", file, thousands(built.triangles) + " tris",
+                 adaptive ? error_text : "", built.seconds.build + built.seconds.write});
+    checks->push_back({"check " + name, "", "",
+                       "valid (" + std::string(to_string(built.check.proof)) + ")",
+                       built.seconds.check});
+    volumes.push_back({name, std::move(built.mesh)});
   }
   return volumes;
 }
@@ -207,9 +213,11 @@ Status write_viewer_inputs(const std::string& data, const std::string& dir, cons
   if (camera_json.is_discarded()) return Error{data + "/sponza_camera.json: not JSON"};
   camera_json["width"] = camera.width;
   camera_json["height"] = camera.height;
+  Result<std::string> medium = medium_record_json(medium_text, data + "/sponza_demo_medium.json");
+  if (!medium) return medium.error();
   ExportOptions options;
   options.glb.light = &light;
-  options.glb.medium_json = nlohmann::json::parse(medium_text, nullptr, false).dump();
+  options.glb.medium_json = std::move(*medium);
   for (const Volume& v : volumes)
     if (Status s = write_mesh(dir + "/volume_" + v.name + ".glb", v.mesh, options); !s) return s;
   if (Status s = write_mesh(dir + "/scene.glb", scene); !s) return s;
@@ -355,23 +363,20 @@ int run_demo(const DemoOptions& o) {
   summary.add("camera depth " + size_text(camera.width, camera.height), "camera_depth.exr", "", "");
 
   // ---- volumes ----------------------------------------------------------------------------------
+  std::vector<Summary::Row> checks;
   Result<std::vector<Volume>> volumes =
-      build_volumes(light, shadow, o.max_error, o.out_dir, progress, summary);
+      build_volumes(light, shadow, data + "/sponza_demo_spot.json", o.max_error, o.out_dir,
+                    progress, summary, &checks);
   if (!volumes) return fail(volumes.error());
   progress.begin("web viewer inputs");
   if (Status s = write_viewer_inputs(data, o.out_dir, scene->mesh, light, camera, *volumes); !s)
     return fail(s.error());
   summary.add("web viewer inputs", "volume_static.glb", "",
               "+ adaptive, scene, camera, medium, light");
-  bool all_valid = true;
-  for (const Volume& v : *volumes) {
-    progress.begin("check " + v.name);
-    const CheckReport report = check_volume_linear(v.mesh, &light);
-    all_valid = all_valid && report.valid();
-    summary.add("check " + v.name, "", "", check_text(report));
-  }
+  for (Summary::Row& check : checks) summary.row(std::move(check));
 
-  // ---- rendering --------------------------------------------------------------------------------
+    // ---- rendering
+    // --------------------------------------------------------------------------------
 #ifdef LIGHTVOL_HAS_SHADOWMAP
   if (gl) {
     RenderScene render_scene{camera, {}, light, scene->medium};
@@ -404,8 +409,6 @@ int run_demo(const DemoOptions& o) {
         "live.html?scene=/data/scene.glb&light=/data/light.json&medium=/data/"
         "medium.json&camera=/data/camera.json&animate=1\n",
         serve.string().c_str(), o.out_dir.c_str());
-  if (!all_valid)
-    return fail(Error{"a demo volume failed its checks (see the table)", ErrorKind::unsound});
   return 0;
 }
 

@@ -23,6 +23,10 @@ constexpr std::pair<std::string_view, std::string_view> kParameterFlags[] = {
     {"CheckOptions::cgal_with_light", "--cgal"},
     {"set_memory_budget()", "--max-memory"},
     {"shadow_map_size(n)", "--size"},
+    {"BuildFileOptions::light_path", "--light"},
+    {"BuildFileOptions::out_path", "--out"},
+    {"BuildFileOptions::report_path", "--report"},
+    {"BuildFileOptions::medium_path", "--medium"},
 };
 
 }  // namespace

@@ -6,20 +6,15 @@
 
 namespace lightvol::cli {
 
-Progress::Progress(bool quiet) : show_(!quiet && ::isatty(STDERR_FILENO)) {}
-
-void Progress::begin(const std::string& step) {
-  log_.begin(step);
-  if (show_) {
+Progress::Progress(bool quiet) : show_(!quiet && ::isatty(STDERR_FILENO)) {
+  if (!show_) return;
+  log_.on_begin = [](const std::string& step) {
     std::fprintf(stderr, "%s ... ", step.c_str());
     std::fflush(stderr);
-  }
-}
-
-void Progress::end(const std::string& detail) {
-  const StageRecord& r = log_.end();
-  if (show_)
+  };
+  log_.on_end = [](const StageRecord& r, const std::string& detail) {
     std::fprintf(stderr, "%.2f s%s%s\n", r.seconds, detail.empty() ? "" : "  ", detail.c_str());
+  };
 }
 
 std::string size_text(int width, int height) {

@@ -1,4 +1,6 @@
-// Timed progress lines on stderr: shown on a terminal, silent when piped or with --quiet.
+// Timed progress lines on stderr: shown on a terminal, silent when piped or with --quiet. The
+// steps are timed by a StageLog (core/stages.h), which the library's pipelines also time their
+// steps in; this prints them.
 #pragma once
 
 #include <string>
@@ -10,10 +12,14 @@ namespace lightvol::cli {
 class Progress {
  public:
   explicit Progress(bool quiet);
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
   // Starts a step ("reading depth.exr") and its timer.
-  void begin(const std::string& step);
+  void begin(const std::string& step) { log_.begin(step); }
   // Ends the current step, printing its time, and records it in the stage log.
-  void end(const std::string& detail = "");
+  void end(const std::string& detail = "") { log_.end(detail); }
+  // The log the steps are recorded in: what a library pipeline is given to time its steps.
+  StageLog& log() { return log_; }
   const StageLog& log() const { return log_; }
   bool shown() const { return show_; }
 

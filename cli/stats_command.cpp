@@ -9,11 +9,10 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include <lightvol/core/text.h>
 #include <lightvol/depth/shadow_maps.h>
 #include <lightvol/light/light.h>
+#include <lightvol/pipeline/stats_report.h>
 #include <lightvol/volume/volume_stats.h>
 
 #include "commands.h"
@@ -68,67 +67,10 @@ Result<std::vector<Tessellation>> parse_tessellations(const std::string& text) {
   return out;
 }
 
-const char* tessellation_name(Tessellation t) {
-  return t == Tessellation::collapse ? "collapse" : "quadtree";
-}
-
 using Rows = std::vector<BoundStats>;
 
 double ratio(const BoundStats& r, const VolumeStats& stats) {
   return double(r.triangles) / double(stats.static_counts().triangles);
-}
-
-nlohmann::json report_json(const StatsOptions& o, const Light& light, const VolumeStats& stats,
-                           const Rows& rows) {
-  const VolumeCounts st = stats.static_counts();
-  nlohmann::json adaptive = nlohmann::json::array();
-  for (const BoundStats& r : rows) {
-    nlohmann::json row = {{"tessellation", tessellation_name(r.tessellation)},
-                          {"max_error", r.max_error},
-                          {"triangles", r.triangles},
-                          {"vertices", r.vertices},
-                          {"max_error_reached", r.max_error_reached},
-                          {"min_angle_degrees", r.min_angle_degrees},
-                          {"min_area_texels", r.min_area},
-                          {"leaves", r.leaves},
-                          {"ratio_to_static", ratio(r, stats)},
-                          {"seconds",
-                           {{"balance", r.balance_seconds},
-                            {"emit", r.emit_seconds},
-                            {"collapse", r.collapse_seconds},
-                            {"measure", r.measure_seconds}}}};
-    if (stats.omni()) {
-      nlohmann::json faces = nlohmann::json::object();
-      for (int f = 0; f < kOmniFaces; ++f)
-        faces[std::string(omni_face_tag(f))] = r.omni.face_triangles[f];
-      row["face_triangles"] = faces;
-      row["seam_triangles"] = r.omni.seam_triangles;
-      row["corner_triangles"] = 8;
-      row["seam_rounds"] = r.omni.seam_rounds;
-    } else {
-      row["fixup_rounds"] = r.fixup_rounds;
-    }
-    adaptive.push_back(row);
-  }
-  nlohmann::json report = {{"light",
-                            {{"path", o.light_path},
-                             {"type", to_string(light.type)},
-                             {"depth", to_string(light.depth)}}},
-                           {"width", stats.width()},
-                           {"height", stats.height()},
-                           {"static", {{"triangles", st.triangles}, {"vertices", st.vertices}}},
-                           {"error_pyramid_seconds", stats.pyramid_seconds()},
-                           {"adaptive", adaptive}};
-  if (!stats.omni()) {
-    report["input"] = o.depth_paths.front();
-    return report;
-  }
-  report["inputs"] = o.depth_paths;
-  report["faces"] = 6;
-  report["static"]["face_triangles"] = stats.static_face_triangles();
-  report["static"]["seam_triangles"] = stats.static_seam_triangles();
-  report["static"]["corner_triangles"] = 8;
-  return report;
 }
 
 void print_csv(const VolumeStats& stats, const Rows& rows) {
@@ -142,8 +84,8 @@ void print_csv(const VolumeStats& stats, const Rows& rows) {
     for (const BoundStats& r : rows)
       std::printf("adaptive,%.9g,%llu,%llu,%.9g,%.6f,%.6f,%.6f,%s,%.6f,%.9g,%.9g\n", r.max_error,
                   ull(r.triangles), ull(r.vertices), r.max_error_reached, stats.pyramid_seconds(),
-                  r.balance_seconds, r.emit_seconds, tessellation_name(r.tessellation),
-                  r.collapse_seconds, r.min_angle_degrees, r.min_area);
+                  r.balance_seconds, r.emit_seconds, to_string(r.tessellation), r.collapse_seconds,
+                  r.min_angle_degrees, r.min_area);
     return;
   }
   std::printf(
@@ -156,8 +98,8 @@ void print_csv(const VolumeStats& stats, const Rows& rows) {
     std::printf("adaptive,%.9g,%llu,%llu,%.9g", r.max_error, ull(r.triangles), ull(r.vertices),
                 r.max_error_reached);
     for (int f = 0; f < kOmniFaces; ++f) std::printf(",%llu", ull(r.omni.face_triangles[f]));
-    std::printf(",%llu,8,%s,%.9g,%.9g\n", ull(r.omni.seam_triangles),
-                tessellation_name(r.tessellation), r.min_angle_degrees, r.min_area);
+    std::printf(",%llu,8,%s,%.9g,%.9g\n", ull(r.omni.seam_triangles), to_string(r.tessellation),
+                r.min_angle_degrees, r.min_area);
   }
 }
 
@@ -176,7 +118,7 @@ void print_table(const StatsOptions& o, const Light& light, const VolumeStats& s
                 "min area", "balance s", "emit s", "collapse s");
     for (const BoundStats& r : rows)
       std::printf("%12s %12.6g %14s %14s %8.3f%% %14.6g %9.4f° %9.2f %10.3f %10.3f %10.3f\n",
-                  tessellation_name(r.tessellation), r.max_error, thousands(r.triangles).c_str(),
+                  to_string(r.tessellation), r.max_error, thousands(r.triangles).c_str(),
                   thousands(r.vertices).c_str(), 100.0 * ratio(r, stats), r.max_error_reached,
                   r.min_angle_degrees, r.min_area, r.balance_seconds, r.emit_seconds,
                   r.collapse_seconds);
@@ -193,7 +135,7 @@ void print_table(const StatsOptions& o, const Light& light, const VolumeStats& s
               "max error", "triangles", "of static", "reached", "px", "nx", "py", "ny", "pz", "nz",
               "seams", "min angle", "min area");
   for (const BoundStats& r : rows) {
-    std::printf("%12s %12.6g %12s %8.3f%% %12.6g", tessellation_name(r.tessellation), r.max_error,
+    std::printf("%12s %12.6g %12s %8.3f%% %12.6g", to_string(r.tessellation), r.max_error,
                 thousands(r.triangles).c_str(), 100.0 * ratio(r, stats), r.max_error_reached);
     for (int f = 0; f < kOmniFaces; ++f)
       std::printf(" %9s", thousands(r.omni.face_triangles[f]).c_str());
@@ -233,13 +175,14 @@ int run_stats(const StatsOptions& o) {
   Rows rows;
   for (const Tessellation t : *tessellations)
     for (const double e : *bounds) {
-      progress.begin(std::string(tessellation_name(t)) + " at " + std::to_string(e));
+      progress.begin(std::string(to_string(t)) + " at " + std::to_string(e));
       rows.push_back(stats->at(e, t));
       progress.end(thousands(rows.back().triangles) + " triangles");
     }
 
   if (o.json)
-    std::printf("%s\n", json_text(report_json(o, *light, *stats, rows), 2).c_str());
+    std::printf("%s\n",
+                stats_report_json(*stats, rows, *light, o.light_path, o.depth_paths).c_str());
   else if (o.csv)
     print_csv(*stats, rows);
   else

@@ -238,6 +238,13 @@ Result<Medium> load_medium(const std::string& path) {
   return parse_medium(*text, path);
 }
 
+Result<std::string> medium_record_json(std::string_view json_text, const std::string& source) {
+  if (Result<Medium> medium = parse_medium(json_text, source); !medium) return medium.error();
+  const nlohmann::json medium = nlohmann::json::parse(json_text, nullptr, false);
+  if (medium.is_discarded()) return Error{source + ": not JSON"};  // parse_medium parsed it
+  return medium.dump();
+}
+
 // ---- quadrature ---------------------------------------------------------------------------------
 
 namespace {

@@ -72,6 +72,11 @@ struct Medium {
 Result<Medium> parse_medium(std::string_view json_text, const std::string& source);
 Result<Medium> load_medium(const std::string& path);
 
+// The medium description `json_text` as a GLB records it beside its light (export.h
+// GlbContent::medium_json): checked by parse_medium (its errors name `source`), then written on one
+// line without its formatting, keys sorted.
+Result<std::string> medium_record_json(std::string_view json_text, const std::string& source);
+
 // ---- airlight -----------------------------------------------------------------------------------
 
 // Sun et al. 2005: F(u, v) = ∫₀ᵛ exp(−u tan ξ) dξ for u ≥ 0, 0 ≤ v ≤ π/2, by Gauss–Legendre.

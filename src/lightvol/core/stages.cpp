@@ -13,14 +13,16 @@ std::uint64_t peak_memory_bytes() {
 
 void StageLog::begin(std::string name) {
   current_ = std::move(name);
+  if (on_begin) on_begin(current_);
   start_ = std::chrono::steady_clock::now();
 }
 
-const StageRecord& StageLog::end() {
+const StageRecord& StageLog::end(const std::string& detail) {
   LV_CHECK(!current_.empty());
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   stages_.push_back({std::move(current_), s, peak_memory_bytes()});
   current_.clear();
+  if (on_end) on_end(stages_.back(), detail);
   return stages_.back();
 }
 

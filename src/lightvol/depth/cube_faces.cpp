@@ -88,6 +88,18 @@ DepthImage stack_cube_faces(const CubeFaces& cube) {
   return strip;
 }
 
+std::vector<std::string> depth_input_files(const std::vector<std::string>& paths) {
+  std::vector<std::string> files;
+  for (const std::string& p : paths) {
+    if (p.find(kFacePlaceholder) == std::string::npos) {
+      files.push_back(p);
+      continue;
+    }
+    for (int face = 0; face < kOmniFaces; ++face) files.push_back(expand_face_pattern(p, face));
+  }
+  return files;
+}
+
 Result<CubeFaces> read_cube_faces(const std::vector<std::string>& paths,
                                   const DepthReadOptions& options) {
   std::array<std::string, kOmniFaces> face_paths;
@@ -102,10 +114,9 @@ Result<CubeFaces> read_cube_faces(const std::vector<std::string>& paths,
     if (!strip) return strip.error();
     return split_cube_strip(*strip, paths[0]);
   }
-  if (paths.size() == 1) {
-    for (int f = 0; f < kOmniFaces; ++f) face_paths[f] = expand_face_pattern(paths[0], f);
-  } else if (paths.size() == kOmniFaces) {
-    for (int f = 0; f < kOmniFaces; ++f) face_paths[f] = paths[f];
+  const std::vector<std::string> files = depth_input_files(paths);  // {face}: six
+  if (files.size() == kOmniFaces) {
+    for (int f = 0; f < kOmniFaces; ++f) face_paths[f] = files[f];
   } else {
     return Error{
         "an omni light takes six depth images (+X -X +Y -Y +Z -Z), one path containing "

@@ -29,6 +29,12 @@ std::string omni_face_name(int face);
 // `pattern` with every "{face}" replaced by the face's tag (px nx py ny pz nz).
 std::string expand_face_pattern(const std::string& pattern, int face);
 
+// The files `paths` (a light's depth inputs, as read_shadow_maps takes them) name: a path with
+// {face} as its six faces (px nx py ny pz nz), every other path as given, in order. What a caller
+// that must know every file a build reads (an output may not replace one; a job's content hash
+// covers them) lists.
+std::vector<std::string> depth_input_files(const std::vector<std::string>& paths);
+
 // Every face square, at least 2×2, and all the same size; the Error names the source and the face.
 Status validate_cube_faces(const CubeFaces& cube);
 

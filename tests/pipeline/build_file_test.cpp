@@ -1,0 +1,158 @@
+// pipeline/: build_volume_file (what `lightvol build` calls) from a light and maps in memory, its
+// report and stage log, what it refuses; the files a build reads (depth_input_files,
+// build_input_files).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <lightvol/depth/cube_faces.h>
+#include <lightvol/io/mesh_reader.h>
+#include <lightvol/pipeline/build_file.h>
+#include <lightvol/pipeline/build_job.h>
+
+#include "support/test_support.h"
+
+namespace lightvol {
+namespace {
+using namespace test;
+
+// A 3×3 spot map at linear depth 2: the static volume has 9 texel vertices and the apex, 8 grid
+// triangles and 8 in the fan.
+struct SmallSpot {
+  Light light = light_from_json(spot_json("linear"));
+  ShadowMaps maps = ShadowMaps::planar(constant_depth(3, 3, 2.0f), "3x3");
+};
+
+TEST(BuildFile, InMemoryLightAndMapsGiveTheCheckedVolumeItsFileAndItsReport) {
+  const SmallSpot spot;
+  const TempDir dir;
+  BuildFileOptions o;
+  o.light = &spot.light;
+  o.maps = &spot.maps;
+  o.light_path = "spot.json";
+  o.out_path = dir.file("volume.ply");
+  o.report_path = dir.file("volume.report.json");
+  o.keep_mesh = true;
+  std::vector<std::string> begun, ended;
+  StageLog log;
+  log.on_begin = [&](const std::string& name) { begun.push_back(name); };
+  log.on_end = [&](const StageRecord& s, const std::string& detail) {
+    ended.push_back(s.name + (detail.empty() ? "" : ": " + detail));
+  };
+  const BuildFileResult r = build_volume_file(o, log);
+  ASSERT_TRUE(r.status.ok()) << r.status.error().message;
+  EXPECT_EQ(r.triangles, 16u);
+  EXPECT_EQ(r.vertices, 10u);
+  EXPECT_TRUE(r.check.valid());
+  EXPECT_EQ(r.mesh.num_triangles(), 16u);
+  EXPECT_DOUBLE_EQ(r.volume, signed_volume(r.mesh));
+  // Nothing was read: the steps are the build, the check and the write, each begun and ended.
+  const std::vector<std::string> steps = {"building static volume", "checking",
+                                          "writing " + o.out_path};
+  EXPECT_EQ(begun, steps);
+  EXPECT_EQ(ended, (std::vector<std::string>{"building static volume: 16 triangles",
+                                             "checking: valid", "writing " + o.out_path}));
+  ASSERT_EQ(log.stages().size(), 3u);
+  // The file holds the volume; the report file is the report's text and a line break.
+  const Result<Mesh> back = read_mesh(o.out_path);
+  ASSERT_TRUE(back.ok()) << back.error().message;
+  EXPECT_EQ(back->num_triangles(), 16u);
+  EXPECT_EQ(slurp(o.report_path), r.report + "\n");
+  const nlohmann::json report = nlohmann::json::parse(r.report);
+  EXPECT_EQ(report["triangles"], 16);
+  EXPECT_EQ(report["vertices"], 10);
+  EXPECT_EQ(report["mode"], "static");
+  EXPECT_EQ(report["space"], "world");
+  EXPECT_EQ(report["output"], o.out_path);
+  EXPECT_EQ(report["light"]["path"], "spot.json");
+  EXPECT_EQ(report["light"]["type"], "spot");
+  EXPECT_EQ(report["width"], 3);
+  EXPECT_EQ(report["stages"].size(), 3u);
+  EXPECT_EQ(report["volume"].get<double>(), r.volume);
+}
+
+TEST(BuildFile, AdaptiveReportsItsBoundAndTessellation) {
+  const Light light = light_from_json(spot_json("linear"));
+  const ShadowMaps maps = ShadowMaps::planar(constant_depth(17, 17, 2.0f), "17x17");
+  const TempDir dir;
+  BuildFileOptions o;
+  o.light = &light;
+  o.maps = &maps;
+  o.out_path = dir.file("volume.off");
+  o.make_report = true;
+  o.volume.grid = VolumeGrid::adaptive;
+  o.volume.adaptive.max_error = 0.01;
+  StageLog log;
+  const BuildFileResult r = build_volume_file(o, log);
+  ASSERT_TRUE(r.status.ok()) << r.status.error().message;
+  EXPECT_TRUE(r.mesh.indices.empty());  // not kept unless asked
+  const nlohmann::json report = nlohmann::json::parse(r.report);
+  EXPECT_EQ(report["mode"], "adaptive");
+  EXPECT_EQ(report["adaptive"]["refine"], "error");
+  EXPECT_EQ(report["adaptive"]["tessellation"], "collapse");
+  EXPECT_EQ(report["adaptive"]["max_error"], 0.01);
+  EXPECT_TRUE(report["adaptive"]["threshold"].is_null());
+  // A flat map: far fewer triangles than the static grid's 512 (and its fan's 64), and the bound
+  // holds.
+  EXPECT_LT(r.triangles, 512u);
+  EXPECT_LE(report["adaptive"]["max_error_reached"].get<double>(), 0.01);
+}
+
+TEST(BuildFile, AnOutputThatIsAnInputIsRefusedNamingBothOptionsAndWritesNothing) {
+  const TempDir dir;
+  const std::string light = dir.write("light.json", spot_json("linear"));
+  BuildFileOptions o;
+  o.light_path = light;
+  o.depth_paths = {dir.file("depth.exr")};
+  o.out_path = dir.file("volume.ply");
+  o.report_path = light;
+  StageLog log;
+  const BuildFileResult r = build_volume_file(o, log);
+  ASSERT_FALSE(r.status.ok());
+  EXPECT_EQ(r.status.error().message, "BuildFileOptions::report_path " + light +
+                                          ": is also the BuildFileOptions::light_path " + light +
+                                          "; an output may not replace an input");
+  EXPECT_EQ(slurp(light), spot_json("linear"));
+  EXPECT_EQ(dir.entries(), 1);
+  EXPECT_TRUE(log.stages().empty());  // refused before anything is read
+}
+
+TEST(BuildFile, ControlCharactersAndUnknownFormatsAreRefusedBeforeReading) {
+  const SmallSpot spot;
+  const TempDir dir;
+  BuildFileOptions o;
+  o.light = &spot.light;
+  o.maps = &spot.maps;
+  o.out_path = dir.file("volume\n.ply");
+  StageLog log;
+  BuildFileResult r = build_volume_file(o, log);
+  ASSERT_FALSE(r.status.ok());
+  EXPECT_EQ(
+      r.status.error().message.rfind("BuildFileOptions::out_path: control character \\x0a", 0), 0u)
+      << r.status.error().message;
+  o.out_path = dir.file("volume.xyz");
+  r = build_volume_file(o, log);
+  ASSERT_FALSE(r.status.ok());
+  EXPECT_NE(r.status.error().message.find("volume.xyz"), std::string::npos);
+  EXPECT_EQ(dir.entries(), 0);
+  EXPECT_TRUE(log.stages().empty());
+}
+
+TEST(BuildInputs, FacePathsAreSixFilesAndEveryInputIsListedWithItsKey) {
+  EXPECT_EQ(depth_input_files({"a.exr"}), std::vector<std::string>{"a.exr"});
+  EXPECT_EQ(depth_input_files({"room_{face}.exr"}),
+            (std::vector<std::string>{"room_px.exr", "room_nx.exr", "room_py.exr", "room_ny.exr",
+                                      "room_pz.exr", "room_nz.exr"}));
+  BuildFileOptions o;
+  o.depth_paths = {"c_{face}.pfm"};
+  o.light_path = "omni.json";
+  o.medium_path = "fog.json";
+  const auto files = build_input_files(o);
+  ASSERT_EQ(files.size(), 8u);
+  EXPECT_EQ(files[0], (std::pair<std::string, std::string>{"inputs", "c_px.pfm"}));
+  EXPECT_EQ(files[5], (std::pair<std::string, std::string>{"inputs", "c_nz.pfm"}));
+  EXPECT_EQ(files[6], (std::pair<std::string, std::string>{"light", "omni.json"}));
+  EXPECT_EQ(files[7], (std::pair<std::string, std::string>{"args: --medium", "fog.json"}));
+}
+
+}  // namespace
+}  // namespace lightvol
