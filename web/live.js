@@ -96,9 +96,16 @@ async function main() {
   const size = Number(params.get('size') ?? 512);
   if (!(size >= 2 && size <= 4096)) throw new Error(`size=${params.get('size')}: a shadow map size from 2 to 4096`);
   const animate = params.get('animate') === '1';
+  // adaptive=E: build's adaptive volume at bound E (--adaptive --max-error E --tessellation
+  // quadtree), made on the GPU every frame; rounds=N its fix-up rounds a frame.
+  const maxError = params.has('adaptive') ? Number(params.get('adaptive')) : undefined;
+  if (maxError !== undefined && !(Number.isFinite(maxError) && maxError >= 0))
+    throw new Error(`adaptive=${params.get('adaptive')}: a bound E >= 0 (world units along the texel rays)`);
+  const rounds = params.has('rounds') ? Number(params.get('rounds')) : undefined;
   say('loading…');
-  const [glsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
-    LightVolume.loadShader(), fetchJson(lightUrl), fetchJson(cameraUrl),
+  const [glsl, adaptiveGlsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
+    LightVolume.loadShader(), maxError !== undefined ? LightVolume.loadAdaptiveShader() : Promise.resolve(null),
+    fetchJson(lightUrl), fetchJson(cameraUrl),
     mediumUrl ? fetchJson(mediumUrl) : Promise.resolve({ scattering: 0.05, absorption: 0.01, intensity: 10 }),
     sceneUrl ? loadScene(sceneUrl) : Promise.resolve(null),
   ]);
@@ -172,7 +179,7 @@ async function main() {
   orbit.target.copy(target);
   orbit.update();
 
-  const volume = new LightVolume(renderer, light, { glsl, width, height, medium });
+  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds });
 
   // The lit scene into a float target; the composite as the viewer's (web/main.js): the scene
   // through the medium plus the airlight, × exposure, x/(1+x), sRGB.
@@ -244,7 +251,7 @@ async function main() {
     renderer.autoClear = true;
     const [w, h] = volume.size;
     info.textContent = `${lightJson.type ?? 'spot'} light · shadow map ${w}×${h}${volume.type === 'omni' ? ' ×6' : ''} · ` +
-                       `${volume.triangles.toLocaleString('en')} triangles · volume + airlight ${ms.toFixed(1)} ms (CPU side) · ` +
+                       `${volume.adaptive ? `adaptive, E = ${maxError}` : `${volume.triangles.toLocaleString('en')} triangles`} · volume + airlight ${ms.toFixed(1)} ms (CPU side) · ` +
                        `frame ${frame}`;
   }
 
@@ -253,8 +260,11 @@ async function main() {
     captured = { frame, airlight: volume.readAirlight(), shadowMap: volume.readShadowMap(),
                  light: structuredClone(volume.lightJson()), medium: structuredClone(volume.lastMediumJson()),
                  surface: volume.readSurface(),
-                 counts: volume.readFaceCounts(), indices: volume.geometry.index.array,
-                 positions: volume.readPositions() };
+                 counts: volume.readFaceCounts(),
+                 indices: volume.adaptive ? null : volume.geometry.index.array,
+                 positions: volume.adaptive ? null : volume.readPositions(),
+                 triangles: volume.adaptive ? volume.readTriangles() : null,
+                 converged: volume.adaptive ? volume.converged() : true };
   };
   window.lightvolAirlight = () => captured.airlight;
   window.lightvolShadowMap = () => captured.shadowMap;
@@ -265,6 +275,10 @@ async function main() {
   window.lightvolFrame = () => captured.frame;
   window.lightvolIndices = () => captured.indices;  // the volume's triangles (build's)
   window.lightvolPositions = () => captured.positions;  // its vertices, as the GPU made them
+  // adaptive=E: the volume's triangles as drawn ([kind, col, row] × 3: LightVolume.readTriangles)
+  // and whether the frame's fix-up rounds converged.
+  window.lightvolTriangles = () => captured.triangles;
+  window.lightvolConverged = () => captured.converged;
 
   const play = document.getElementById('play');
   play.checked = animate;
@@ -309,7 +323,8 @@ async function main() {
       wait();
       volumeMs += performance.now() - t0;
     }
-    return { frame: frameMs, volume: volumeMs / n, triangles: volume.triangles, size: volume.size };
+    return { frame: frameMs, volume: volumeMs / n,
+             triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });
   gizmo.addEventListener('change', () => { if (!play.checked) draw(); });
