@@ -274,13 +274,13 @@ void main() {
 #if defined(LVA_EMIT_GRID) || defined(LVA_EMIT_CLOSE)
 uniform mat4 view_projection;
 out vec3 world;
-// For read-back by transform feedback (tests): (kind, col, row, 0); kind 0 none (a degenerate
-// triangle's vertex), 1 grid vertex of texel (col, row), 2 the apex, 3 the near-plane copy of
-// texel (col, row), 4 the cap's centre.
-out vec4 lva_vertex;
+// For read-back by transform feedback (tests): kind << 28 | col << 14 | row; kind 0 none (a
+// degenerate triangle's vertex), 1 grid vertex of texel (col, row), 2 the apex, 3 the near-plane
+// copy of texel (col, row), 4 the cap's centre (col and row 0 for kinds 0, 2 and 4).
+flat out uint lva_vertex;
 
 void emit(int kind, ivec2 t) {
-  lva_vertex = vec4(float(kind), kind == 2 || kind == 4 ? vec2(0.0) : vec2(t), 0.0);
+  lva_vertex = kind == 1 || kind == 3 ? uint(kind) << 28 | uint(t.x) << 14 | uint(t.y) : uint(kind) << 28;
   if (kind == 0) {
     world = vec3(0.0);
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the triangle is culled

@@ -340,6 +340,8 @@ export class AdaptiveVolume {
   // of texel (col, row), 4 cap), the grid's first, wound as drawn.
   readTriangles(extraUniforms) {
     const { gl, renderer } = this;
+    if (Math.max(...this.u.lva_map.value.toArray()) > 16384)
+      throw new Error('LightVolume: readTriangles takes maps of at most 16384 texels a side');
     const fragment = `#version 300 es\n${PREFIX}out vec4 colour;\nvoid main() { colour = vec4(0.0); }\n`;
     if (!this.feedback)
       this.feedback = {
@@ -358,7 +360,7 @@ export class AdaptiveVolume {
       gl.bindVertexArray(this.vao);
       const buffer = gl.createBuffer(), feedback = gl.createTransformFeedback();
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer);
-      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 16 * n, gl.STREAM_READ);
+      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * n, gl.STREAM_READ);
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
       gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, feedback);
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);
@@ -369,16 +371,17 @@ export class AdaptiveVolume {
       gl.disable(gl.RASTERIZER_DISCARD);
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
       gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
-      const out = new Float32Array(4 * n);
+      const out = new Uint32Array(n);
       gl.bindBuffer(gl.COPY_READ_BUFFER, buffer);
       gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
       gl.bindBuffer(gl.COPY_READ_BUFFER, null);
       gl.deleteBuffer(buffer);
       gl.deleteTransformFeedback(feedback);
       gl.bindVertexArray(null);
+      const vertex = (v) => [v >>> 28, (v >>> 14) & 0x3fff, v & 0x3fff];
       for (let t = 0; t < n; t += 3) {
-        if (out[4 * t] === 0) continue;
-        triangles.push([0, 1, 2].map((k) => [out[4 * (t + k)], out[4 * (t + k) + 1], out[4 * (t + k) + 2]]));
+        if (out[t] === 0) continue;
+        triangles.push([vertex(out[t]), vertex(out[t + 1]), vertex(out[t + 2])]);
       }
     }
     renderer.resetState();
