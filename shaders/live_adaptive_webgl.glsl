@@ -19,11 +19,12 @@
 //                   parent or a neighbour split in the round before).
 //   LVA_CODE        fragment, per cell of every level: what it emits (0 nothing, 1 + configuration
 //                   for a leaf, 17 for a split level-1 cell: its four quads).
-//   LVA_EMIT_GRID   vertex, instanced: instance = cell (levels 1..top, level after level), vertex
-//                   = 3 × triangle + corner of its triangles (at most 8); unused ones degenerate.
-//   LVA_EMIT_CLOSE  vertex, instanced: instance = border ring edge p; the edge that starts a leaf's
-//                   border edge emits that edge's closing (spot: a triangle to the apex;
-//                   directional: two wall triangles and one of the cap), others degenerate.
+//   LVA_EMIT_GRID   vertex, drawn as 24 vertices a cell (levels 1..top, level after level, no
+//                   vertex buffer): vertex 3 × triangle + corner of the cell's triangles (at most
+//                   8); unused ones degenerate.
+//   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
+//                   that edge's closing (spot: a triangle to the apex; directional: two wall
+//                   triangles and one of the cap), others degenerate.
 // The cells' state lives in one R8UI atlas, level L a rectangle of nx(L) × ny(L) texels at
 // (ox(L), oy(L)): 0 unsplit, r + 1 split in fix-up round r (0: pyramid and first balance).
 // Coordinates are build's: texel (col, row), row 0 the top of the light's view.
@@ -301,14 +302,21 @@ void emit(int kind, ivec2 t) {
 
 #ifdef LVA_EMIT_GRID
 uniform highp usampler2D lva_codes;
-uniform int lva_first[17];  // the first instance of level L; [top + 1]: cells in all
+uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
 
 void main() {
-  int c = gl_InstanceID, L = 1;
+  int c = gl_VertexID / 24, L = 1;
   while (L < lva_top && c >= lva_first[L + 1]) ++L;
   int k = c - lva_first[L], i = k % lva_nx[L], j = k / lva_nx[L];
   uint code = texelFetch(lva_codes, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r;
-  int t = gl_VertexID / 3, corner = gl_VertexID - 3 * t;
+  int vertex = gl_VertexID - 24 * c, t = vertex / 3, corner = vertex - 3 * t;
+  // Most of the vertices belong to no triangle: out before any other work.
+  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
+  int n = 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
+  if (code == 0u || (code != kQuads && t >= n)) {
+    emit(0, ivec2(0));
+    return;
+  }
   if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding
   ivec4 b = cell_box(L, i, j);
   ivec2 tri[18];
@@ -323,19 +331,14 @@ void main() {
     emit(1, tri[3 * (t % 2) + corner]);
     return;
   }
-  if (code == 0u) {
-    emit(0, ivec2(0));
-    return;
-  }
-  int n = cell_triangles(b, 1 << (L - 1), code - 1u, tri);
-  if (t < n) emit(1, tri[3 * t + corner]);
-  else emit(0, ivec2(0));
+  cell_triangles(b, 1 << (L - 1), config, tri);
+  emit(1, tri[3 * t + corner]);
 }
 #endif
 
 #ifdef LVA_EMIT_CLOSE
 void main() {
-  int p = gl_InstanceID, v = gl_VertexID;
+  int p = gl_VertexID / 9, v = gl_VertexID - 9 * p;
   int perimeter = 2 * (lva_map.x - 1) + 2 * (lva_map.y - 1);
   ivec2 u = live_ring_texel(p), w = live_ring_texel((p + 1) % perimeter);
   int wl = lva_map.x - 1, hl = lva_map.y - 1;

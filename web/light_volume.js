@@ -279,7 +279,7 @@ export class LightVolume {
   // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true),
   // maxError (spot and directional lights: build's adaptive volume at that bound, `--adaptive
   // --max-error E --tessellation quadtree`, made on the GPU each frame: live_adaptive.js; with
-  // adaptiveGlsl, loadAdaptiveShader()'s text) and rounds (its fix-up rounds a frame, default 8).
+  // adaptiveGlsl, loadAdaptiveShader()'s text) and rounds (its fix-up rounds a frame, default 4).
   constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds }) {
     const name = light && (light.name ? `'${light.name}'` : light.type);
     if (!light || !(light.isSpotLight || light.isDirectionalLight || light.isPointLight))

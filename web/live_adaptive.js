@@ -3,9 +3,9 @@
 // frame in WebGL2 by shaders/live_adaptive_webgl.glsl. WebGL2 has no compute shaders, so the error
 // pyramid, the 2:1 balance and the fix-up rounds are fragment passes into an R8UI atlas of the
 // quadtree's cells (one level a pass, each written to a scratch atlas and blitted back), a last
-// pass writes what each cell emits, and two instanced draws emit the triangles: one over every
-// cell (up to 8 triangles each, the others degenerate and culled) and one over the border ring
-// (the closing). No read-back, no CPU work per frame but the uniforms.
+// pass writes what each cell emits, and two draws with no vertex buffer emit the triangles: one
+// of 24 vertices a cell (up to 8 triangles each, the others degenerate and culled) and one of 9
+// vertices a border ring edge (the closing). No read-back, no CPU work per frame but the uniforms.
 import * as THREE from 'three';
 
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
@@ -90,9 +90,10 @@ export class AdaptiveVolume {
 
   // renderer: three's WebGLRenderer; glsl: shaders/airlight.glsl; adaptiveGlsl: this file's
   // shader; maxError: E (world units along the texel rays, as build's --max-error); rounds: the
-  // fix-up rounds each frame runs (build's quadtree needs 1 to 3 on most maps; converged() tells).
+  // fix-up rounds each frame runs (default 4; build's quadtree needs at most 1 on the demo's maps;
+  // converged() tells).
   // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
-  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 8, live, volumeUniforms, volumeState, fragmentShader }) {
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, live, volumeUniforms, volumeState, fragmentShader }) {
     if (!(Number.isFinite(maxError) && maxError >= 0))
       throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
     if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= 63))
@@ -131,14 +132,11 @@ export class AdaptiveVolume {
       uniforms: { ...volumeUniforms, ...live, ...this.u },
       ...volumeState,
     });
-    const geometry = (vertices) => {
-      const g = new THREE.InstancedBufferGeometry();
-      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * vertices), 3));
-      g.instanceCount = 0;
-      return g;
-    };
-    this.gridGeometry = geometry(GRID_VERTICES);
-    this.closeGeometry = geometry(CLOSE_VERTICES);
+    // No attributes: three.js draws drawRange.count vertices.
+    this.gridGeometry = new THREE.BufferGeometry();
+    this.closeGeometry = new THREE.BufferGeometry();
+    this.gridGeometry.setDrawRange(0, 0);
+    this.closeGeometry.setDrawRange(0, 0);
     this.gridMaterial = material('GRID');
     this.closeMaterial = material('CLOSE');
     this.meshes = [new THREE.Mesh(this.gridGeometry, this.gridMaterial),
@@ -218,8 +216,9 @@ export class AdaptiveVolume {
     u.lva_splits.value = this.splits.texture;
     u.lva_fails.value = this.fails.texture;
     u.lva_codes.value = this.codes.texture;
-    this.gridGeometry.instanceCount = cells;
-    this.closeGeometry.instanceCount = 2 * cw + 2 * ch;
+    this.perimeter = 2 * cw + 2 * ch;
+    this.gridGeometry.setDrawRange(0, GRID_VERTICES * cells);
+    this.closeGeometry.setDrawRange(0, CLOSE_VERTICES * this.perimeter);
   }
 
   // The measure's per-texel constants (TexelDepths::create, in double): orthographic lights a
@@ -351,7 +350,7 @@ export class AdaptiveVolume {
     const uniforms = { ...this.live, ...this.u, view_projection: { value: new THREE.Matrix4() }, ...extraUniforms };
     const triangles = [];
     for (const [stage, vertices, instances] of [['GRID', GRID_VERTICES, this.cells],
-                                                ['CLOSE', CLOSE_VERTICES, this.closeGeometry.instanceCount]]) {
+                                                ['CLOSE', CLOSE_VERTICES, this.perimeter]]) {
       const program = this.feedback[stage];
       const n = vertices * instances;
       renderer.resetState();
@@ -366,7 +365,7 @@ export class AdaptiveVolume {
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);
       gl.enable(gl.RASTERIZER_DISCARD);
       gl.beginTransformFeedback(gl.TRIANGLES);
-      gl.drawArraysInstanced(gl.TRIANGLES, 0, vertices, instances);
+      gl.drawArrays(gl.TRIANGLES, 0, n);
       gl.endTransformFeedback();
       gl.disable(gl.RASTERIZER_DISCARD);
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);

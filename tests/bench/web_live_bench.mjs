@@ -5,16 +5,17 @@
 // (shadow map, lit scene, volume and airlight, composite) and the live volume with its airlight
 // alone (for adaptive rows with the quadtree's passes), each frame waited for
 // (window.lightvolTime). On SwiftShader (no GPU) these are a CPU rasterizer's times.
-//   node tests/bench/web_live_bench.mjs PATH/TO/lightvol [FRAMES] [E]
+//   node tests/bench/web_live_bench.mjs PATH/TO/lightvol [FRAMES] [E] [ONLY]
+// (ONLY: rows whose light and size, e.g. "spot 512", start with it.)
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, resolve } from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
 
-const [lightvolArg, framesArg, boundArg] = process.argv.slice(2);
+const [lightvolArg, framesArg, boundArg, onlyArg] = process.argv.slice(2);
 if (!lightvolArg) {
-  console.error('usage: web_live_bench.mjs PATH/TO/lightvol [FRAMES] [E]');
+  console.error('usage: web_live_bench.mjs PATH/TO/lightvol [FRAMES] [E] [ONLY]');
   process.exit(2);
 }
 const web = fileURLToPath(new URL('../../web', import.meta.url));
@@ -40,6 +41,7 @@ try {
   console.log(`camera ${camera.width}x${camera.height}, ${frames} frames a row`);
   console.log('| light, map | volume | triangles | whole frame | volume + airlight | of which quadtree passes |\n|---|---|---|---|---|---|');
   for (const [file, name, size, e] of rows) {
+    if (onlyArg && !`${name} ${size}`.startsWith(onlyArg)) continue;
     const page = await browser.newPage();
     await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/${file}.json&medium=/data/medium.json` +
                         `&camera=/data/camera.json&animate=1&size=${size}${e === null ? '' : `&adaptive=${e}`}`));

@@ -6,8 +6,9 @@
 // every texel (TexelDepths' measure, in double, texel by texel against the triangle that covers
 // it); the count is within 5 % of `lightvol build --adaptive --max-error E --tessellation quadtree`
 // of the page's own map and light; the fix-up rounds converged; the airlight is within 1 % relative
-// L2 of `lightvol render --method volume` of build's adaptive volume; the two frames differ.
-//   node web/tests/live_adaptive_test.mjs PATH/TO/lightvol [--only spot|directional] [--size N]
+// L2 of `lightvol render --method volume` of build's adaptive volume; the two frames differ. Bad
+// input: adaptive=E for a point light, or an E that is not a number >= 0: the message on the page.
+//   node web/tests/live_adaptive_test.mjs PATH/TO/lightvol [--only spot|directional|errors] [--size N]
 //                                         [--screenshot DIR] [--keep DIR]
 // Exit 0 when every case passes, 1 when one fails, 2 when something could not run.
 import { execFileSync } from 'node:child_process';
@@ -49,7 +50,7 @@ const run = (...a) => execFileSync(lightvol, [...a, '--quiet'], { cwd: work, std
 run('demo', '--out', '.', '--size', '128');
 const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
 writeFileSync(join(work, 'camera_radial.json'), JSON.stringify({ ...camera, depth: 'radial' }));
-const lights = { spot: JSON.parse(readFileSync(join(work, 'light.json'), 'utf8')), directional: DEMO_LIGHTS.directional };
+const lights = { spot: JSON.parse(readFileSync(join(work, 'light.json'), 'utf8')), ...DEMO_LIGHTS };
 for (const [name, json] of Object.entries(lights)) writeFileSync(join(work, `light_${name}.json`), JSON.stringify(json));
 
 // ---- TexelDepths (src/lightvol/tessellate/texel_depths.cpp) in double ----------------------------
@@ -227,6 +228,22 @@ try {
     if (!quiet) console.log(`${name}: console: ${messages.join(' | ')}  FAILED`);
     failed ||= !first.ok || !second.ok || !differ || !quiet;
     await page.close();
+  }
+  if (!only || only === 'errors') {
+    for (const [light, e, pattern] of [['omni', '0.1', /takes spot and directional lights/],
+                                       ['spot', '-1', /adaptive=-1: a bound E >= 0/]]) {
+      const page = await browser.newPage();
+      const messages = [];
+      page.on('console', (m) => messages.push(m.text()));
+      await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/light_${light}.json` +
+                          `&medium=/data/medium.json&camera=/data/camera.json&size=16&adaptive=${e}`));
+      await page.waitForFunction(() => document.title.startsWith('lightvol:'), { timeout: 300000 });
+      const shown = await page.evaluate(() => document.getElementById('status').textContent);
+      const ok = (await page.title()) === 'lightvol:error' && pattern.test(shown) && messages.some((m) => pattern.test(m));
+      console.log(`errors: ${light} with adaptive=${e}: page says "${shown}"` + (ok ? '' : '  FAILED'));
+      failed ||= !ok;
+      await page.close();
+    }
   }
 } finally {
   await browser.close();
