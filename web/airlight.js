@@ -104,6 +104,44 @@ function floatTarget(width, height, format, depth, count = 1) {
   return target;
 }
 
+// The composite both pages show, as lightvol demo's pictures: the lit scene (`scene`, a float
+// texture) seen through the medium (× e^(−σt·t), t the distance in `surface`; × show_scene, 0 for
+// no scene), plus the airlight (R32F) in the light's colour, × exposure, Reinhard x/(1+x), sRGB.
+// sigmaT: a uniform object ({ value }), shared with the airlight's when it is the same medium.
+export class Composite {
+  constructor({ scene, airlight, surface, sigmaT, lightColour = [1, 1, 1] }) {
+    this.uniforms = {
+      scene_color: { value: scene }, airlight: { value: airlight }, surface: { value: surface },
+      sigma_t: sigmaT, light_colour: { value: new THREE.Vector3(...lightColour) },
+      exposure: { value: 1 }, show_scene: { value: 1 },
+    };
+    const mesh = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
+      uniforms: this.uniforms,
+      vertexShader: 'varying vec2 uv_; void main() { uv_ = uv; gl_Position = vec4(position.xy, 0.0, 1.0); }',
+      fragmentShader: `
+        uniform sampler2D scene_color; uniform sampler2D airlight; uniform sampler2D surface;
+        uniform float sigma_t; uniform float exposure; uniform float show_scene; uniform vec3 light_colour;
+        varying vec2 uv_;
+        void main() {
+          float through = exp(-sigma_t * min(texture2D(surface, uv_).r, 1e30));
+          vec3 c = show_scene * through * texture2D(scene_color, uv_).rgb +
+                   light_colour * max(texture2D(airlight, uv_).r, 0.0);
+          c *= exposure;
+          c = c / (1.0 + c);
+          gl_FragColor = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
+        }`,
+      depthTest: false, depthWrite: false,
+    }));
+    mesh.frustumCulled = false;
+    this.scene = new THREE.Scene();
+    this.scene.add(mesh);
+    this.camera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+  }
+
+  // Into the bound render target (the canvas: renderer.setRenderTarget(null) first).
+  render(renderer) { renderer.render(this.scene, this.camera); }
+}
+
 // Renders the airlight of a light volume for one camera, as `lightvol render --method volume`:
 // the scene's distances along the pixel rays (surface pass), the volume with additive float
 // blending (RG32F), the resolve (R32F). With `density: true` (a medium of varying density), the

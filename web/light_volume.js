@@ -16,6 +16,7 @@
 // float render targets or float blending) are thrown as Error with a message that says what to do.
 import * as THREE from 'three';
 import { AirlightRenderer, lookAt, parseFrame, stageSource, toMatrix4 } from './airlight.js';
+import { AdaptiveVolume } from './live_adaptive.js';
 
 // ---- lightvol's texel rays (src/lightvol/light/light.cpp, Unprojector), in double -------------
 
@@ -262,6 +263,9 @@ function refuseDensity(medium) {
 
 export class LightVolume {
   // The text of shaders/airlight.glsl (fetched beside this module: ../shaders/airlight.glsl).
+  // The text of shaders/live_adaptive_webgl.glsl, for the option maxError.
+  static loadAdaptiveShader(url) { return AdaptiveVolume.loadShader(url); }
+
   static async loadShader(url = SHADER_URL) {
     const response = await fetch(url);
     if (!response.ok) throw new Error(`LightVolume: ${url}: HTTP ${response.status}`);
@@ -272,8 +276,11 @@ export class LightVolume {
   // DirectionalLight or PointLight with castShadow; options: glsl (loadShader()'s text), width and
   // height (the airlight target: the camera's image in pixels), medium (lightvol's medium JSON:
   // scattering, absorption, intensity, phase, profile; intensity defaults to the light's), cone
-  // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true).
-  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true }) {
+  // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true),
+  // maxError (spot and directional lights: build's adaptive volume at that bound, `--adaptive
+  // --max-error E --tessellation quadtree`, made on the GPU each frame: live_adaptive.js; with
+  // adaptiveGlsl, loadAdaptiveShader()'s text) and rounds (its fix-up rounds a frame, default 4).
+  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds }) {
     const name = light && (light.name ? `'${light.name}'` : light.type);
     if (!light || !(light.isSpotLight || light.isDirectionalLight || light.isPointLight))
       throw new Error(`LightVolume: ${name ?? 'no light'} is not a SpotLight, DirectionalLight or PointLight`);
@@ -294,6 +301,9 @@ export class LightVolume {
     this.light = light;
     this.gl = gl;
     this.type = light.isSpotLight ? 'spot' : light.isDirectionalLight ? 'directional' : 'omni';
+    if (maxError !== undefined && this.type === 'omni')
+      throw new Error('LightVolume: maxError (an adaptive volume) takes spot and directional lights; ' +
+                      'point lights have static volumes only');
     this.airlight = new AirlightRenderer(renderer, glsl, { width, height });
     this.medium = medium;
     this.cone = cone;
@@ -338,9 +348,19 @@ export class LightVolume {
       ...a.volumeState,
     });
     this.geometry = new THREE.BufferGeometry();
-    const mesh = new THREE.Mesh(this.geometry, this.volumeMaterial);
-    mesh.frustumCulled = false;
-    a.volumeScene.add(mesh);
+    this.adaptive = null;
+    if (maxError !== undefined) {
+      this.adaptive = new AdaptiveVolume(renderer, glsl, adaptiveGlsl, {
+        maxError, rounds, live: this.live, volumeState: a.volumeState,
+        volumeUniforms: { ...a.common, surface: vu.surface, baseline: vu.baseline, panels: vu.panels,
+                          facing_sign: vu.facing_sign },
+        fragmentShader: stageSource(glsl, 'LIGHTVOL_VOLUME_FRAGMENT') });
+      for (const m of this.adaptive.meshes) a.volumeScene.add(m);
+    } else {
+      const mesh = new THREE.Mesh(this.geometry, this.volumeMaterial);
+      mesh.frustumCulled = false;
+      a.volumeScene.add(mesh);
+    }
     // Reads a copied depth map as floats (R32F), for readShadowMap().
     this.readMaterial = new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3,
@@ -364,6 +384,7 @@ export class LightVolume {
   get airlightTexture() { return this.airlight.airlightTarget.texture; }
   // Distances along the camera's pixel rays to the scene (3e38 where none), R32F.
   get surfaceTexture() { return this.airlight.surfaceTarget.texture; }
+  // The static volume's triangles (adaptive volumes: readTriangles().length, read back).
   get triangles() { return this.geometry.index ? this.geometry.index.count / 3 : 0; }
 
   setMedium(medium) {
@@ -399,6 +420,7 @@ export class LightVolume {
     const json = lightJson(light);
     this.lastLight = json;
     this.setUniforms(json);
+    if (this.adaptive) this.adaptive.generate(json, this.copies[0].depthTexture, ...this.size);
     const frame = parseFrame(json);
     airlight.setLight(frame);
     this.lastMedium = this.mediumJson();
@@ -510,6 +532,7 @@ export class LightVolume {
       u.live_cap.value.copy(t.nearPoint(0, 0).add(t.nearPoint(width - 1, 0)).add(t.nearPoint(0, height - 1))
                              .add(t.nearPoint(width - 1, height - 1)).multiplyScalar(0.25));
     }
+    if (this.adaptive) return;  // made on the GPU each frame (render())
     // The triangles depend on the size and the windings only.
     const key = `${width}x${height}:${texels.map((t) => (t.standard ? 1 : 0)).join('')}`;
     if (this.indicesFor === key) return;
@@ -626,7 +649,14 @@ export class LightVolume {
     return out;
   }
 
+  // For tests, never in a frame (adaptive volumes): the last frame's triangles as drawn, read back
+  // by transform feedback (AdaptiveVolume.readTriangles: [kind, col, row] × 3 each), and whether
+  // its fix-up rounds converged.
+  readTriangles() { return this.adaptive.readTriangles(); }
+  converged() { return this.adaptive.converged(); }
+
   dispose() {
+    if (this.adaptive) this.adaptive.dispose();
     for (const t of this.copies) { t.depthTexture.dispose(); t.dispose(); }
     this.geometry.dispose();
     this.volumeMaterial.dispose();

@@ -1,9 +1,10 @@
 // lightvol's live page: live.html?scene=URL&light=URL&medium=URL&camera=URL[&animate=1][&size=N]
-// [&shadow=0]. The scene (GLB, glTF, PLY or OBJ) lit by the light of a lightvol light JSON (spot,
-// directional or omni: a three.js SpotLight, DirectionalLight or PointLight with a size × size
-// shadow map, 512 by default), seen from a lightvol camera JSON, with the light's shafts from
-// LightVolume (light_volume.js): the static light volume of that frame's shadow map, built on the
-// GPU, and its airlight. Drag the light with the gizmo (TransformControls), orbit the camera;
+// [&shadow=0][&adaptive=E[&rounds=N]]. The scene (GLB, glTF, PLY or OBJ) lit by the light of a
+// lightvol light JSON (spot, directional or omni: a three.js SpotLight, DirectionalLight or
+// PointLight with a size × size shadow map, 512 by default), seen from a lightvol camera JSON, with
+// the light's shafts from LightVolume (light_volume.js): the static light volume of that frame's
+// shadow map (adaptive=E: build's adaptive quadtree volume at bound E), built on the GPU, and its
+// airlight. Drag the light with the gizmo (TransformControls), orbit the camera;
 // with animate=1 an object moves through the light. shadow=0 makes the light without castShadow
 // (to see the addon's message).
 // Hooks (docs/web.md): document.title = 'lightvol:done' after the first frame (the JSON camera's);
@@ -12,7 +13,8 @@
 // (lightvol's light JSON of that map), lightvolMedium(), lightvolSurface(), lightvolFaceCounts(),
 // lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
 // first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
-// the last captured frame and renders). lightvolTime(n): milliseconds per frame;
+// the last captured frame and renders). lightvolTime(n): milliseconds per frame (adaptive=E: also
+// the quadtree passes alone); lightvolTriangles(), lightvolConverged(): adaptive=E volumes;
 // lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -21,7 +23,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
-import { parseFrame } from './airlight.js';
+import { Composite, parseFrame } from './airlight.js';
 import { LightVolume } from './light_volume.js';
 
 const status = document.getElementById('status');
@@ -96,9 +98,16 @@ async function main() {
   const size = Number(params.get('size') ?? 512);
   if (!(size >= 2 && size <= 4096)) throw new Error(`size=${params.get('size')}: a shadow map size from 2 to 4096`);
   const animate = params.get('animate') === '1';
+  // adaptive=E: build's adaptive volume at bound E (--adaptive --max-error E --tessellation
+  // quadtree), made on the GPU every frame; rounds=N its fix-up rounds a frame.
+  const maxError = params.has('adaptive') ? Number(params.get('adaptive')) : undefined;
+  if (maxError !== undefined && !(Number.isFinite(maxError) && maxError >= 0))
+    throw new Error(`adaptive=${params.get('adaptive')}: a bound E >= 0 (world units along the texel rays)`);
+  const rounds = params.has('rounds') ? Number(params.get('rounds')) : undefined;
   say('loading…');
-  const [glsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
-    LightVolume.loadShader(), fetchJson(lightUrl), fetchJson(cameraUrl),
+  const [glsl, adaptiveGlsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
+    LightVolume.loadShader(), maxError !== undefined ? LightVolume.loadAdaptiveShader() : Promise.resolve(null),
+    fetchJson(lightUrl), fetchJson(cameraUrl),
     mediumUrl ? fetchJson(mediumUrl) : Promise.resolve({ scattering: 0.05, absorption: 0.01, intensity: 10 }),
     sceneUrl ? loadScene(sceneUrl) : Promise.resolve(null),
   ]);
@@ -172,35 +181,15 @@ async function main() {
   orbit.target.copy(target);
   orbit.update();
 
-  const volume = new LightVolume(renderer, light, { glsl, width, height, medium });
+  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds });
 
-  // The lit scene into a float target; the composite as the viewer's (web/main.js): the scene
-  // through the medium plus the airlight, × exposure, x/(1+x), sRGB.
+  // The lit scene into a float target; the composite as the viewer's (airlight.js's Composite):
+  // the scene through the medium plus the airlight in the light's colour, × exposure, x/(1+x), sRGB.
   const litTarget = new THREE.WebGLRenderTarget(width, height, { type: THREE.FloatType });
   const sigmaT = (medium.scattering ?? 0.05) + (medium.absorption ?? 0);
-  const composite = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
-    uniforms: { scene_color: { value: litTarget.texture }, airlight: { value: volume.airlightTexture },
-                surface: { value: volume.surfaceTexture }, sigma_t: { value: sigmaT },
-                light_colour: { value: new THREE.Vector3(...LIGHT_COLOUR) },
-                exposure: { value: 1 } },
-    vertexShader: 'varying vec2 uv_; void main() { uv_ = uv; gl_Position = vec4(position.xy, 0.0, 1.0); }',
-    fragmentShader: `
-      uniform sampler2D scene_color; uniform sampler2D airlight; uniform sampler2D surface;
-      uniform float sigma_t; uniform float exposure; uniform vec3 light_colour; varying vec2 uv_;
-      void main() {
-        float through = exp(-sigma_t * min(texture2D(surface, uv_).r, 1e30));
-        vec3 c = through * texture2D(scene_color, uv_).rgb +
-                 light_colour * max(texture2D(airlight, uv_).r, 0.0);
-        c *= exposure;
-        c = c / (1.0 + c);
-        gl_FragColor = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
-      }`,
-    depthTest: false, depthWrite: false,
-  }));
-  composite.frustumCulled = false;
-  const compositeScene = new THREE.Scene();
-  compositeScene.add(composite);
-  const screenCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+  const composite = new Composite({ scene: litTarget.texture, airlight: volume.airlightTexture,
+                                    surface: volume.surfaceTexture, sigmaT: { value: sigmaT },
+                                    lightColour: LIGHT_COLOUR });
 
   // The light's gizmo, drawn over the picture.
   const gizmo = new TransformControls(camera, canvas);
@@ -235,16 +224,16 @@ async function main() {
       picture.sort();
       const p = picture[Math.min(picture.length - 1, Math.floor(0.995 * picture.length))];
       exposure = p > 0 ? 1.2 / p : 1;
-      composite.material.uniforms.exposure.value = exposure;
+      composite.uniforms.exposure.value = exposure;
     }
     renderer.setRenderTarget(null);
-    renderer.render(compositeScene, screenCamera);
+    composite.render(renderer);
     renderer.autoClear = false;
     renderer.render(gizmoScene, camera);
     renderer.autoClear = true;
     const [w, h] = volume.size;
     info.textContent = `${lightJson.type ?? 'spot'} light · shadow map ${w}×${h}${volume.type === 'omni' ? ' ×6' : ''} · ` +
-                       `${volume.triangles.toLocaleString('en')} triangles · volume + airlight ${ms.toFixed(1)} ms (CPU side) · ` +
+                       `${volume.adaptive ? `adaptive, E = ${maxError}` : `${volume.triangles.toLocaleString('en')} triangles`} · volume + airlight ${ms.toFixed(1)} ms (CPU side) · ` +
                        `frame ${frame}`;
   }
 
@@ -253,8 +242,11 @@ async function main() {
     captured = { frame, airlight: volume.readAirlight(), shadowMap: volume.readShadowMap(),
                  light: structuredClone(volume.lightJson()), medium: structuredClone(volume.lastMediumJson()),
                  surface: volume.readSurface(),
-                 counts: volume.readFaceCounts(), indices: volume.geometry.index.array,
-                 positions: volume.readPositions() };
+                 counts: volume.readFaceCounts(),
+                 indices: volume.adaptive ? null : volume.geometry.index.array,
+                 positions: volume.adaptive ? null : volume.readPositions(),
+                 triangles: volume.adaptive ? volume.readTriangles() : null,
+                 converged: volume.adaptive ? volume.converged() : true };
   };
   window.lightvolAirlight = () => captured.airlight;
   window.lightvolShadowMap = () => captured.shadowMap;
@@ -265,6 +257,10 @@ async function main() {
   window.lightvolFrame = () => captured.frame;
   window.lightvolIndices = () => captured.indices;  // the volume's triangles (build's)
   window.lightvolPositions = () => captured.positions;  // its vertices, as the GPU made them
+  // adaptive=E: the volume's triangles as drawn ([kind, col, row] × 3: LightVolume.readTriangles)
+  // and whether the frame's fix-up rounds converged.
+  window.lightvolTriangles = () => captured.triangles;
+  window.lightvolConverged = () => captured.converged;
 
   const play = document.getElementById('play');
   play.checked = animate;
@@ -309,7 +305,20 @@ async function main() {
       wait();
       volumeMs += performance.now() - t0;
     }
-    return { frame: frameMs, volume: volumeMs / n, triangles: volume.triangles, size: volume.size };
+    // Adaptive volumes: the quadtree's passes alone (the frame's map and light again).
+    let passesMs = null;
+    if (volume.adaptive) {
+      passesMs = 0;
+      for (let i = 0; i < n; ++i) {
+        t0 = performance.now();
+        volume.adaptive.generate(volume.lightJson(), volume.copies[0].depthTexture, ...volume.size);
+        wait();
+        passesMs += performance.now() - t0;
+      }
+      passesMs /= n;
+    }
+    return { frame: frameMs, volume: volumeMs / n, passes: passesMs,
+             triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });
   gizmo.addEventListener('change', () => { if (!play.checked) draw(); });

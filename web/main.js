@@ -13,7 +13,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { DRACOLoader } from 'three/addons/loaders/DRACOLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { OBJLoader } from 'three/addons/loaders/OBJLoader.js';
-import { AirlightRenderer, parseFrame } from './airlight.js';
+import { AirlightRenderer, Composite, parseFrame } from './airlight.js';
 import { DensityGrid, loadDensityShaders, parseDensity } from './density.js';
 
 const status = document.getElementById('status');
@@ -160,32 +160,9 @@ async function main() {
   const wireMaterial = new THREE.LineBasicMaterial({ color: 0x66ccff, transparent: true, opacity: 0.35 });
   wire.add(new THREE.LineSegments(new THREE.WireframeGeometry(volumeGeometry), wireMaterial));
 
-  // Composite as lightvol demo's picture: the lit scene seen through the medium (× e^(−σt·t)) plus
-  // the airlight, × exposure, Reinhard x/(1+x), sRGB.
-  const composite = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
-    uniforms: { scene_color: { value: litTarget.texture },
-                airlight: { value: airlight.airlightTarget.texture },
-                surface: { value: airlight.surfaceTarget.texture },
-                sigma_t: airlight.common.sigma_t,
-                exposure: { value: 1 }, show_scene: { value: 1 } },
-    vertexShader: 'varying vec2 uv_; void main() { uv_ = uv; gl_Position = vec4(position.xy, 0.0, 1.0); }',
-    fragmentShader: `
-      uniform sampler2D scene_color; uniform sampler2D airlight; uniform sampler2D surface;
-      uniform float sigma_t; uniform float exposure; uniform float show_scene; varying vec2 uv_;
-      void main() {
-        float through = exp(-sigma_t * min(texture2D(surface, uv_).r, 1e30));
-        vec3 c = show_scene * through * texture2D(scene_color, uv_).rgb +
-                 vec3(max(texture2D(airlight, uv_).r, 0.0));
-        c *= exposure;
-        c = c / (1.0 + c);
-        gl_FragColor = vec4(pow(c, vec3(1.0 / 2.2)), 1.0);
-      }`,
-    depthTest: false, depthWrite: false,
-  }));
-  composite.frustumCulled = false;
-  const compositeScene = new THREE.Scene();
-  compositeScene.add(composite);
-  const orthoCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+  // Composite as lightvol demo's picture (airlight.js's Composite, the live page's too).
+  const composite = new Composite({ scene: litTarget.texture, airlight: airlight.airlightTarget.texture,
+                                    surface: airlight.surfaceTarget.texture, sigmaT: airlight.common.sigma_t });
 
   // The camera: exactly the JSON's first; the orbit controls then move its view.
   const orbitCamera = new THREE.PerspectiveCamera();
@@ -250,10 +227,10 @@ async function main() {
       exposure = p > 0 ? 4 / p : 1;
     }
     renderer.setRenderTarget(null);
-    composite.material.uniforms.exposure.value = exposure;
-    composite.material.uniforms.show_scene.value = sceneGeometries.length > 0 ? 1 : 0;
+    composite.uniforms.exposure.value = exposure;
+    composite.uniforms.show_scene.value = sceneGeometries.length > 0 ? 1 : 0;
     renderer.autoClear = true;
-    renderer.render(compositeScene, orthoCamera);
+    composite.render(renderer);
     if (ui.wireframe.checked) {
       renderer.autoClear = false;
       renderer.render(wire, litCamera);

@@ -6,7 +6,9 @@
 #                     <= 1 %;
 #   live_test.mjs     the live page (web/live.html, web/light_volume.js) for a spot, a directional
 #                     and an omni light, frames 0 and 30 against `lightvol render --method volume` of
-#                     the volume `lightvol build` makes from the page's own map and light, <= 1 %.
+#                     the volume `lightvol build` makes from the page's own map and light, <= 1 %;
+#   live_adaptive_test.mjs  the live page's adaptive volumes (live.html?adaptive=E): build's
+#                     quadtree triangle count, the bound E at every texel, the airlight <= 1 %.
 # Each script's header says how. Usage: browser_test.sh SCRIPT.mjs PATH/TO/lightvol [options...]
 # Needs node, chromium, oiiotool and web/node_modules (tools/install-deps.sh installs them).
 set -euo pipefail

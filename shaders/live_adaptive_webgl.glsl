@@ -1,0 +1,385 @@
+// lightvol's adaptive live volume in WebGL2 (web/live_adaptive.js, docs/web.md): the compute passes
+// of shaders/live_adaptive.comp recast for a browser, which has neither compute shaders, nor
+// atomics, nor doubles. The quadtree is `lightvol build --adaptive --tessellation quadtree`'s: the
+// same cells, the same error pyramid thresholded at E, the same 2:1 balance, the same fix-up rounds
+// and the same 16 edge-split configurations. The measures are float here: each is computed with a
+// bound on its own rounding (below), and a cell splits when the measure plus that bound exceeds E,
+// so the bound E holds at every texel; a cell whose double measure lies within that rounding of E
+// (a few parts in a million of it) may split where build's does not.
+//
+// The host (web/live_adaptive.js) prepends "#version 300 es", the precision statements and one
+// "#define LVA_<STAGE>" (the emission stages also "#define LIGHTVOL_LIVE_COMMON" and
+// shaders/airlight.glsl, for live_grid_point, live_segment and live_ring_texel). Stages:
+//   LVA_OWN         fragment, per cell of level L (1..top): split when a child did, or when a texel
+//                   of the cell lies farther than E from the cell's two triangles.
+//   LVA_BALANCE     fragment, per cell of level L (2..top): split when a child or a child's
+//                   neighbour did (2:1); in fix-up round r, first the cells the round's test failed.
+//   LVA_TEST        fragment, per cell of levels 2..top, fix-up round r: r when the leaf's split
+//                   configuration breaks E (round 1 tests every leaf, later rounds those whose
+//                   parent or a neighbour split in the round before).
+//   LVA_CODE        fragment, per cell of every level: what it emits (0 nothing, 1 + configuration
+//                   for a leaf, 17 for a split level-1 cell: its four quads).
+//   LVA_EMIT_GRID   vertex, drawn as 24 vertices a cell (levels 1..top, level after level, no
+//                   vertex buffer): vertex 3 × triangle + corner of the cell's triangles (at most
+//                   8); unused ones degenerate.
+//   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
+//                   that edge's closing (spot: a triangle to the apex; directional: two wall
+//                   triangles and one of the cap), others degenerate.
+// The cells' state lives in one R8UI atlas, level L a rectangle of nx(L) × ny(L) texels at
+// (ox(L), oy(L)): 0 unsplit, r + 1 split in fix-up round r (0: pyramid and first balance).
+// Coordinates are build's: texel (col, row), row 0 the top of the light's view.
+
+uniform highp usampler2D lva_splits;
+uniform ivec2 lva_map;  // W, H
+uniform int lva_top;    // the root's level
+uniform int lva_nx[16];
+uniform int lva_ny[16];
+uniform int lva_ox[16];
+uniform int lva_oy[16];
+
+const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
+const uint kQuads = 17u;
+
+bool in_level(int L, int i, int j) {
+  return L >= 1 && L <= lva_top && i >= 0 && j >= 0 && i < lva_nx[L] && j < lva_ny[L];
+}
+
+uint split_at(int L, int i, int j) {
+  return in_level(L, i, j) ? texelFetch(lva_splits, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r : 0u;
+}
+bool is_split(int L, int i, int j) { return split_at(L, i, j) != 0u; }
+
+// Cell box: texels x0..x1, y0..y1, clipped at the far edges.
+ivec4 cell_box(int L, int i, int j) {
+  int s = 1 << L;
+  return ivec4(i * s, j * s, min(i * s + s, lva_map.x - 1), min(j * s + s, lva_map.y - 1));
+}
+
+// The edges of a leaf whose same-level neighbour is split and whose midpoint lies inside the
+// (clipped) edge.
+uint config_of(int L, int i, int j, ivec4 b) {
+  int half_ = 1 << (L - 1);
+  uint config = 0u;
+  if (b.x + half_ < b.z) {
+    if (is_split(L, i, j - 1)) config |= kSplitTop;
+    if (is_split(L, i, j + 1)) config |= kSplitBottom;
+  }
+  if (b.y + half_ < b.w) {
+    if (is_split(L, i - 1, j)) config |= kSplitLeft;
+    if (is_split(L, i + 1, j)) config |= kSplitRight;
+  }
+  return config;
+}
+
+// The triangles of a cell in configuration `config` (detail::cell_triangles, in its order; lattice
+// points, positively oriented in (col, row)). Returns the count.
+int cell_triangles(ivec4 b, int half_, uint config, out ivec2 tri[18]) {
+  ivec2 a = b.xy, bb = ivec2(b.z, b.y), c = ivec2(b.x, b.w), d = b.zw;
+  ivec2 mt = ivec2(b.x + half_, b.y), mr = ivec2(b.z, b.y + half_), mb = ivec2(b.x + half_, b.w),
+        ml = ivec2(b.x, b.y + half_);
+  int n = 0;
+  bool top_ = (config & kSplitTop) != 0u, right = (config & kSplitRight) != 0u,
+       bottom = (config & kSplitBottom) != 0u, left = (config & kSplitLeft) != 0u;
+  if (top_ && left) {
+    tri[0] = a; tri[1] = mt; tri[2] = ml; tri[3] = mt; tri[4] = bb; tri[5] = ml;
+    tri[6] = ml; tri[7] = bb; tri[8] = c; n = 3;
+  } else if (top_) {
+    tri[0] = a; tri[1] = mt; tri[2] = c; tri[3] = mt; tri[4] = bb; tri[5] = c; n = 2;
+  } else if (left) {
+    tri[0] = a; tri[1] = bb; tri[2] = ml; tri[3] = ml; tri[4] = bb; tri[5] = c; n = 2;
+  } else {
+    tri[0] = a; tri[1] = bb; tri[2] = c; n = 1;
+  }
+  int k = 3 * n;
+  if (right && bottom) {
+    tri[k] = mr; tri[k + 1] = d; tri[k + 2] = mb; tri[k + 3] = bb; tri[k + 4] = mr;
+    tri[k + 5] = mb; tri[k + 6] = bb; tri[k + 7] = mb; tri[k + 8] = c; n += 3;
+  } else if (right) {
+    tri[k] = bb; tri[k + 1] = mr; tri[k + 2] = c; tri[k + 3] = mr; tri[k + 4] = d;
+    tri[k + 5] = c; n += 2;
+  } else if (bottom) {
+    tri[k] = bb; tri[k + 1] = d; tri[k + 2] = mb; tri[k + 3] = bb; tri[k + 4] = mb;
+    tri[k + 5] = c; n += 2;
+  } else {
+    tri[k] = bb; tri[k + 1] = d; tri[k + 2] = c; n += 1;
+  }
+  return n;
+}
+
+// The level and coordinates of the atlas texel p among levels first..top (x: 0 when none).
+ivec3 atlas_cell(ivec2 p, int first) {
+  for (int L = first; L <= lva_top; ++L) {
+    ivec2 q = p - ivec2(lva_ox[L], lva_oy[L]);
+    if (q.x >= 0 && q.y >= 0 && q.x < lva_nx[L] && q.y < lva_ny[L]) return ivec3(L, q);
+  }
+  return ivec3(0);
+}
+
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
+uniform int lva_level;  // LVA_OWN, LVA_BALANCE
+uniform int lva_round;  // LVA_BALANCE, LVA_TEST
+layout(location = 0) out uint lva_out;
+#endif
+
+#if defined(LVA_OWN) || defined(LVA_TEST)
+// The measure: TexelDepths::error (src/lightvol/tessellate/texel_depths.cpp), the world distance
+// along texel (x, y)'s ray between its depth d and the depth dp of the triangle's plane there:
+//   |dp − d| · G / |w(d) · w(dp)|,  w(z) = w0 + z · w1 (the homogeneous w of the ray's point),
+// with G = |h1.xyz · h0.w − h0.xyz · h1.w| per texel. Perspective: with d∞ = −w0 / w1 (the depth of
+// w = 0), |w(d) · w(dp)| = w1² · |d − d∞| · |dp − d∞|, and lva_rays holds, per texel in double
+// rounded to float, K = G / w1² and d∞ as a sum hi + lo of two floats, so that d − d∞ = (d − hi) − lo
+// loses nothing to cancellation. Orthographic (lva_uniform): the error is |dp − d| · lva_scale.
+// The plane's dp − d = (d0 − d) + (d1 − d0)·β + (d2 − d0)·γ in the triangle's barycentrics: its
+// rounding is at most a few units of 2^-24 times M = |d0 − d| + |d1 − d0|·β + |d2 − d0|·γ, and
+// the rest of the measure's a few units relative; the margin allows 32 of each.
+uniform highp sampler2D lva_depth;  // the shadow map (window depth), texture rows bottom-up
+uniform highp sampler2D lva_rays;   // per texel, build's rows: K, d∞ hi, d∞ lo
+uniform int lva_uniform;
+uniform float lva_scale;
+uniform float lva_bound;  // the largest float <= E
+const float kUnit = 5.9604645e-8;  // 2^-24
+
+float d_at(int x, int y) { return texelFetch(lva_depth, ivec2(x, lva_map.y - 1 - y), 0).r; }
+
+// Whether a texel of box b lies farther than E (with the margin) from the cell's triangles in
+// configuration `config`.
+bool cell_fails(ivec4 b, int half_, uint config) {
+  ivec2 tri[18];
+  int n = cell_triangles(b, half_, config, tri);
+  ivec2 p0[6], e1[6], e2[6];
+  int area[6];
+  float d0[6], g1[6], g2[6], inv[6];
+  for (int t = 0; t < n; ++t) {
+    ivec2 a = tri[3 * t], u = tri[3 * t + 1] - a, v = tri[3 * t + 2] - a;
+    int ar = u.x * v.y - u.y * v.x;
+    if (ar < 0) {
+      ivec2 s = u;
+      u = v;
+      v = s;
+      ar = -ar;
+    }
+    p0[t] = a, e1[t] = u, e2[t] = v, area[t] = ar;
+    d0[t] = d_at(a.x, a.y);
+    g1[t] = d_at(a.x + u.x, a.y + u.y) - d0[t];
+    g2[t] = d_at(a.x + v.x, a.y + v.y) - d0[t];
+    inv[t] = 1.0 / float(ar);
+  }
+  for (int y = b.y; y <= b.w; ++y) {
+    for (int x = b.x; x <= b.z; ++x) {
+      for (int t = 0; t < n; ++t) {
+        ivec2 q = ivec2(x, y) - p0[t];
+        int bn = q.x * e2[t].y - q.y * e2[t].x, gn = e1[t].x * q.y - e1[t].y * q.x;
+        if (bn < 0 || gn < 0 || bn + gn > area[t]) continue;
+        float d = d_at(x, y);
+        float beta = float(bn) * inv[t], gamma = float(gn) * inv[t];
+        float a0 = d0[t] - d;
+        float r = a0 + (g1[t] * beta + g2[t] * gamma);
+        float m = abs(a0) + abs(g1[t]) * beta + abs(g2[t]) * gamma;
+        float err, margin;
+        if (lva_uniform == 1) {
+          err = abs(r) * lva_scale;
+          margin = 32.0 * kUnit * (err + m * lva_scale);
+        } else {
+          vec4 ray = texelFetch(lva_rays, ivec2(x, y), 0);
+          float qd = (d - ray.y) - ray.z, qp = qd + r;
+          float k = ray.x / (abs(qd) * abs(qp));
+          err = abs(r) * k;
+          margin = 32.0 * kUnit * (err + m * k * (1.0 + abs(r) / abs(qp)));
+        }
+        if (err + margin > lva_bound) return true;
+        break;
+      }
+    }
+  }
+  return false;
+}
+#endif
+
+#ifdef LVA_OWN
+void main() {
+  int L = lva_level;
+  ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
+  int i = c.x, j = c.y;
+  if (L > 1 && (is_split(L - 1, 2 * i, 2 * j) || is_split(L - 1, 2 * i + 1, 2 * j) ||
+                is_split(L - 1, 2 * i, 2 * j + 1) || is_split(L - 1, 2 * i + 1, 2 * j + 1))) {
+    lva_out = 1u;
+    return;
+  }
+  lva_out = cell_fails(cell_box(L, i, j), 1 << (L - 1), 0u) ? 1u : 0u;
+}
+#endif
+
+#ifdef LVA_BALANCE
+uniform highp usampler2D lva_fails;
+void main() {
+  int L = lva_level;
+  ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
+  int i = c.x, j = c.y;
+  uint mark = uint(lva_round) + 1u;
+  uint old = split_at(L, i, j);
+  if (lva_round > 0 &&
+      texelFetch(lva_fails, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r == uint(lva_round)) {
+    lva_out = mark;
+    return;
+  }
+  if (old != 0u) {
+    lva_out = old;
+    return;
+  }
+  int l = L - 1, ci = 2 * i, cj = 2 * j;
+  bool any = is_split(l, ci, cj) || is_split(l, ci + 1, cj) || is_split(l, ci, cj + 1) ||
+             is_split(l, ci + 1, cj + 1) || is_split(l, ci - 1, cj) ||
+             is_split(l, ci - 1, cj + 1) || is_split(l, ci + 2, cj) ||
+             is_split(l, ci + 2, cj + 1) || is_split(l, ci, cj - 1) ||
+             is_split(l, ci + 1, cj - 1) || is_split(l, ci, cj + 2) || is_split(l, ci + 1, cj + 2);
+  lva_out = any ? mark : 0u;
+}
+#endif
+
+#ifdef LVA_TEST
+void main() {
+  lva_out = 0u;
+  ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 2);
+  int L = cl.x, i = cl.y, j = cl.z;
+  if (L < 2 || is_split(L, i, j)) return;
+  uint parent = L == lva_top ? 1u : split_at(L + 1, i / 2, j / 2);
+  if (parent == 0u) return;  // not a leaf
+  if (lva_round > 1) {
+    uint r = uint(lva_round);
+    if (parent != r && split_at(L, i - 1, j) != r && split_at(L, i + 1, j) != r &&
+        split_at(L, i, j - 1) != r && split_at(L, i, j + 1) != r)
+      return;  // nothing around it changed since it passed
+  }
+  ivec4 b = cell_box(L, i, j);
+  uint config = config_of(L, i, j, b);
+  if (config == 0u) return;
+  if (cell_fails(b, 1 << (L - 1), config)) lva_out = uint(lva_round);
+}
+#endif
+
+#ifdef LVA_CODE
+void main() {
+  lva_out = 0u;
+  ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 1);
+  int L = cl.x, i = cl.y, j = cl.z;
+  if (L < 1) return;
+  bool split = is_split(L, i, j);
+  if (L == 1 && split) {
+    lva_out = kQuads;
+  } else if (!split && (L == lva_top || is_split(L + 1, i / 2, j / 2))) {
+    lva_out = 1u + config_of(L, i, j, cell_box(L, i, j));
+  }
+}
+#endif
+
+#if defined(LVA_EMIT_GRID) || defined(LVA_EMIT_CLOSE)
+uniform mat4 view_projection;
+out vec3 world;
+// For read-back by transform feedback (tests): kind << 28 | col << 14 | row; kind 0 none (a
+// degenerate triangle's vertex), 1 grid vertex of texel (col, row), 2 the apex, 3 the near-plane
+// copy of texel (col, row), 4 the cap's centre (col and row 0 for kinds 0, 2 and 4).
+flat out uint lva_vertex;
+
+void emit(int kind, ivec2 t) {
+  lva_vertex = kind == 1 || kind == 3 ? uint(kind) << 28 | uint(t.x) << 14 | uint(t.y) : uint(kind) << 28;
+  if (kind == 0) {
+    world = vec3(0.0);
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the triangle is culled
+    return;
+  }
+  if (kind == 1) {
+    world = (live_eye_to_world[0] * vec4(live_grid_point(0, t), 1.0)).xyz;
+  } else if (kind == 2) {
+    world = live_apex;
+  } else if (kind == 3) {
+    world = (live_eye_to_world[0] * vec4(live_segment(live_ndc(t), 0.0), 1.0)).xyz;
+  } else {
+    world = live_cap;
+  }
+  gl_Position = view_projection * vec4(world, 1.0);
+}
+#endif
+
+#ifdef LVA_EMIT_GRID
+uniform highp usampler2D lva_codes;
+uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
+
+void main() {
+  int c = gl_VertexID / 24, L = 1;
+  while (L < lva_top && c >= lva_first[L + 1]) ++L;
+  int k = c - lva_first[L], i = k % lva_nx[L], j = k / lva_nx[L];
+  uint code = texelFetch(lva_codes, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r;
+  int vertex = gl_VertexID - 24 * c, t = vertex / 3, corner = vertex - 3 * t;
+  // Most of the vertices belong to no triangle: out before any other work.
+  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
+  int n = 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
+  if (code == 0u || (code != kQuads && t >= n)) {
+    emit(0, ivec2(0));
+    return;
+  }
+  if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding
+  ivec4 b = cell_box(L, i, j);
+  ivec2 tri[18];
+  if (code == kQuads) {
+    int q = t / 2;
+    ivec2 quad = b.xy + ivec2(q % 2, q / 2);
+    if (quad.x >= b.z || quad.y >= b.w) {
+      emit(0, ivec2(0));
+      return;
+    }
+    cell_triangles(ivec4(quad, quad + 1), 0, 0u, tri);
+    emit(1, tri[3 * (t % 2) + corner]);
+    return;
+  }
+  cell_triangles(b, 1 << (L - 1), config, tri);
+  emit(1, tri[3 * t + corner]);
+}
+#endif
+
+#ifdef LVA_EMIT_CLOSE
+void main() {
+  int p = gl_VertexID / 9, v = gl_VertexID - 9 * p;
+  int perimeter = 2 * (lva_map.x - 1) + 2 * (lva_map.y - 1);
+  ivec2 u = live_ring_texel(p), w = live_ring_texel((p + 1) % perimeter);
+  int wl = lva_map.x - 1, hl = lva_map.y - 1;
+  // The quad inside the map along this unit edge, and the side it lies on (0 top, 1 bottom,
+  // 2 left, 3 right).
+  int side;
+  ivec2 quad;
+  if (u.y == 0 && w.y == 0) {
+    side = 0, quad = ivec2(min(u.x, w.x), 0);
+  } else if (u.y == hl && w.y == hl) {
+    side = 1, quad = ivec2(min(u.x, w.x), hl - 1);
+  } else if (u.x == 0 && w.x == 0) {
+    side = 2, quad = ivec2(0, min(u.y, w.y));
+  } else {
+    side = 3, quad = ivec2(wl - 1, min(u.y, w.y));
+  }
+  // The leaf that holds the quad, and its edge on that side.
+  ivec4 b = ivec4(quad, quad + 1);
+  for (int L = lva_top; L >= 1; --L) {
+    if (!is_split(L, quad.x >> L, quad.y >> L)) {
+      b = cell_box(L, quad.x >> L, quad.y >> L);
+      break;
+    }
+  }
+  ivec2 e0 = side == 0 ? b.xy : side == 1 ? b.xw : side == 2 ? b.xy : b.zy;
+  ivec2 e1 = side == 0 ? b.zy : side == 1 ? b.zw : side == 2 ? b.xw : b.zw;
+  if (u != e0 && u != e1) {
+    emit(0, ivec2(0));
+    return;
+  }
+  ivec2 nxt = u == e0 ? e1 : e0;
+  // Build's closing of the ring edge u -> nxt (closing.cpp): spot (nxt, u, apex); directional
+  // (nxt, u, u'), (nxt, u', nxt'), (nxt', u', cap), ' the near-plane copy.
+  int t = v / 3, corner = v - 3 * t;
+  if (live_type == 0) {
+    if (t > 0) emit(0, ivec2(0));
+    else emit(corner == 0 ? 1 : corner == 1 ? 1 : 2, corner == 0 ? nxt : u);
+    return;
+  }
+  if (t == 0) emit(corner == 2 ? 3 : 1, corner == 0 ? nxt : u);
+  else if (t == 1) emit(corner == 0 ? 1 : 3, corner == 2 ? nxt : corner == 0 ? nxt : u);
+  else emit(corner == 2 ? 4 : 3, corner == 0 ? nxt : u);
+}
+#endif

@@ -1,0 +1,401 @@
+// The adaptive light volume of LightVolume (light_volume.js, option maxError; docs/web.md): `lightvol
+// build --adaptive --tessellation quadtree`'s volume of the frame's shadow map, made on the GPU every
+// frame in WebGL2 by shaders/live_adaptive_webgl.glsl. WebGL2 has no compute shaders, so the error
+// pyramid, the 2:1 balance and the fix-up rounds are fragment passes into an R8UI atlas of the
+// quadtree's cells (one level a pass, each written to a scratch atlas and blitted back), a last
+// pass writes what each cell emits, and two draws with no vertex buffer emit the triangles: one
+// of 24 vertices a cell (up to 8 triangles each, the others degenerate and culled) and one of 9
+// vertices a border ring edge (the closing). No read-back, no CPU work per frame but the uniforms.
+import * as THREE from 'three';
+
+const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
+const FULL_SCREEN = '#version 300 es\nvoid main() {\n' +
+                    '  gl_Position = vec4(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0, 0.0, 1.0);\n}\n';
+const GRID_VERTICES = 24;   // 8 triangles: a split level-1 cell's four quads
+const CLOSE_VERTICES = 9;   // 3 triangles: a directional ring edge's walls and cap
+const SHADER_URL = new URL('../shaders/live_adaptive_webgl.glsl', import.meta.url).href;
+
+// The largest float <= e.
+function floatFloor(e) {
+  const f = new Float32Array([e]);
+  if (f[0] > e) {
+    const bits = new Int32Array(f.buffer);
+    bits[0] += f[0] > 0 ? -1 : 1;
+    if (f[0] === 0) f[0] = -Number.MIN_VALUE;
+  }
+  return f[0];
+}
+
+function integerTarget(width, height) {
+  const t = new THREE.WebGLRenderTarget(width, height, {
+    format: THREE.RedIntegerFormat, type: THREE.UnsignedByteType, depthBuffer: false,
+    minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false });
+  t.texture.internalFormat = 'R8UI';
+  return t;
+}
+
+// Sets a raw program's uniforms from three.js-style uniform objects ({ value }), textures by
+// three.js's own handles; `units` counts texture units from 0.
+function applyUniforms(gl, renderer, program, uniforms) {
+  let unit = 0;
+  const count = gl.getProgramParameter(program, gl.ACTIVE_UNIFORMS);
+  for (let k = 0; k < count; ++k) {
+    const info = gl.getActiveUniform(program, k);
+    const name = info.name.replace(/\[0\]$/, '');
+    const u = uniforms[name];
+    if (!u) continue;
+    const at = gl.getUniformLocation(program, info.name);
+    const v = u.value;
+    switch (info.type) {
+      case gl.FLOAT: gl.uniform1f(at, v); break;
+      case gl.INT: case gl.BOOL:
+        if (info.size > 1) gl.uniform1iv(at, Int32Array.from(v));
+        else gl.uniform1i(at, v);
+        break;
+      case gl.INT_VEC2: gl.uniform2i(at, v.x ?? v[0], v.y ?? v[1]); break;
+      case gl.FLOAT_VEC2: gl.uniform2f(at, v.x, v.y); break;
+      case gl.FLOAT_VEC3: gl.uniform3f(at, v.x, v.y, v.z); break;
+      case gl.FLOAT_VEC4: gl.uniform4f(at, v.x, v.y, v.z, v.w); break;
+      case gl.FLOAT_MAT4: {
+        const list = Array.isArray(v) ? v : [v];
+        const data = new Float32Array(16 * list.length);
+        list.forEach((m, f) => data.set(m.elements, 16 * f));
+        gl.uniformMatrix4fv(at, false, data);
+        break;
+      }
+      case gl.SAMPLER_2D: case gl.UNSIGNED_INT_SAMPLER_2D: {
+        const list = Array.isArray(v) ? v : [v];
+        const units = [];
+        for (let i = 0; i < info.size; ++i) {
+          const texture = list[Math.min(i, list.length - 1)];
+          gl.activeTexture(gl.TEXTURE0 + unit);
+          gl.bindTexture(gl.TEXTURE_2D, texture.isTexture ? renderer.properties.get(texture).__webglTexture : texture);
+          units.push(unit++);
+        }
+        gl.uniform1iv(at, Int32Array.from(units));
+        break;
+      }
+      default: throw new Error(`LightVolume: internal error: uniform ${info.name} of type 0x${info.type.toString(16)}`);
+    }
+  }
+}
+
+export class AdaptiveVolume {
+  // The text of shaders/live_adaptive_webgl.glsl (beside shaders/airlight.glsl).
+  static async loadShader(url = SHADER_URL) {
+    const response = await fetch(url);
+    if (!response.ok) throw new Error(`LightVolume: ${url}: HTTP ${response.status}`);
+    return response.text();
+  }
+
+  // renderer: three's WebGLRenderer; glsl: shaders/airlight.glsl; adaptiveGlsl: this file's
+  // shader; maxError: E (world units along the texel rays, as build's --max-error); rounds: the
+  // fix-up rounds each frame runs (default 4; build's quadtree needs at most 1 on the demo's maps;
+  // converged() tells).
+  // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, live, volumeUniforms, volumeState, fragmentShader }) {
+    if (!(Number.isFinite(maxError) && maxError >= 0))
+      throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
+    if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= 63))
+      throw new Error(`LightVolume: rounds: expected an integer from 1 to 63, got ${rounds}`);
+    if (!adaptiveGlsl) throw new Error('LightVolume: options.adaptiveGlsl is empty (LightVolume.loadAdaptiveShader() gives it)');
+    this.renderer = renderer;
+    this.gl = renderer.getContext();
+    this.glsl = glsl;
+    this.adaptiveGlsl = adaptiveGlsl;
+    this.maxError = maxError;
+    this.rounds = rounds;
+    this.live = live;
+    this.key = null;
+    this.raysKey = null;
+    const zeros = () => new Array(16).fill(0);
+    this.u = {
+      lva_map: { value: new THREE.Vector2(2, 2) },
+      lva_top: { value: 1 },
+      lva_nx: { value: zeros() }, lva_ny: { value: zeros() },
+      lva_ox: { value: zeros() }, lva_oy: { value: zeros() },
+      lva_first: { value: new Array(17).fill(0) },
+      lva_level: { value: 1 }, lva_round: { value: 0 },
+      lva_uniform: { value: 0 }, lva_scale: { value: 1 },
+      lva_bound: { value: floatFloor(maxError) },
+      lva_splits: { value: null }, lva_fails: { value: null }, lva_codes: { value: null },
+      lva_depth: { value: null }, lva_rays: { value: null },
+    };
+    this.passes = {};
+    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE'])
+      this.passes[stage] = this.program(FULL_SCREEN, `#version 300 es\n${PREFIX}#define LVA_${stage}\n${adaptiveGlsl}`);
+    this.vao = this.gl.createVertexArray();
+    const material = (stage) => new THREE.RawShaderMaterial({
+      glslVersion: THREE.GLSL3,
+      vertexShader: this.emitSource(stage),
+      fragmentShader,
+      uniforms: { ...volumeUniforms, ...live, ...this.u },
+      ...volumeState,
+    });
+    // No attributes: three.js draws drawRange.count vertices.
+    this.gridGeometry = new THREE.BufferGeometry();
+    this.closeGeometry = new THREE.BufferGeometry();
+    this.gridGeometry.setDrawRange(0, 0);
+    this.closeGeometry.setDrawRange(0, 0);
+    this.gridMaterial = material('GRID');
+    this.closeMaterial = material('CLOSE');
+    this.meshes = [new THREE.Mesh(this.gridGeometry, this.gridMaterial),
+                   new THREE.Mesh(this.closeGeometry, this.closeMaterial)];
+    for (const m of this.meshes) m.frustumCulled = false;
+    this.targets = [];
+  }
+
+  emitSource(stage) {
+    return `${PREFIX}#define LIGHTVOL_LIVE_COMMON\n#define LVA_EMIT_${stage}\n${this.glsl}\n${this.adaptiveGlsl}`;
+  }
+
+  program(vertex, fragment, feedback = null) {
+    const gl = this.gl;
+    const shader = (type, source) => {
+      const s = gl.createShader(type);
+      gl.shaderSource(s, source);
+      gl.compileShader(s);
+      if (!gl.getShaderParameter(s, gl.COMPILE_STATUS))
+        throw new Error(`LightVolume: the adaptive volume's shader: ${gl.getShaderInfoLog(s)}`);
+      return s;
+    };
+    const p = gl.createProgram();
+    gl.attachShader(p, shader(gl.VERTEX_SHADER, vertex));
+    gl.attachShader(p, shader(gl.FRAGMENT_SHADER, fragment));
+    if (feedback) gl.transformFeedbackVaryings(p, feedback, gl.INTERLEAVED_ATTRIBS);
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS))
+      throw new Error(`LightVolume: the adaptive volume's program: ${gl.getProgramInfoLog(p)}`);
+    return p;
+  }
+
+  // The quadtree of a W × H map (detail::Quadtree: levels 1..top, at least one) and its atlas:
+  // level 1 at (0, 0), levels 2..top stacked to its right.
+  resize(width, height) {
+    const key = `${width}x${height}`;
+    if (this.key === key) return;
+    this.key = key;
+    this.raysKey = null;
+    const cw = width - 1, ch = height - 1;
+    let top = 0;
+    while ((1 << top) < Math.max(cw, ch)) ++top;
+    top = Math.max(top, 1);
+    if (top > 15) throw new Error('LightVolume: adaptive volumes take maps of at most 32769 texels a side');
+    const u = this.u;
+    u.lva_map.value.set(width, height);
+    u.lva_top.value = top;
+    let cells = 0, y = 0;
+    for (let L = 1; L <= top; ++L) {
+      const nx = (cw + (1 << L) - 1) >> L, ny = (ch + (1 << L) - 1) >> L;
+      u.lva_nx.value[L] = nx;
+      u.lva_ny.value[L] = ny;
+      u.lva_first.value[L] = cells;
+      cells += nx * ny;
+      if (L === 1) {
+        u.lva_ox.value[L] = 0;
+        u.lva_oy.value[L] = 0;
+      } else {
+        u.lva_ox.value[L] = u.lva_nx.value[1];
+        u.lva_oy.value[L] = y;
+        y += ny;
+      }
+    }
+    u.lva_first.value[top + 1] = cells;
+    this.cells = cells;
+    this.top = top;
+    this.atlas = [u.lva_nx.value[1] + (top >= 2 ? u.lva_nx.value[2] : 0), Math.max(u.lva_ny.value[1], y)];
+    this.column = [u.lva_nx.value[1], 0, top >= 2 ? u.lva_nx.value[2] : 0, y];  // levels 2..top
+    for (const t of this.targets) t.dispose();
+    const [aw, ah] = this.atlas;
+    this.splits = integerTarget(aw, ah);
+    this.scratch = integerTarget(aw, ah);
+    this.fails = integerTarget(aw, ah);
+    this.codes = integerTarget(aw, ah);
+    this.targets = [this.splits, this.scratch, this.fails, this.codes];
+    for (const t of this.targets) this.renderer.initRenderTarget(t);
+    u.lva_splits.value = this.splits.texture;
+    u.lva_fails.value = this.fails.texture;
+    u.lva_codes.value = this.codes.texture;
+    this.perimeter = 2 * cw + 2 * ch;
+    this.gridGeometry.setDrawRange(0, GRID_VERTICES * cells);
+    this.closeGeometry.setDrawRange(0, CLOSE_VERTICES * this.perimeter);
+  }
+
+  // The measure's per-texel constants (TexelDepths::create, in double): orthographic lights a
+  // uniform scale; perspective ones K = G / w1² and d∞ = −w0 / w1 as two floats (the GLSL file).
+  prepareRays(json, width, height) {
+    const key = `${width}x${height}:${json.projection.flat().join(',')}`;
+    if (this.raysKey === key) return;
+    this.raysKey = key;
+    const fromRows = (r) => new THREE.Matrix4().set(...r.flat());
+    const m = fromRows(json.view).invert().multiply(fromRows(json.projection).invert());
+    const e = m.elements, at = (r, c) => e[4 * c + r];
+    const h1 = [0, 1, 2, 3].map((k) => 2 * at(k, 2));
+    const x0 = 2 * 0.5 / width - 1, y0 = -(2 * 0.5 / height - 1);
+    const w0c = at(3, 0) * x0 + at(3, 1) * y0 - at(3, 2) + at(3, 3);
+    const u = this.u;
+    u.lva_uniform.value = at(3, 0) === 0 && at(3, 1) === 0 && h1[3] === 0 ? 1 : 0;
+    if (u.lva_uniform.value) {
+      u.lva_scale.value = Math.hypot(h1[0], h1[1], h1[2]) / Math.abs(w0c);
+      if (!this.rays) {
+        this.rays = new THREE.DataTexture(new Float32Array(4), 1, 1, THREE.RGBAFormat, THREE.FloatType);
+        this.rays.needsUpdate = true;
+        this.renderer.initTexture(this.rays);
+      }
+      u.lva_rays.value = this.rays;
+      return;
+    }
+    const data = new Float32Array(4 * width * height);
+    const w1 = h1[3];
+    for (let r = 0; r < height; ++r) {
+      const y = -(2 * (r + 0.5) / height - 1);
+      for (let c = 0; c < width; ++c) {
+        const x = 2 * (c + 0.5) / width - 1;
+        const h0 = [0, 1, 2, 3].map((k) => at(k, 0) * x + at(k, 1) * y - at(k, 2) + at(k, 3));
+        const g = Math.hypot(h1[0] * h0[3] - h0[0] * h1[3], h1[1] * h0[3] - h0[1] * h1[3], h1[2] * h0[3] - h0[2] * h1[3]);
+        const dInf = -h0[3] / w1, hi = Math.fround(dInf);
+        data.set([g / (w1 * w1), hi, dInf - hi, 0], 4 * (r * width + c));
+      }
+    }
+    if (this.rays) this.rays.dispose();
+    this.rays = new THREE.DataTexture(data, width, height, THREE.RGBAFormat, THREE.FloatType);
+    this.rays.minFilter = this.rays.magFilter = THREE.NearestFilter;
+    this.rays.needsUpdate = true;
+    this.renderer.initTexture(this.rays);
+    u.lva_rays.value = this.rays;
+  }
+
+  // The frame's quadtree, from `depth` (the copied shadow map, a THREE.DepthTexture) of light JSON
+  // `json`: after LightVolume set the live uniforms, before the volume is drawn.
+  generate(json, depth, width, height) {
+    const { gl, renderer, u } = this;
+    this.resize(width, height);
+    this.prepareRays(json, width, height);
+    u.lva_depth.value = depth;
+    const props = renderer.properties;
+    const fbo = (t) => props.get(t).__webglFramebuffer;
+    renderer.resetState();
+    gl.bindVertexArray(this.vao);
+    const [aw, ah] = this.atlas;
+    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.splits));
+    gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
+    const run = (stage, target, [x, y, w, h], back) => {
+      const p = this.passes[stage];
+      gl.useProgram(p);
+      applyUniforms(gl, renderer, p, u);
+      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(target));
+      gl.viewport(x, y, w, h);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      if (back) {
+        gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(target));
+        gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(back));
+        gl.blitFramebuffer(x, y, x + w, y + h, x, y, x + w, y + h, gl.COLOR_BUFFER_BIT, gl.NEAREST);
+        gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+      }
+    };
+    const level = (L) => [u.lva_ox.value[L], u.lva_oy.value[L], u.lva_nx.value[L], u.lva_ny.value[L]];
+    const balance = (round) => {
+      u.lva_round.value = round;
+      for (let L = 2; L <= this.top; ++L) {
+        u.lva_level.value = L;
+        run('BALANCE', this.scratch, level(L), this.splits);
+      }
+    };
+    for (let L = 1; L <= this.top; ++L) {
+      u.lva_level.value = L;
+      run('OWN', this.scratch, level(L), this.splits);
+    }
+    balance(0);
+    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.fails));
+    gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
+    for (let round = 1; round <= this.rounds && this.top >= 2; ++round) {
+      u.lva_round.value = round;
+      run('TEST', this.fails, this.column, null);
+      balance(round);
+    }
+    run('CODE', this.codes, [0, 0, aw, ah], null);
+    gl.bindVertexArray(null);
+    renderer.resetState();
+  }
+
+  // For tests, never in a frame: whether the last frame's fix-up converged (its last round split
+  // nothing), read back.
+  converged() {
+    const { gl, renderer } = this;
+    const [x, y, w, h] = this.column;
+    if (w === 0 || h === 0) return true;
+    const out = new Uint32Array(4 * w * h);
+    renderer.resetState();
+    gl.bindFramebuffer(gl.READ_FRAMEBUFFER, renderer.properties.get(this.fails).__webglFramebuffer);
+    gl.readPixels(x, y, w, h, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+    renderer.resetState();
+    for (let k = 0; k < out.length; k += 4) if (out[k] !== 0) return false;
+    return true;
+  }
+
+  // For tests, never in a frame: the last frame's triangles as the emission draws make them, by
+  // transform feedback of the same vertex stages with the same uniforms: an array of triangles,
+  // each three [kind, col, row] (kind 1 grid vertex of texel (col, row), 2 apex, 3 near-plane copy
+  // of texel (col, row), 4 cap), the grid's first, wound as drawn.
+  readTriangles(extraUniforms) {
+    const { gl, renderer } = this;
+    if (Math.max(...this.u.lva_map.value.toArray()) > 16384)
+      throw new Error('LightVolume: readTriangles takes maps of at most 16384 texels a side');
+    const fragment = `#version 300 es\n${PREFIX}out vec4 colour;\nvoid main() { colour = vec4(0.0); }\n`;
+    if (!this.feedback)
+      this.feedback = {
+        GRID: this.program(`#version 300 es\n${this.emitSource('GRID')}`, fragment, ['lva_vertex']),
+        CLOSE: this.program(`#version 300 es\n${this.emitSource('CLOSE')}`, fragment, ['lva_vertex']),
+      };
+    const uniforms = { ...this.live, ...this.u, view_projection: { value: new THREE.Matrix4() }, ...extraUniforms };
+    const triangles = [];
+    for (const [stage, vertices, instances] of [['GRID', GRID_VERTICES, this.cells],
+                                                ['CLOSE', CLOSE_VERTICES, this.perimeter]]) {
+      const program = this.feedback[stage];
+      const n = vertices * instances;
+      renderer.resetState();
+      gl.useProgram(program);
+      applyUniforms(gl, renderer, program, uniforms);
+      gl.bindVertexArray(this.vao);
+      const buffer = gl.createBuffer(), feedback = gl.createTransformFeedback();
+      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer);
+      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * n, gl.STREAM_READ);
+      gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
+      gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, feedback);
+      gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);
+      gl.enable(gl.RASTERIZER_DISCARD);
+      gl.beginTransformFeedback(gl.TRIANGLES);
+      gl.drawArrays(gl.TRIANGLES, 0, n);
+      gl.endTransformFeedback();
+      gl.disable(gl.RASTERIZER_DISCARD);
+      gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
+      gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
+      const out = new Uint32Array(n);
+      gl.bindBuffer(gl.COPY_READ_BUFFER, buffer);
+      gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
+      gl.bindBuffer(gl.COPY_READ_BUFFER, null);
+      gl.deleteBuffer(buffer);
+      gl.deleteTransformFeedback(feedback);
+      gl.bindVertexArray(null);
+      const vertex = (v) => [v >>> 28, (v >>> 14) & 0x3fff, v & 0x3fff];
+      for (let t = 0; t < n; t += 3) {
+        if (out[t] === 0) continue;
+        triangles.push([vertex(out[t]), vertex(out[t + 1]), vertex(out[t + 2])]);
+      }
+    }
+    renderer.resetState();
+    return triangles;
+  }
+
+  dispose() {
+    for (const t of this.targets) t.dispose();
+    if (this.rays) this.rays.dispose();
+    this.gridGeometry.dispose();
+    this.closeGeometry.dispose();
+    this.gridMaterial.dispose();
+    this.closeMaterial.dispose();
+    const gl = this.gl;
+    for (const p of Object.values(this.passes)) gl.deleteProgram(p);
+    gl.deleteVertexArray(this.vao);
+  }
+}
