@@ -5,7 +5,8 @@
 # SCENES_DIR has them. Whole process under /usr/bin/time (user+sys CPU, wall, peak memory) and the
 # build report's stages (reading the image; "pyramid": texel depths and the error pyramid;
 # collapse). With a second build folder, both versions run alternately, and each row of the
-# second table is this version over the other: ratios from one run of both.
+# second table is this version over the other: ratios from one run of both. The output's md5
+# (first 12 digits) says whether both wrote the same bytes.
 # Usage: tests/bench/adaptive_scale_bench.sh BUILD_DIR [OTHER_BUILD_DIR] [RUNS] [SIZES] [SCENES_DIR]
 #   (BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON: make_depth, heightfield_tool), e.g.
 #   tests/bench/adaptive_scale_bench.sh build /tmp/main-build 1 "4096 16384" ../shared/scenes
@@ -20,20 +21,21 @@ source "$(dirname "$0")/bench_common.sh"
 versions=("$build")
 [ -n "$other" ] && versions+=("$other")
 
-# measure OUT MAP LIGHT BINARY: appends "cpu wall peak_MiB read pyramid collapse" of one build.
+# measure OUT MAP LIGHT BINARY: appends "cpu wall peak_MiB read pyramid collapse triangles md5"
+# of one build.
 measure() {
   local out=$1 map=$2 light=$3 lv=$4
   rm -f "$work/out.ply"
   /usr/bin/time -f '%U %S %e %M' -o "$work/t" "$lv" build "$map" --light "$light" --adaptive \
     --max-error 0.001 --out "$work/out.ply" --report "$work/r.json" --quiet
   read -r user sys wall rss < "$work/t"
-  python3 - "$work/r.json" "$user" "$sys" "$wall" "$rss" >> "$out" <<'PY'
+  python3 - "$work/r.json" "$user" "$sys" "$wall" "$rss" "$(md5sum < "$work/out.ply" | cut -c1-12)" >> "$out" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 read = sum(s["seconds"] for s in r["stages"] if s["name"].startswith("reading") and not s["name"].endswith(".json"))
 a = r["adaptive"]["seconds"]
 print(float(sys.argv[2]) + float(sys.argv[3]), sys.argv[4], int(sys.argv[5]) / 1024, read,
-      a["error_pyramid"], a["collapse"], r["triangles"])
+      a["error_pyramid"], a["collapse"], r["triangles"], sys.argv[6])
 PY
 }
 
@@ -63,8 +65,8 @@ if [ -n "$scenes" ]; then
 fi
 
 echo "E = 0.001; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg); $(date -u '+%Y-%m-%d %H:%M')"
-printf '| map | version | triangles | CPU user+sys | wall | peak memory | read | pyramid | collapse |\n'
-printf '|---|---|---:|---:|---:|---:|---:|---:|---:|\n'
+printf '| map | version | triangles | output md5 | CPU user+sys | wall | peak memory | read | pyramid | collapse |\n'
+printf '|---|---|---:|---|---:|---:|---:|---:|---:|---:|\n'
 ratios=()
 for m in "${maps[@]}"; do
   IFS='|' read -r label map light <<< "$m"
@@ -73,8 +75,9 @@ for m in "${maps[@]}"; do
     for j in "${!versions[@]}"; do measure "$work/v$j" "$map" "$light" "${versions[$j]}/lightvol"; done
   done
   for j in "${!versions[@]}"; do
-    printf '| %s | %s | %s | %.2f s | %.2f s | %.0f MiB | %.2f s | %.2f s | %.2f s |\n' "$label" \
-      "${versions[$j]}" "$(col "$work/v$j" 7)" "$(col "$work/v$j" 1)" "$(col "$work/v$j" 2)" \
+    printf '| %s | %s | %s | %s | %.2f s | %.2f s | %.0f MiB | %.2f s | %.2f s | %.2f s |\n' "$label" \
+      "${versions[$j]}" "$(col "$work/v$j" 7)" "$(cut -d' ' -f8 "$work/v$j" | sort -u | tr '\n' ' ')" \
+      "$(col "$work/v$j" 1)" "$(col "$work/v$j" 2)" \
       "$(col "$work/v$j" 3)" "$(col "$work/v$j" 4)" "$(col "$work/v$j" 5)" "$(col "$work/v$j" 6)"
   done
   if [ -n "$other" ]; then
