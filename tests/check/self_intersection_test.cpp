@@ -312,6 +312,43 @@ TEST(ExactSelfIntersections, FanWindingTwiceIsTestedPairByPair) {
   expect_same_as_cgal(folded, "folded fan");
 }
 
+// A single closed shell turned inside out bounds a volume for CGAL (the unbounded one: its
+// does_bound_a_volume reads an inward outer level as odd); only the linear "outward" check fails.
+// Generated mesh 5892 is a double cone with its apex below its base's centre, moved so that its
+// highest vertex is unique; the tetrahedron is the least such shell (one highest vertex, incoming
+// edges of three slopes).
+TEST(ExactSelfIntersections, InsideOutShellBoundsAVolumeAsForCgal) {
+  Mesh tetra;
+  add_vertex(tetra, 0, 0, 0);
+  add_vertex(tetra, 2, 0, 0);
+  add_vertex(tetra, 0, 1, 0);
+  add_vertex(tetra, 0.25, 0.5, 1);
+  // Outward: (0, 2, 1) is the base seen from below, the others seen from outside.
+  add_face(tetra, 0, 2, 1);
+  add_face(tetra, 0, 1, 3);
+  add_face(tetra, 1, 2, 3);
+  add_face(tetra, 2, 0, 3);
+  Mesh inside_out = tetra;
+  for (std::size_t t = 0; t < inside_out.num_triangles(); ++t)
+    std::swap(inside_out.indices[3 * t + 1], inside_out.indices[3 * t + 2]);
+  const Mesh cone = generated(5892);
+  for (const auto& [mesh, what] : {std::pair<const Mesh*, const char*>{&tetra, "tetrahedron"},
+                                   {&inside_out, "inside-out tetrahedron"},
+                                   {&cone, "generated mesh 5892"}}) {
+    const Outcome o = expect_same_as_cgal(*mesh, what);
+    EXPECT_TRUE(o.ran) << what;
+    EXPECT_FALSE(o.intersecting) << what;
+    EXPECT_EQ(o.components, 1u) << what;
+    const detail::CgalChecks mine = detail::exact_checks(*mesh, true, 10);
+    EXPECT_TRUE(mine.ran_volume_test) << what;
+    EXPECT_TRUE(mine.bounds_a_volume) << what;
+    const CheckReport report = check_volume_linear(*mesh, nullptr);
+    const CheckResult* outward = report.find(kCheckOutward);
+    ASSERT_NE(outward, nullptr);
+    EXPECT_EQ(outward->status, mesh == &tetra ? CheckStatus::passed : CheckStatus::failed) << what;
+  }
+}
+
 // Volumes as build makes them (a spot map with occluders, hubs at the apex, depth steps), sound and
 // then with a vertex pushed through the floor.
 TEST(ExactSelfIntersections, BuiltVolumesGiveCgalsVerdicts) {

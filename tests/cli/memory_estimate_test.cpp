@@ -155,7 +155,8 @@ TEST_F(MemoryEstimate, BuildAndStatsOfOneMapPerMode) {
     EXPECT_GE(estimate(BuildMemory::adaptive, n), static_cast<double>(adaptive)) << size;
     expect_close(
         "adaptive " + size,
-        static_cast<double>(adaptive_memory_bytes(n, n, 1, quadtree_triangles(report), true)),
+        static_cast<double>(adaptive_memory_bytes(n, n, 1, quadtree_triangles(report), true,
+                                                  /*float_depths=*/true)),  // window encoding
         adaptive);
     expect_close(
         "stats " + size, estimate(BuildMemory::stats, n),
@@ -181,7 +182,8 @@ TEST_F(MemoryEstimate, OmniBuildOfSixFaces) {
     EXPECT_GE(estimate(BuildMemory::adaptive, n, 6), static_cast<double>(adaptive)) << size;
     expect_close(
         "omni adaptive " + size,
-        static_cast<double>(adaptive_memory_bytes(n, n, 6, quadtree_triangles(report), true)),
+        static_cast<double>(adaptive_memory_bytes(n, n, 6, quadtree_triangles(report), true,
+                                                  /*float_depths=*/true)),  // window encoding
         adaptive);
   }
 }

@@ -1,6 +1,7 @@
 // Adaptive tessellation of one grid: vertices in texel order and all used, forced border vertices,
 // the fix-up that splits a leaf whose configuration breaks the bound, and its rounds (each re-tests
-// only what the round before changed: the same grid as the full rounds). The bound over whole
+// only what the round before changed: the same grid as the full rounds); depths held as floats
+// when that is exact (the same grids as held as doubles). The bound over whole
 // volumes is tested in tests/volume/adaptive_volume_test.cpp.
 #include <algorithm>
 #include <cmath>
@@ -15,6 +16,7 @@
 
 #include <lightvol/core/mesh.h>
 #include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
 
 #include "support/adaptive_support.h"
@@ -47,6 +49,82 @@ TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
     ASSERT_GE(g.border[side].size(), 2u);
     EXPECT_EQ(g.border[side].front(), 0);
     EXPECT_EQ(g.border[side].back(), last);
+  }
+}
+
+// ---- depths held as floats ----------------------------------------------------------------------
+
+// TexelDepths holds the window depths as floats when every one is a float exactly: window
+// encoding (the stored value clamped to [0, 1]), and a linear encoding whose conversion rounds to
+// nothing (an orthographic light from 0 to 1: d = stored). Each depth is checked here against the
+// conversion in double precision, so the floats lose nothing; then the pyramid, the quadtree at
+// several bounds, the collapsed grid and the measure are the same as with the depths held as
+// doubles (both projections: the uniform error scale and the per-texel one). A spot light with
+// linear depth (d = a rational function of the stored value) keeps doubles.
+TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
+  const std::string box =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  struct Case {
+    std::string light;
+    double lo, hi;  // stored values, drawn in [lo, hi] on plateaus with steps and slopes
+    bool floats;
+    bool window;
+  };
+  const Case cases[] = {{test::spot_json("window"), 0.97, 1.02, true, true},
+                        {directional_json("window"), -0.02, 0.6, true, true},
+                        {box, 0.05, 0.95, true, false},
+                        {test::spot_json("linear"), 2.0, 6.0, false, false}};
+  std::mt19937 rng(11);
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.light);
+    std::uniform_real_distribution<double> value(c.lo, c.hi),
+        jitter(-1e-4 * (c.hi - c.lo), 1e-4 * (c.hi - c.lo));
+    std::vector<double> plateau(64);
+    for (double& p : plateau) p = value(rng);
+    const int n = 97;
+    const DepthImage depth = make_depth(n, n, [&](int col, int row) {
+      const double slope = (c.hi - c.lo) * 0.002 * (col - row);
+      return static_cast<float>(plateau[static_cast<std::size_t>(row / 13 * 8 + col / 13) % 64] +
+                                slope + jitter(rng));
+    });
+    const Light light = light_from_json(c.light);
+    Result<TexelDepths> held = TexelDepths::create(light, depth, 0, "x");
+    ASSERT_TRUE(held.ok());
+    EXPECT_EQ(held->float_depths(), c.floats);
+    // Each depth against its conversion in double precision (texel_depths.cpp's formulas).
+    const Mat4d& pj = light.projection;
+    for (int row = 0; row < n; ++row)
+      for (int col = 0; col < n; ++col) {
+        const double stored = depth.at(col, row);
+        double expected = std::clamp(stored, 0.0, 1.0);
+        if (!c.window) {
+          const double z = -std::clamp(stored, light.near, light.far);
+          expected = std::clamp(0.5 * ((pj(2, 2) * z + pj(2, 3)) / (pj(3, 2) * z + pj(3, 3)) + 1.0),
+                                0.0, 1.0);
+        }
+        ASSERT_EQ(held->window_depth(col, row), expected) << col << ", " << row;
+      }
+    if (!c.floats) continue;
+    TexelDepths doubles = held->with_double_depths();
+    EXPECT_FALSE(doubles.float_depths());
+    EXPECT_EQ(doubles.uniform(), held->uniform());
+    const RefinementPyramid as_floats(std::move(*held), Refinement::max_error);
+    const RefinementPyramid as_doubles(std::move(doubles), Refinement::max_error);
+    for (const double bound : {2e-4, 1e-3, 5e-3}) {
+      SCOPED_TRACE(bound);
+      const AdaptiveGrid a = as_floats.tessellate(bound, true),
+                         b = as_doubles.tessellate(bound, true);
+      EXPECT_GT(a.num_triangles(), 2u);
+      EXPECT_EQ(a.vertices, b.vertices);
+      EXPECT_EQ(a.indices, b.indices);
+      EXPECT_EQ(as_floats.measure(a), as_doubles.measure(b));
+      const AdaptiveGrid ca = collapse_grid(as_floats.texels(), a, bound),
+                         cb = collapse_grid(as_doubles.texels(), b, bound);
+      EXPECT_LT(ca.num_triangles(), a.num_triangles());
+      EXPECT_EQ(ca.vertices, cb.vertices);
+      EXPECT_EQ(ca.indices, cb.indices);
+    }
   }
 }
 

@@ -105,8 +105,9 @@ constexpr double kCheckBytesPerTriangle = 0.5;
 constexpr double kStaticMeshBytesPerTexel = 12 + 2 * 12;
 // The depth floats as received from lightvol-image.
 constexpr double kDepthBytesPerTexel = 4;
-// Adaptive: the floats read, the texel depths and error scales (doubles), the error pyramid
-// (floats, a third of a texel's), the quadtree's and the collapse's per-texel tables.
+// Adaptive: the floats read, the texel depths (doubles, or floats when exact: 4 bytes less) and
+// error scales (doubles), the error pyramid (floats, a third of a texel's), the quadtree's and the
+// collapse's per-texel tables.
 constexpr double kAdaptiveBytesPerTexel = 24;
 // Adaptive, before the tessellation's size is known: its grid may hold every texel as a vertex
 // (4 bytes) and two triangles per texel (12 bytes each), as it does on noise at a bound of 0.
@@ -160,11 +161,13 @@ std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int6
 }
 
 std::uint64_t adaptive_memory_bytes(std::int64_t width, std::int64_t height, int images,
-                                    std::uint64_t quadtree_triangles, bool collapse) {
+                                    std::uint64_t quadtree_triangles, bool collapse,
+                                    bool float_depths) {
   if (width <= 0 || height <= 0 || images <= 0) return 0;
   const double texels = static_cast<double>(width) * static_cast<double>(height);
+  const double per_texel = kAdaptiveBytesPerTexel - (float_depths ? 4 : 0);
   const double lightvol = static_cast<double>(process_base_bytes()) +
-                          texels * static_cast<double>(images) * kAdaptiveBytesPerTexel +
+                          texels * static_cast<double>(images) * per_texel +
                           static_cast<double>(quadtree_triangles) *
                               (collapse ? kCollapseBytesPerTriangle : kQuadtreeBytesPerTriangle);
   const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;

@@ -56,9 +56,11 @@ std::uint64_t build_memory_bytes(BuildMemory mode, std::int64_t width, std::int6
 // collapse and assemble; build_memory_bytes(BuildMemory::adaptive) covers what they allocate
 // before that, a grid of up to one vertex and two triangles per texel included. At or above the
 // measured peak and within 1.25× of it, for any map up to the worst case, noise at a bound of 0
-// (every texel a vertex; tests/cli/memory_estimate_test.cpp).
+// (every texel a vertex; tests/cli/memory_estimate_test.cpp). `float_depths`: every image's texel
+// depths are held as floats (TexelDepths::float_depths), 4 bytes a texel less.
 std::uint64_t adaptive_memory_bytes(std::int64_t width, std::int64_t height, int images,
-                                    std::uint64_t quadtree_triangles, bool collapse);
+                                    std::uint64_t quadtree_triangles, bool collapse,
+                                    bool float_depths = false);
 
 // The per-texel terms of build_memory_bytes, for the docs and tests.
 double build_bytes_per_texel(BuildMemory mode);

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <lightvol/core/result.h>
@@ -42,21 +43,40 @@ class TexelDepths {
   int width() const { return width_; }
   int height() const { return height_; }
   // The texel's window depth, clamped to [0, 1] (its vertex lies on the far plane at 1).
-  double window_depth(int col, int row) const { return depth_[index(col, row)]; }
+  double window_depth(int col, int row) const {
+    const std::size_t v = index(col, row);
+    return float_depths_ ? double{depth_f_[v]} : depth_[v];
+  }
   // World distance between the point of texel (col, row)'s ray at window depth `d` and its own
   // point.
   double error(int col, int row, double d) const {
-    const std::size_t v = index(col, row);
-    if (uniform_) return std::abs(d - depth_[v]) * uniform_scale_;
-    return std::abs(d - depth_[v]) * scale_[v] / std::abs(w0(col, row) + d * w1_);
+    const double depth = window_depth(col, row);
+    if (uniform_) return std::abs(d - depth) * uniform_scale_;
+    return std::abs(d - depth) * scale_[index(col, row)] / std::abs(w0(col, row) + d * w1_);
   }
+
+  // The window depths are held as floats when every one of them is a float exactly (window
+  // encoding: the stored value clamped to [0, 1]; linear or radial ones whose conversion happens
+  // to round to nothing, as with an orthographic light from 0 to 1): half the memory, and the
+  // same doubles once read (a float converts to double exactly), so the same errors, pyramid and
+  // grids. The row loops read depth_row_as<float> or depth_row_as<double> accordingly.
+  bool float_depths() const { return float_depths_; }
+  // The same texels with their depths held as doubles (for tests: the float path against it).
+  TexelDepths with_double_depths() const;
 
   // For the row loops of the tessellator: the error is |d − depth|·scale / |w0 + d·w1| with
   // w0 = w0_c + col·w0_dc + row·w0_dr; with `uniform()`, scale = uniform_scale() and the
   // denominator is 1 everywhere (orthographic projections).
   bool uniform() const { return uniform_; }
   double uniform_scale() const { return uniform_scale_; }
-  const double* depth_row(int row) const { return depth_.get() + index(0, row); }
+  template <class D>
+  const D* depth_row_as(int row) const {
+    if constexpr (std::is_same_v<D, float>) {
+      return depth_f_.get() + index(0, row);
+    } else {
+      return depth_.get() + index(0, row);
+    }
+  }
   const double* scale_row(int row) const { return scale_.get() + index(0, row); }
   double w0(int col, int row) const { return w0_c_ + col * w0_dc_ + row * w0_dr_; }
   double w0_dc() const { return w0_dc_; }
@@ -69,7 +89,9 @@ class TexelDepths {
   }
   int width_ = 0, height_ = 0;
   // Per texel, written once in parallel (no serial zero-fill, huge pages where available).
-  std::unique_ptr<double[]> depth_;  // window depth
+  std::unique_ptr<double[]> depth_;   // window depth, or null when float_depths_
+  std::unique_ptr<float[]> depth_f_;  // window depth when float_depths_, else null
+  bool float_depths_ = false;
   std::unique_ptr<double[]> scale_;  // null when uniform
   bool uniform_ = false;
   double uniform_scale_ = 0;

@@ -23,6 +23,7 @@ using detail::RowSpanWalker;
 using detail::span_error;
 using detail::triangle_plane;
 using detail::TrianglePlane;
+using detail::with_texel_kind;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -32,7 +33,7 @@ std::int64_t cross(Pt a, Pt b, Pt c) {
 // triangle's plane in window depth (TexelDepths::error). Stops at the first row that breaks it.
 // Rows are walked with RowSpanWalker (no division per row: most triangles here are a few texels
 // wide, so the per-row work is most of the cost).
-template <bool kUniform>
+template <bool kUniform, class D>
 bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   const TrianglePlane plane = triangle_plane(t, a, b, c);
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
@@ -40,7 +41,7 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   for (int y = y0; y <= y1; ++y) {
     int x0 = 0, x1 = 0;
     if (!walk.next(&x0, &x1)) continue;
-    const double m = span_error<kUniform>(t, y, x0, x1, plane.at(x0, y), plane.gx);
+    const double m = span_error<kUniform, D>(t, y, x0, x1, plane.at(x0, y), plane.gx);
     if (kUniform ? m * t.uniform_scale() > bound : m > bound) return false;
   }
   return true;
@@ -187,8 +188,9 @@ class Collapser {
 
  private:
   bool within(Pt a, Pt b, Pt c) const {
-    return t_.uniform() ? triangle_within<true>(t_, a, b, c, bound_)
-                        : triangle_within<false>(t_, a, b, c, bound_);
+    return with_texel_kind(t_, [&](auto uniform, auto depth) {
+      return triangle_within<decltype(uniform)::value, decltype(depth)>(t_, a, b, c, bound_);
+    });
   }
 
   static constexpr int kStripe = 64;

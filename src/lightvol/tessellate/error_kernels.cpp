@@ -17,14 +17,14 @@ namespace {
 // The largest error over the texels (lattice points) of the closed triangle (a, b, c), rows
 // [y_begin, y_end) only. The triangle's window depth is the plane through its corners' depths:
 // exactly what the emitted flat triangle gives along each texel ray.
-template <bool kUniform>
+template <bool kUniform, class D>
 double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, int y_end) {
   const TrianglePlane plane = triangle_plane(t, a, b, c);
   double worst = 0;
   for (int y = y_begin; y < y_end; ++y) {
     int x0 = 0, x1 = 0;
     if (!triangle_row_span(plane.v, y, &x0, &x1)) continue;
-    worst = std::max(worst, span_error<kUniform>(t, y, x0, x1, plane.at(x0, y), plane.gx));
+    worst = std::max(worst, span_error<kUniform, D>(t, y, x0, x1, plane.at(x0, y), plane.gx));
   }
   if constexpr (kUniform) worst *= t.uniform_scale();
   return worst;
@@ -33,7 +33,7 @@ double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, 
 // The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
 // triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
 // general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
-template <bool kUniform>
+template <bool kUniform, class D>
 double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
   const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
@@ -45,7 +45,7 @@ double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begi
     const int s = y - b.y0;
     const int xs =
         b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
-    const double* dt = t.depth_row(y);
+    const D* dt = t.depth_row_as<D>(y);
     const double base1 = da + g1y * s, base2 = dd + g2y * (y - b.y1);
     double m = 0;
     if constexpr (kUniform) {
@@ -88,8 +88,9 @@ double triangle_error(const TexelDepths& t, Pt a, Pt b, Pt c) {
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y}) + 1;
   const int x0 = std::min({a.x, b.x, c.x}), x1 = std::max({a.x, b.x, c.x}) + 1;
   const auto rows = [&](int ya, int yb) {
-    return t.uniform() ? triangle_error_rows<true>(t, a, b, c, ya, yb)
-                       : triangle_error_rows<false>(t, a, b, c, ya, yb);
+    return with_texel_kind(t, [&](auto uniform, auto depth) {
+      return triangle_error_rows<decltype(uniform)::value, decltype(depth)>(t, a, b, c, ya, yb);
+    });
   };
   // Large triangles (the top of the pyramid) split their rows across threads.
   if (static_cast<std::int64_t>(y1 - y0) * (x1 - x0) < (1 << 16)) return rows(y0, y1);
@@ -108,8 +109,9 @@ float round_up(double e) {
 }
 
 double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
-  return t.uniform() ? box_error_rows_t<true>(t, b, y_begin, y_end)
-                     : box_error_rows_t<false>(t, b, y_begin, y_end);
+  return with_texel_kind(t, [&](auto uniform, auto depth) {
+    return box_error_rows_t<decltype(uniform)::value, decltype(depth)>(t, b, y_begin, y_end);
+  });
 }
 
 }  // namespace lightvol::detail

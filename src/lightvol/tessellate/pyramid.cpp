@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/tessellate/detail/lattice.h>
 
@@ -32,7 +33,10 @@ class PyramidBuilder {
                  std::vector<std::vector<float>>* value)
       : t_(texels), refinement_(refinement), q_(texels.width(), texels.height()), value_(*value) {
     value_.resize(static_cast<std::size_t>(q_.top) + 1);
-    for (int level = 1; level <= q_.top; ++level) value_[level].assign(q_.cells(level), 0.0f);
+    for (int level = 1; level <= q_.top; ++level) {  // level 1: a quarter of the texels' count
+      reserve_large(value_[level], q_.cells(level));
+      value_[level].assign(q_.cells(level), 0.0f);
+    }
   }
 
   int top() const { return q_.top; }

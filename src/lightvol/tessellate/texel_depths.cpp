@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
@@ -26,7 +27,6 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   t.width_ = w;
   t.height_ = h;
   const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  t.depth_ = uninitialized_large<double>(n);
 
   // clip → world. A texel's homogeneous point at window depth d is h0 + d·h1 with
   // h0 = M·(x_ndc, y_ndc, −1, 1) and h1 = 2·M·e_z; two points of one ray lie
@@ -58,6 +58,33 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   const bool linear_fast = light.depth == DepthEncoding::linear && pj(2, 0) == 0 && pj(2, 1) == 0 &&
                            pj(3, 0) == 0 && pj(3, 1) == 0;
   const double pz = pj(2, 2), pzc = pj(2, 3), pw = pj(3, 2), pwc = pj(3, 3);
+  // The window depth of a stored value, for the two encodings converted without unprojecting.
+  const auto fast_depth = [&](double stored) {
+    if (window) return std::clamp(stored, 0.0, 1.0);
+    // The projection's z and w rows see only the eye depth z = −stored.
+    const double z = -std::clamp(stored, light.near, light.far);
+    return std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
+  };
+  // Floats when every depth is one exactly (window: always; linear: checked, stopping at the
+  // first that is not).
+  t.float_depths_ = window;
+  if (linear_fast) {
+    t.float_depths_ = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
+        [&](const tbb::blocked_range<std::size_t>& r, bool exact) {
+          for (std::size_t v = r.begin(); v != r.end() && exact; ++v) {
+            const double d = fast_depth(image.values[v]);
+            exact = static_cast<double>(static_cast<float>(d)) == d;
+          }
+          return exact;
+        },
+        [](bool a, bool b) { return a && b; });
+  }
+  if (t.float_depths_) {
+    t.depth_f_ = uninitialized_large<float>(n);
+  } else {
+    t.depth_ = uninitialized_large<double>(n);
+  }
   const Unprojector unproject(light, w, h, face, Space::world);
   std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
@@ -66,12 +93,8 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         const std::size_t v = t.index(c, r);
         const double stored = image.values[v];
         double d = 0;
-        if (window) {
-          d = std::clamp(stored, 0.0, 1.0);
-        } else if (linear_fast) {
-          // The projection's z and w rows see only the eye depth z = −stored.
-          const double z = -std::clamp(stored, light.near, light.far);
-          d = std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
+        if (window || linear_fast) {
+          d = fast_depth(stored);
         } else {
           Vec3d p;
           if (!unproject.point(c, r, stored, &p)) {
@@ -86,7 +109,11 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
           const double ww = pr(3, 0) * e.x + pr(3, 1) * e.y + pr(3, 2) * e.z + pr(3, 3);
           d = std::clamp(0.5 * (z / ww + 1.0), 0.0, 1.0);
         }
-        t.depth_[v] = d;
+        if (t.float_depths_) {
+          t.depth_f_[v] = static_cast<float>(d);
+        } else {
+          t.depth_[v] = d;
+        }
         if (!t.uniform_) {
           const double x = xn(c), y = yn(r);
           double h0[4];
@@ -102,6 +129,24 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
     return unreachable_radial_depth(source, static_cast<int>(bad % w), static_cast<int>(bad / w),
                                     image.values[bad]);
   }
+  return t;
+}
+
+TexelDepths TexelDepths::with_double_depths() const {
+  TexelDepths t;
+  t.width_ = width_;
+  t.height_ = height_;
+  const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  t.depth_ = uninitialized_large<double>(n);
+  for (int r = 0; r < height_; ++r)
+    for (int c = 0; c < width_; ++c) t.depth_[index(c, r)] = window_depth(c, r);
+  if (!uniform_) {
+    t.scale_ = uninitialized_large<double>(n);
+    std::copy(scale_.get(), scale_.get() + n, t.scale_.get());
+  }
+  t.uniform_ = uniform_;
+  t.uniform_scale_ = uniform_scale_;
+  t.w0_c_ = w0_c_, t.w0_dc_ = w0_dc_, t.w0_dr_ = w0_dr_, t.w1_ = w1_;
   return t;
 }
 

@@ -121,9 +121,10 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
       options.refinement == Refinement::max_error && options.tessellation == Tessellation::collapse;
   // What grows with the tessellation (the collapse's tables, the volume) is measured against the
   // budget now that its size is known, before it is allocated.
-  if (Status s = check_memory(
-          adaptive_memory_bytes(depth.width, depth.height, 1, grid.num_triangles(), collapse),
-          source, "the adaptive volume at this bound");
+  if (Status s =
+          check_memory(adaptive_memory_bytes(depth.width, depth.height, 1, grid.num_triangles(),
+                                             collapse, pyramid.texels().float_depths()),
+                       source, "the adaptive volume at this bound");
       !s)
     return s.error();
   if (collapse) {

@@ -161,8 +161,12 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   // What grows with the tessellation (the collapse's tables, the volume) is measured against the
   // budget now that its size is known, before it is allocated.
   if (memory) {
-    *memory = check_memory(adaptive_memory_bytes(w, w, kOmniFaces, r.quadtree_triangles, collapse),
-                           cube.sources[0], "the adaptive omni volume at this bound");
+    const bool floats =
+        std::all_of(pyramids.begin(), pyramids.end(),
+                    [](const RefinementPyramid& p) { return p.texels().float_depths(); });
+    *memory = check_memory(
+        adaptive_memory_bytes(w, w, kOmniFaces, r.quadtree_triangles, collapse, floats),
+        cube.sources[0], "the adaptive omni volume at this bound");
     if (!*memory) return Mesh{};
   }
   if (collapse) {

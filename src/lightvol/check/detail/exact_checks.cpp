@@ -8,7 +8,6 @@
 #include <cmath>
 #include <initializer_list>
 #include <limits>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -1277,56 +1276,6 @@ std::size_t components(const Geometry& geo, std::size_t nv, std::size_t nt) {
   return n;
 }
 
-// Is a closed surface without self-intersections (one component) oriented outward? CGAL's local
-// test (PMP::internal::is_outward_oriented): at the first highest vertex, the incoming edge of
-// least slope, and the orientations of its two faces seen from above. Nothing when that is not
-// decided in general position (several edges of least slope, a face seen edge-on from above):
-// there CGAL's answer may depend on the order it walks the edges in, so CGAL decides.
-std::optional<bool> outward(const Geometry& geo, const VertexFaces& vf, std::size_t nv) {
-  std::uint32_t top = kNone;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (vf.degree(static_cast<std::uint32_t>(v)) == 0) continue;
-    if (top == kNone || geo.pos[3 * v + 2] > geo.pos[3 * std::size_t{top} + 2])
-      top = static_cast<std::uint32_t>(v);
-  }
-  const Point p2 = geo.point(top);
-  // Incoming edges (x → top): x is the vertex before top in each face around it.
-  std::uint32_t best_face = kNone, best_source = kNone;
-  bool tie = false;
-  const auto compare_slope = Kernel().compare_slope_3_object();
-  for (std::uint32_t k = vf.first[top]; k < vf.first[top + 1]; ++k) {
-    const std::uint32_t f = vf.faces[k];
-    const Tri t = geo.tri(f);
-    const int i = t[0] == top ? 0 : t[1] == top ? 1 : 2;
-    const std::uint32_t x = t[(i + 2) % 3];
-    const CGAL::Comparison_result c =
-        best_face == kNone ? CGAL::SMALLER
-                           : compare_slope(geo.point(x), p2, geo.point(best_source), p2);
-    if (c == CGAL::SMALLER) best_face = f, best_source = x, tie = false;
-    if (c == CGAL::EQUAL && x != best_source) tie = true;
-  }
-  if (tie) return std::nullopt;
-  // p1 → p2 in best_face, whose third vertex is p3; p2 → p1 in the other face, third vertex p4.
-  const Tri t = geo.tri(best_face);
-  const int i = t[0] == top ? 0 : t[1] == top ? 1 : 2;
-  const Point p1 = geo.point(best_source), p3 = geo.point(t[(i + 1) % 3]);
-  Point p4 = p3;
-  for (std::uint32_t k = vf.first[top]; k < vf.first[top + 1]; ++k) {
-    const Tri u = geo.tri(vf.faces[k]);
-    const int j = u[0] == top ? 0 : u[1] == top ? 1 : 2;
-    if (u[(j + 1) % 3] == best_source) p4 = geo.point(u[(j + 2) % 3]);
-  }
-  const auto orientation_xy = [](const Point& a, const Point& b, const Point& c) {
-    return CGAL::orientation(Kernel::Point_2(a.x(), a.y()), Kernel::Point_2(b.x(), b.y()),
-                             Kernel::Point_2(c.x(), c.y()));
-  };
-  const CGAL::Orientation o123 = orientation_xy(p1, p2, p3), o214 = orientation_xy(p2, p1, p4);
-  if (o123 == CGAL::COLLINEAR || o214 == CGAL::COLLINEAR) return std::nullopt;
-  if (o123 == o214) return o123 == CGAL::LEFT_TURN;
-  if (o123 == CGAL::LEFT_TURN) return CGAL::orientation(p1, p2, p3, p4) == CGAL::NEGATIVE;
-  return CGAL::orientation(p2, p1, p4, p3) == CGAL::NEGATIVE;
-}
-
 CgalChecks run(const Mesh& mesh, bool closed, std::size_t max_pairs, double long_face_ratio,
                std::size_t min_hub_degree, std::size_t limit) {
   CgalChecks out;
@@ -1345,8 +1294,12 @@ CgalChecks run(const Mesh& mesh, bool closed, std::size_t max_pairs, double long
   out.components = components(geo, nv, nt);
   if (closed && pairs.empty()) {
     out.ran_volume_test = true;
-    const std::optional<bool> up = out.components == 1 ? outward(geo, vf, nv) : std::nullopt;
-    out.bounds_a_volume = up ? *up : cgal_bounds_a_volume(mesh);
+    // One component: CGAL's predicate (PMP::volume_connected_components) takes the component as
+    // the outer boundary of a volume when it is oriented outward, and as bounding the unbounded
+    // volume (its nesting level 0 read as odd) when it is oriented inward, so it bounds a volume
+    // either way; the orientation is the linear "outward" check's business. Several components
+    // (nesting, orientations relative to each other) go to CGAL.
+    out.bounds_a_volume = out.components == 1 || cgal_bounds_a_volume(mesh);
   }
   return out;
 }

@@ -18,8 +18,8 @@ namespace lightvol::detail {
 // other than along the edge or vertex they share, classified exactly as CGAL's pair test does
 // (exact predicates: orientations, CGAL's do_intersect). Counting stops at 10,000 pairs; the first
 // `max_pairs` are kept. When `closed` and no pair was found, bounds-a-volume: a single connected
-// component bounds a volume when it is oriented outward (CGAL's local test at the highest
-// vertex); several go to CGAL (cgal_bounds_a_volume).
+// component bounds a volume whichever way it is oriented (as CGAL's does_bound_a_volume decides:
+// inward, it bounds the unbounded volume); several go to CGAL (cgal_bounds_a_volume).
 //
 // The broad phase: bounding-volume hierarchies over the faces in Morton order, each face's box
 // (long faces: its triangle) against the faces after it; faces around hubs (kMinHubDegree) against

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/adaptive_grid.h>
@@ -41,11 +42,12 @@ inline TrianglePlane triangle_plane(const TexelDepths& t, Pt a, Pt b, Pt c) {
 }
 
 // The largest error over texels [x0, x1] of row y against a plane whose depth is `base` at x0 and
-// changes by `gx` a texel (TexelDepths::error; with kUniform, before the uniform scale). The inner
-// loops vectorize (-fopenmp-simd in the files that use it).
-template <bool kUniform>
+// changes by `gx` a texel (TexelDepths::error; with kUniform, before the uniform scale). D is the
+// type the depths are held in (TexelDepths::float_depths). The inner loops vectorize
+// (-fopenmp-simd in the files that use it).
+template <bool kUniform, class D>
 double span_error(const TexelDepths& t, int y, int x0, int x1, double base, double gx) {
-  const double* dt = t.depth_row(y);
+  const D* dt = t.depth_row_as<D>(y);
   double m = 0;
   if constexpr (kUniform) {
 #pragma omp simd reduction(max : m)
@@ -64,6 +66,15 @@ double span_error(const TexelDepths& t, int y, int x0, int x1, double base, doub
     }
   }
   return m;
+}
+
+// Calls f(std::bool_constant<uniform>, D{}) with the texels' kind of projection and depth type.
+template <class F>
+decltype(auto) with_texel_kind(const TexelDepths& t, F&& f) {
+  if (t.uniform()) {
+    return t.float_depths() ? f(std::true_type{}, float{}) : f(std::true_type{}, double{});
+  }
+  return t.float_depths() ? f(std::false_type{}, float{}) : f(std::false_type{}, double{});
 }
 
 }  // namespace lightvol::detail
