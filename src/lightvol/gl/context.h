@@ -120,7 +120,11 @@ namespace lightvol::gl {
   X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                         \
   X(PFNGLDRAWELEMENTSINDIRECTPROC, glDrawElementsIndirect)           \
   X(PFNGLCLEARBUFFERDATAPROC, glClearBufferData)                     \
-  X(PFNGLUNIFORM1UIPROC, glUniform1ui)
+  X(PFNGLUNIFORM1UIPROC, glUniform1ui)                               \
+  X(PFNGLUNIFORM1IVPROC, glUniform1iv)                               \
+  X(PFNGLBINDBUFFERRANGEPROC, glBindBufferRange)                     \
+  X(PFNGLBUFFERSUBDATAPROC, glBufferSubData)                         \
+  X(PFNGLCOPYBUFFERSUBDATAPROC, glCopyBufferSubData)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
