@@ -106,7 +106,10 @@ layout(std430, binding = 13) buffer ScanSums { uint scan_sums[]; };
 // The volume's state across faces (omni; zero for spot and directional lights): [0] the borders
 // agree (no more seam rounds), [1] seam rounds run, [8 + 4 face + side] the side changed in this
 // seam round, [32 + face] the face's first vertex ([38]: all the faces' vertices), [40 + face] its
-// first triangle ([46]: all the faces' triangles), [64..] the seam round's dispatch sizes.
+// first triangle ([46]: all the faces' triangles), [48 + face] 1 when the face sits this seam
+// round out (its forced vertices did not change: it would tessellate the same), [kOmniArgs +
+// 3 (kSeamSlots face + slot)] the seam round's dispatch sizes per face (LV_UNITE's and
+// LV_APPLY's: face 0's).
 // (Each block declared only for the passes that use it: a compute program holds 16 at most.)
 #if defined(LV_CONTROL) || defined(LV_TRIANGLES) || defined(LV_VERTICES) || \
     defined(LV_SEAM_CONTROL) || defined(LV_UNITE) || defined(LV_APPLY) || defined(LV_BASE) || \
@@ -148,7 +151,7 @@ uniform int seam_desc[72];
 uniform int corner_desc[72];
 
 const uint kNone = 0xFFFFFFFFu;
-const uint kOmniArgs = 64u;  // omni[kOmniArgs + 3 slot]: the seam round's dispatch sizes
+const uint kOmniArgs = 128u;
 const int kSideTop = 0, kSideRight = 1, kSideBottom = 2, kSideLeft = 3;  // GridSide
 
 const int kBandRows = 16;
@@ -371,8 +374,9 @@ void main() {
 #ifdef LV_CONTROL
 void main() {
   if (invocation() != 0) return;
-  // An omni volume whose seams agree runs no more rounds (omni[0]; zero otherwise).
-  bool run = omni[0] == 0u && (round_ == 1 || control[round_ - 1] != 0u);
+  // An omni face that sits the seam round out runs no fix-up round (omni[48 + face]; zero for
+  // spot and directional lights).
+  bool run = omni[48 + lv_face] == 0u && (round_ == 1 || control[round_ - 1] != 0u);
   int cells2 = cells_total - offset_at(min(2, top_level + 1));
   for (int L = 1; L <= top_level; ++L) {
     // L = 1: the test (cells of levels 2..top); L >= 2: the balance of level L.
@@ -728,22 +732,32 @@ void main() {
 
 #ifdef LV_SEAM_CONTROL
 // Seam round round_ (1-based; the host's rounds + 1 after the last, to conclude): the round before
-// changed no side → the borders agree and no more rounds run.
+// changed no side → the borders agree and no more rounds run; else the faces with a changed side
+// tessellate again (all six in round 1).
 uniform int seam_slots;  // dispatch slots of a round (3 uints each)
 void main() {
   if (invocation() != 0) return;
+  bool dirty[6] = bool[6](true, true, true, true, true, true);
   if (omni[0] == 0u && round_ > 1) {
     bool changed = false;
     for (int k = 0; k < 24; ++k) {
-      if (omni[8 + k] != 0u) changed = true;
+      if (k % 4 == 0) dirty[k / 4] = false;
+      if (omni[8 + k] != 0u) changed = dirty[k / 4] = true;
       omni[8 + k] = 0u;
     }
     if (!changed) omni[0] = 1u;
   }
   bool run = omni[0] == 0u && round_ <= rounds;
   if (run) omni[1] = uint(round_);
-  for (int k = 0; k < 3 * seam_slots; ++k)
-    omni[kOmniArgs + uint(k)] = run ? seam_template[k] : 0u;
+  for (int f = 0; f < 6; ++f) {
+    bool face_runs = run && dirty[f];
+    omni[48 + f] = face_runs ? 0u : 1u;
+    for (int k = 0; k < 3 * seam_slots; ++k) {
+      // LV_UNITE's and LV_APPLY's slots (face 0's) run whenever the round does.
+      bool runs = k / 3 >= 16 ? run : face_runs;
+      omni[kOmniArgs + uint(3 * seam_slots * f + k)] = runs ? seam_template[k] : 0u;
+    }
+  }
 }
 #endif
 

@@ -101,11 +101,12 @@ constexpr GLuint kDrawCommand = 192;   // control[kDrawCommand..+4]: the indirec
 constexpr GLuint kControlSize = 256;
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
-constexpr GLuint kOmniSize = 128;  // shaders/live_adaptive.comp's omni[]
-constexpr GLuint kOmniArgs = 64;
-// The seam round's dispatch slots: 0 LV_RESET, 2..top LV_BALANCE of that level, 16 LV_UNITE,
-// 17 LV_APPLY.
+constexpr GLuint kOmniSize = 512;  // shaders/live_adaptive.comp's omni[]
+constexpr GLuint kOmniArgs = 128;
+// The seam round's dispatch slots, per face from kOmniArgs on: 0 LV_RESET, 2..top LV_BALANCE of
+// that level, 16 LV_UNITE, 17 LV_APPLY (face 0's).
 constexpr int kSlotReset = 0, kSlotUnite = 16, kSlotApply = 17, kSlots = 18;
+static_assert(kOmniArgs + 3 * kSlots * kOmniFaces <= kOmniSize);
 
 // Enough groups of 64 for `invocations`, as rows of at most kMaxGroupsX groups
 // (shaders/live_adaptive.comp's invocation()).
@@ -478,7 +479,8 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
     for (int level = 2; level <= s.top; ++level) {
       glUniform1i(balance.uniform("level"), level);
       if (s.omni()) {
-        indirect(kOmni, kOmniArgs + 3 * static_cast<std::uint64_t>(level));
+        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) +
+                                         static_cast<std::uint64_t>(level)));
       } else {
         dispatch(s.nx[level] * s.ny[level]);
       }
@@ -521,7 +523,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       for (face = 0; face < s.faces; ++face) {
         s.bind_face(face);
         use(kReset);
-        indirect(kOmni, kOmniArgs + 3 * kSlotReset);
+        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) + kSlotReset));
         barrier();
         tessellate();
       }
