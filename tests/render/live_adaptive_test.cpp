@@ -356,6 +356,10 @@ std::vector<OmniCase> omni_cases() {
       d = static_cast<float>(-(ndc * p(3, 3) - p(2, 3)) / (p(2, 2) - ndc * p(3, 2)));
     }
   out.push_back({"omni linear 24", linear, cube});
+  // flip_y: the same images read bottom row first (other face frames, other seams).
+  Light flipped = window;
+  flipped.flip_y = true;
+  out.push_back({"omni window 24 flip_y", flipped, test::omni_scene(24)});
   // The cascading plateaus on every face (linear depth about 0.5 from the light): fix-up rounds.
   CubeFaces steps;
   for (int f = 0; f < kOmniFaces; ++f) {
@@ -441,7 +445,7 @@ TEST(LiveAdaptive, OmniIsBuildsAdaptiveOmniVolumeTriangleForTriangle) {
 TEST(LiveAdaptive, OmniIsClosedPassesTheLightCheckAndMeetsTheBoundAtEveryTexel) {
   REQUIRE_GL_CONTEXT();
   const std::vector<OmniCase> all = omni_cases();
-  for (const OmniCase& c : {all[0], all[3], all[4]}) {
+  for (const OmniCase& c : {all[0], all[3], all[4], all[5]}) {
     for (const double e : {0.05, 0.005, 0.0003}) {
       SCOPED_TRACE(c.name + " E = " + std::to_string(e));
       LiveOmni live = make_live_omni(c, e);
@@ -454,6 +458,40 @@ TEST(LiveAdaptive, OmniIsClosedPassesTheLightCheckAndMeetsTheBoundAtEveryTexel) 
       EXPECT_LE(test::omni_ray_error(gpu->mesh, c.light, c.cube), e * (1 + 1e-4) + 5e-5);
     }
   }
+}
+
+TEST(LiveAdaptive, OmniFollowsTheFacesFromFrameToFrame) {
+  REQUIRE_GL_CONTEXT();
+  const OmniCase first = omni_cases()[1];
+  OmniCase second = first;
+  // Something close to the light in front of face +X (a corner of its map), between frames.
+  DepthImage& face = second.cube.faces[0];
+  for (int r = 0; r < 9; ++r)
+    for (int col = 15; col < 24; ++col) face.values[static_cast<std::size_t>(r) * 24 + col] = 0.2f;
+  LiveOmni live = make_live_omni(first, 0.005);
+  ASSERT_TRUE(live.volume);
+  Result<LiveMesh> one = live.volume->read_mesh();
+  ASSERT_TRUE(one) << one.error().message;
+  // The same texture, new contents (GL row t is image row 23 - t): no call to the live volume.
+  std::vector<float> rows(face.values.size());
+  for (int t = 0; t < 24; ++t)
+    std::copy_n(face.values.begin() + (23 - t) * 24, 24, rows.begin() + t * 24);
+  glBindTexture(GL_TEXTURE_2D, live.textures[0].id());
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 24, 24, GL_RED, GL_FLOAT, rows.data());
+  glBindTexture(GL_TEXTURE_2D, 0);
+  Result<LiveMesh> two = live.volume->read_mesh();
+  ASSERT_TRUE(two) << two.error().message;
+  for (const auto& [c, gpu] : {std::pair<const OmniCase&, const LiveMesh&>{first, *one},
+                               std::pair<const OmniCase&, const LiveMesh&>{second, *two}}) {
+    AdaptiveReport report;
+    OmniAdaptiveDetail detail;
+    const Mesh cpu = cpu_omni_volume(c, 0.005, &report, &detail);
+    EXPECT_EQ(gpu.mesh.num_triangles(), cpu.num_triangles());
+    EXPECT_EQ(gpu.seam_rounds, detail.seam_rounds);
+    EXPECT_TRUE(triangle_set(gpu.mesh.indices, gpu.mesh.num_triangles()) ==
+                triangle_set(cpu.indices, cpu.num_triangles()));
+  }
+  EXPECT_NE(one->mesh.num_triangles(), two->mesh.num_triangles());
 }
 
 TEST(LiveAdaptive, OmniSeamsStayClosedWhenTheSeamRoundsAllowedDoNotConverge) {
