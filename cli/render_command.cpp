@@ -311,7 +311,7 @@ void add_render_command(CLI::App& app, Runner* run) {
       "live, raymarch: the light's shadow map (omni: six faces, a {face} path or a W x 6W strip)");
   cmd->add_flag("--adaptive", o->adaptive,
                 "live: the adaptive volume (build --adaptive --tessellation quadtree's quadtree), "
-                "made by compute shaders each frame; spot and directional lights");
+                "made by compute shaders each frame; spot, directional and omni lights");
   cmd->add_option("--max-error", o->max_error,
                   "Error bound of --adaptive, in world units along each texel ray")
       ->check(decimal_number())

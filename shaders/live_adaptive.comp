@@ -28,11 +28,31 @@
 //   LV_VERTICES  per bitmap word: its vertices' world positions and texel ids.
 //   LV_CLOSE     one invocation: the border ring's closing (spot fan, directional walls and cap),
 //                the draw command and the statistics.
+// An omni light's six faces run the per-face passes one face after the other (the host binds each
+// face's ranges of the per-face buffers and sets lv_face), in seam rounds as
+// build_adaptive_omni_volume runs them (volume/omni_adaptive.cpp): each round tessellates every
+// face from its threshold with its forced border vertices, then the seams' two borders are united
+// and a side that lacks some of its seam's vertices takes the union as its forced vertices; the
+// rounds end when no side changes. Passes of the omni volume:
+//   LV_SEAM_CONTROL one invocation before seam round s: whether the round before changed a side;
+//                the round's dispatch sizes (zero once the borders agree).
+//   LV_RESET     per face and cell: the threshold's split, plus the forced border vertices.
+//   LV_UNITE     per seam and border position: the union of the seam's two borders.
+//   LV_APPLY     per face side and position: a side that lacked some takes the union.
+//   LV_BASE      one invocation per face after its scans: the face's first vertex and triangle in
+//                the volume, its fix-up statistics.
+//   LV_SEAMS     one invocation: the seam strips and the corner triangles, the draw command and the
+//                statistics (instead of LV_CLOSE).
 // Cells: level L ≥ 1 holds nx(L) × ny(L) cells of 2^L quads a side, clipped at the far edges;
 // split[] holds them level after level (offsets in Params), 0 for an unsplit cell and r + 1 for a
 // cell split in round r (0: threshold and first balance).
 
 layout(local_size_x = 64) in;
+
+// The omni passes that need none of the per-texel buffers (a program holds 16 blocks at most).
+#if defined(LV_UNITE) || defined(LV_APPLY) || defined(LV_SEAM_CONTROL)
+#define LV_SEAM_PASS
+#endif
 
 layout(std430, binding = 0) readonly buffer Params {
   double m[16];  // clip to world, row-major (inverse(view) · inverse(projection))
@@ -45,7 +65,7 @@ layout(std430, binding = 0) readonly buffer Params {
   // The integers, as doubles: every member of the block 8-byte aligned (llvmpipe misread an int
   // at an offset of 4 mod 8 in this block, in some invocations).
   double p_width, p_height, p_flip_y, p_encoding;  // encoding: 0 window, 1 linear
-  double p_uniform_flag, p_standard, p_type, p_cells_total;
+  double p_uniform_flag, p_standard, p_type, p_cells_total;  // type: 0 spot, 1 directional, 2 omni
   double p_nx[16];
   double p_ny[16];
   double p_offset[17];  // first cell of level L (1..top) in split[]; [top + 1]: cells_total
@@ -63,8 +83,10 @@ layout(std430, binding = 0) readonly buffer Params {
 #define ny_at(L) int(p_ny[L])
 #define offset_at(L) int(p_offset[L])
 
+#ifndef LV_SEAM_PASS
 layout(std430, binding = 1) buffer Depths { double depth[]; };
 layout(std430, binding = 2) buffer Scales { double scale[]; };
+#endif
 layout(std430, binding = 3) coherent buffer Splits { uint split[]; };
 layout(std430, binding = 4) buffer Fails { uint fail[]; };
 // control[0..63]: fails per round; control[64 + k]: dispatch sizes written by LV_CONTROL
@@ -72,6 +94,7 @@ layout(std430, binding = 4) buffer Fails { uint fail[]; };
 // control[kDraw..kDraw + 4]: the indirect draw command.
 layout(std430, binding = 5) coherent buffer Control { uint control[]; };
 layout(std430, binding = 6) buffer Bits { uint bits[]; };
+#ifndef LV_SEAM_PASS
 layout(std430, binding = 7) buffer Counts { uint tri_count[]; };   // per cell
 layout(std430, binding = 16) buffer Offsets { uint tri_offset[]; };  // per cell: its first one
 layout(std430, binding = 8) buffer Ranks { uint word_rank[]; };    // per bitmap word
@@ -79,6 +102,40 @@ layout(std430, binding = 9) buffer Indices { uint indices[]; };
 layout(std430, binding = 10) buffer Positions { float positions[]; };
 layout(std430, binding = 11) buffer TexelIds { uint texel_ids[]; };
 layout(std430, binding = 13) buffer ScanSums { uint scan_sums[]; };
+#endif
+// The volume's state across faces (omni; zero for spot and directional lights): [0] the borders
+// agree (no more seam rounds), [1] seam rounds run, [8 + 4 face + side] the side changed in this
+// seam round, [32 + face] the face's first vertex ([38]: all the faces' vertices), [40 + face] its
+// first triangle ([46]: all the faces' triangles), [48 + face] 1 when the face sits this seam
+// round out (its forced vertices did not change: it would tessellate the same), [kOmniArgs +
+// 3 (kSeamSlots face + slot)] the seam round's dispatch sizes per face (LV_UNITE's and
+// LV_APPLY's: face 0's).
+// (Each block declared only for the passes that use it: a compute program holds 16 at most.)
+#if defined(LV_CONTROL) || defined(LV_TRIANGLES) || defined(LV_VERTICES) || \
+    defined(LV_SEAM_CONTROL) || defined(LV_UNITE) || defined(LV_APPLY) || defined(LV_BASE) || \
+    defined(LV_SEAMS)
+layout(std430, binding = 17) coherent buffer Omni { uint omni[]; };
+#endif
+#ifdef LV_RESET
+layout(std430, binding = 18) buffer Threshold { uint threshold_split[]; };  // per face: split[]
+                                                                            // after LV_OWN
+#endif
+// Per face side (4 face + GridSide) and position along it: W values each.
+#if defined(LV_RESET) || defined(LV_APPLY)
+layout(std430, binding = 19) buffer Forced { uint forced[]; };
+#endif
+#if defined(LV_UNITE) || defined(LV_APPLY)
+layout(std430, binding = 20) buffer Union { uint united[]; };
+#endif
+#ifdef LV_UNITE
+layout(std430, binding = 21) buffer AllSplits { uint all_split[]; };  // every face's split[]
+#endif
+#if defined(LV_VERTICES) || defined(LV_SEAMS)
+layout(std430, binding = 22) buffer BorderIndex { uint border_index[]; };  // vertex, or kNone
+#endif
+#ifdef LV_SEAM_CONTROL
+layout(std430, binding = 23) buffer SeamTemplate { uint seam_template[]; };
+#endif
 
 // The root's level, as a uniform (read from Params it came back 0 in some invocations of some
 // passes on llvmpipe).
@@ -86,6 +143,16 @@ uniform int top_level;
 uniform int level;   // LV_OWN, LV_BALANCE
 uniform int round_;  // LV_BALANCE, LV_TEST, LV_CONTROL
 uniform int rounds;  // LV_CONTROL, LV_CLOSE: the most fix-up rounds a frame runs
+uniform int lv_face;  // the face the per-face passes run on (0: spot, directional)
+uniform int split_stride;  // LV_UNITE: uints between two faces' split[] in all_split[]
+// Omni: the cube's twelve seams (face a, its GridSide, face b, its side, reversed, flip) and eight
+// corners (face, last_col, last_row, three times), as omni_adjacency lists them.
+uniform int seam_desc[72];
+uniform int corner_desc[72];
+
+const uint kNone = 0xFFFFFFFFu;
+const uint kOmniArgs = 128u;
+const int kSideTop = 0, kSideRight = 1, kSideBottom = 2, kSideLeft = 3;  // GridSide
 
 const int kBandRows = 16;
 const uint kStats = 160u;  // control[kStats + ...]: rounds used, converged, grid vertices, grid
@@ -118,7 +185,9 @@ ivec4 cell_box(int L, int i, int j) {
   return ivec4(i * s, j * s, min(i * s + s, width - 1), min(j * s + s, height - 1));
 }
 
+#ifndef LV_SEAM_PASS
 double d_at(int x, int y) { return depth[y * width + x]; }
+#endif
 
 // The level and coordinates of flattened cell c (levels from `first` on).
 ivec3 cell_of(int c, int first) {
@@ -185,7 +254,7 @@ void main() {
   if (v >= width * height) return;
   int col = v % width, row = v / width;
   int texture_row = flip_y == 1 ? row : height - 1 - row;
-  double stored = double(texelFetch(shadow_maps[0], ivec2(col, texture_row), 0).r);
+  double stored = double(live_fetch(lv_face, ivec2(col, texture_row)));
   double d;
   if (encoding == 0) {
     d = clamp(stored, 0.0LF, 1.0LF);
@@ -305,7 +374,9 @@ void main() {
 #ifdef LV_CONTROL
 void main() {
   if (invocation() != 0) return;
-  bool run = round_ == 1 || control[round_ - 1] != 0u;
+  // An omni face that sits the seam round out runs no fix-up round (omni[48 + face]; zero for
+  // spot and directional lights).
+  bool run = omni[48 + lv_face] == 0u && (round_ == 1 || control[round_ - 1] != 0u);
   int cells2 = cells_total - offset_at(min(2, top_level + 1));
   for (int L = 1; L <= top_level; ++L) {
     // L = 1: the test (cells of levels 2..top); L >= 2: the balance of level L.
@@ -524,13 +595,14 @@ void main() {
   int L = cl.x, i = cl.y, j = cl.z;
   ivec4 b = cell_box(L, i, j);
   ivec2 tri[18];
-  uint out_ = 3u * first;
+  uint out_ = 3u * (first + omni[40 + lv_face]);
+  uint vb = omni[32 + lv_face];
   if (L == 1 && split[c] != 0u) {
     for (int y = b.y; y < b.w; ++y)
       for (int x = b.x; x < b.z; ++x) {
         int k = cell_triangles(ivec4(x, y, x + 1, y + 1), 0, 0u, tri);
         for (int t = 0; t < 3 * k; t += 3) {
-          uint r0 = rank(tri[t]), r1 = rank(tri[t + 1]), r2 = rank(tri[t + 2]);
+          uint r0 = vb + rank(tri[t]), r1 = vb + rank(tri[t + 1]), r2 = vb + rank(tri[t + 2]);
           indices[out_] = r0;
           indices[out_ + 1u] = standard == 1 ? r1 : r2;
           indices[out_ + 2u] = standard == 1 ? r2 : r1;
@@ -541,7 +613,7 @@ void main() {
   }
   int k = cell_triangles(b, 1 << (L - 1), config_of(L, i, j, b), tri);
   for (int t = 0; t < 3 * k; t += 3) {
-    uint r0 = rank(tri[t]), r1 = rank(tri[t + 1]), r2 = rank(tri[t + 2]);
+    uint r0 = vb + rank(tri[t]), r1 = vb + rank(tri[t + 1]), r2 = vb + rank(tri[t + 2]);
     indices[out_] = r0;
     indices[out_ + 1u] = standard == 1 ? r1 : r2;
     indices[out_ + 2u] = standard == 1 ? r2 : r1;
@@ -556,15 +628,22 @@ void main() {
   int k = invocation();
   if (k >= words * height) return;
   int row = k / words, col0 = (k % words) * 32;
-  uint r = word_rank[k];
+  uint r = omni[32 + lv_face] + word_rank[k];
   for (uint w = bits[k]; w != 0u; w &= w - 1u) {
     int col = col0 + findLSB(w);
-    vec3 eye = live_grid_point(0, ivec2(col, row));
-    vec3 world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
+    vec3 eye = live_grid_point(lv_face, ivec2(col, row));
+    vec3 world = (live_eye_to_world[lv_face] * vec4(eye, 1.0)).xyz;
     positions[3u * r] = world.x;
     positions[3u * r + 1u] = world.y;
     positions[3u * r + 2u] = world.z;
-    texel_ids[r] = uint(row * width + col);
+    texel_ids[r] = uint((lv_face * height + row) * width + col);
+    if (type == 2) {  // omni: the border vertices' indices, for LV_SEAMS
+      uint side0 = uint(4 * lv_face) * uint(width);
+      if (row == 0) border_index[side0 + uint(kSideTop * width + col)] = r;
+      if (row == height - 1) border_index[side0 + uint(kSideBottom * width + col)] = r;
+      if (col == 0) border_index[side0 + uint(kSideLeft * width + row)] = r;
+      if (col == width - 1) border_index[side0 + uint(kSideRight * width + row)] = r;
+    }
     ++r;
   }
 }
@@ -647,6 +726,184 @@ void main() {
   control[kStats] = splitting;
   control[kStats + 1u] = control[uint(rounds)] == 0u ? 1u : 0u;  // converged
   control[kStats + 4u] = nv + closing_vertices;
+  control[kStats + 5u] = triangles;
+}
+#endif
+
+#ifdef LV_SEAM_CONTROL
+// Seam round round_ (1-based; the host's rounds + 1 after the last, to conclude): the round before
+// changed no side → the borders agree and no more rounds run; else the faces with a changed side
+// tessellate again (all six in round 1).
+uniform int seam_slots;  // dispatch slots of a round (3 uints each)
+void main() {
+  if (invocation() != 0) return;
+  bool dirty[6] = bool[6](true, true, true, true, true, true);
+  if (omni[0] == 0u && round_ > 1) {
+    bool changed = false;
+    for (int k = 0; k < 24; ++k) {
+      if (k % 4 == 0) dirty[k / 4] = false;
+      if (omni[8 + k] != 0u) changed = dirty[k / 4] = true;
+      omni[8 + k] = 0u;
+    }
+    if (!changed) omni[0] = 1u;
+  }
+  bool run = omni[0] == 0u && round_ <= rounds;
+  if (run) omni[1] = uint(round_);
+  for (int f = 0; f < 6; ++f) {
+    bool face_runs = run && dirty[f];
+    omni[48 + f] = face_runs ? 0u : 1u;
+    for (int k = 0; k < 3 * seam_slots; ++k) {
+      // LV_UNITE's and LV_APPLY's slots (face 0's) run whenever the round does.
+      bool runs = k / 3 >= 16 ? run : face_runs;
+      omni[kOmniArgs + uint(3 * seam_slots * f + k)] = runs ? seam_template[k] : 0u;
+    }
+  }
+}
+#endif
+
+#ifdef LV_RESET
+// Refiner::threshold then Refiner::force_border: a cell on a side is split when a forced position
+// lies strictly inside its span along that side.
+bool forced_inside(int side, int from, int to) {
+  uint base = uint(4 * lv_face + side) * uint(width);
+  for (int p = from + 1; p < to; ++p)
+    if (forced[base + uint(p)] != 0u) return true;
+  return false;
+}
+
+void main() {
+  int c = invocation();
+  if (c >= cells_total) return;
+  if (c == 0)
+    for (int k = 0; k < 64; ++k) control[k] = 0u;  // the fix-up rounds' counts
+  fail[c] = 0u;
+  uint s = threshold_split[c];
+  if (s == 0u) {
+    ivec3 cl = cell_of(c, 1);
+    int L = cl.x, i = cl.y, j = cl.z;
+    ivec4 b = cell_box(L, i, j);
+    if ((j == 0 && forced_inside(kSideTop, b.x, b.z)) ||
+        (j == ny_at(L) - 1 && forced_inside(kSideBottom, b.x, b.z)) ||
+        (i == 0 && forced_inside(kSideLeft, b.y, b.w)) ||
+        (i == nx_at(L) - 1 && forced_inside(kSideRight, b.y, b.w)))
+      s = 1u;
+  }
+  split[c] = s;
+}
+#endif
+
+#if defined(LV_UNITE)
+// Whether position p along `side` of face f is a vertex of the face's tessellation: a corner, or
+// the midpoint of a split cell's side (its level: one above p's alignment; deeper cells keep it a
+// corner, and no configuration splits a side on the border).
+bool border_vertex(int f, int side, int p) {
+  if (p == 0 || p == width - 1) return true;
+  int L = findLSB(p) + 1, k = p >> L;
+  int i = side == kSideLeft ? 0 : side == kSideRight ? nx_at(L) - 1 : k;
+  int j = side == kSideTop ? 0 : side == kSideBottom ? ny_at(L) - 1 : k;
+  return all_split[f * split_stride + cell_index(L, i, j)] != 0u;
+}
+
+void main() {
+  int id = invocation();
+  if (id >= 12 * width) return;
+  int s = id / width, p = id - s * width;
+  int fa = seam_desc[6 * s], sa = seam_desc[6 * s + 1], fb = seam_desc[6 * s + 2],
+      sb = seam_desc[6 * s + 3];
+  int pb = seam_desc[6 * s + 4] == 1 ? width - 1 - p : p;
+  bool va = border_vertex(fa, sa, p), vb = border_vertex(fb, sb, pb);
+  bool u = va || vb;
+  united[uint(4 * fa + sa) * uint(width) + uint(p)] = u ? 1u : 0u;
+  united[uint(4 * fb + sb) * uint(width) + uint(pb)] = u ? 1u : 0u;
+  if (u && !va) omni[8 + 4 * fa + sa] = 1u;
+  if (u && !vb) omni[8 + 4 * fb + sb] = 1u;
+}
+#endif
+
+#ifdef LV_APPLY
+void main() {
+  int id = invocation();
+  if (id >= 24 * width) return;
+  if (omni[8 + id / width] != 0u) forced[id] = united[id];
+}
+#endif
+
+#ifdef LV_BASE
+// After face lv_face's scans: where the next face's vertices and triangles begin; the face's
+// fix-up statistics as LV_CLOSE writes them.
+void main() {
+  if (invocation() != 0) return;
+  omni[32 + lv_face + 1] = omni[32 + lv_face] + control[kStats + 2u];
+  omni[40 + lv_face + 1] = omni[40 + lv_face] + control[kStats + 3u];
+  uint splitting = 0u;
+  for (int r = 1; r <= rounds; ++r)
+    if (control[r] != 0u) ++splitting;
+  control[kStats] = splitting;
+  control[kStats + 1u] = control[uint(rounds)] == 0u ? 1u : 0u;
+}
+#endif
+
+#ifdef LV_SEAMS
+uint out_;
+void emit(uint a, uint b, uint c, bool flip) {
+  indices[out_] = a;
+  indices[out_ + 1u] = flip ? c : b;
+  indices[out_ + 2u] = flip ? b : c;
+  out_ += 3u;
+}
+
+uint border_at(int f, int side, int p) { return border_index[uint(4 * f + side) * uint(width) + uint(p)]; }
+
+// The next vertex after position p (in face a's numbering) along the seam's side of face f, or
+// width when none.
+int next_on(int f, int side, bool reversed, int p) {
+  for (int q = p + 1; q < width; ++q)
+    if (border_at(f, side, reversed ? width - 1 - q : q) != kNone) return q;
+  return width;
+}
+
+// Each seam zips its two borders from position 0 to W − 1, taking face a's next vertex first on a
+// tie: where the borders agree (the rounds converged) build's strip, (A_k, A_k+1, B_k) and
+// (A_k+1, B_k+1, B_k); closed either way.
+void main() {
+  if (invocation() != 0) return;
+  uint nv = omni[38], nt = omni[46];
+  out_ = 3u * nt;
+  for (int s = 0; s < 12; ++s) {
+    int fa = seam_desc[6 * s], sa = seam_desc[6 * s + 1], fb = seam_desc[6 * s + 2],
+        sb = seam_desc[6 * s + 3];
+    bool reversed = seam_desc[6 * s + 4] == 1, flip = seam_desc[6 * s + 5] == 1;
+    int pa = 0, pb = 0;
+    uint a0 = border_at(fa, sa, 0), b0 = border_at(fb, sb, reversed ? width - 1 : 0);
+    while (pa < width - 1 || pb < width - 1) {
+      int na = next_on(fa, sa, false, pa), nb = next_on(fb, sb, reversed, pb);
+      if (na <= nb) {
+        uint a1 = border_at(fa, sa, na);
+        emit(a0, a1, b0, flip);
+        a0 = a1, pa = na;
+      } else {
+        uint b1 = border_at(fb, sb, reversed ? width - 1 - nb : nb);
+        emit(a0, b1, b0, flip);
+        b0 = b1, pb = nb;
+      }
+    }
+  }
+  for (int k = 0; k < 8; ++k) {
+    uint v[3];
+    for (int m = 0; m < 3; ++m) {
+      int f = corner_desc[9 * k + 3 * m], last_col = corner_desc[9 * k + 3 * m + 1],
+          last_row = corner_desc[9 * k + 3 * m + 2];
+      v[m] = border_at(f, last_row == 1 ? kSideBottom : kSideTop, last_col == 1 ? width - 1 : 0);
+    }
+    emit(v[0], v[1], v[2], false);
+  }
+  uint triangles = out_ / 3u;
+  control[kDraw + 0u] = 3u * triangles;
+  control[kDraw + 1u] = 1u;
+  control[kDraw + 2u] = 0u;
+  control[kDraw + 3u] = 0u;
+  control[kDraw + 4u] = 0u;
+  control[kStats + 4u] = nv;
   control[kStats + 5u] = triangles;
 }
 #endif

@@ -20,6 +20,7 @@
 
 #include "support/analytic_scene.h"
 #include "support/gl_test_context.h"
+#include "support/omni_scene.h"
 #include "support/test_support.h"
 
 namespace lightvol {
@@ -215,6 +216,37 @@ TEST(RenderCommand, LiveAdaptiveDrawsTheAirlightOfBuildsQuadtreeVolume) {
                          dir + "/x.exr'");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "lightvol: --max-error: applies with --adaptive only\n");
+}
+
+TEST(RenderCommand, LiveAdaptiveOmniDrawsTheAirlightOfBuildsQuadtreeVolume) {
+  REQUIRE_GL_CONTEXT();
+  test::TempDir tmp;
+  const std::string dir = tmp.path();
+  write_scene(dir, {4, 3, 3}, {-1, 1, -3});
+  // The room with a pillar and a ball (tests/support/omni_scene.h), six 24² faces.
+  std::ofstream(dir + "/omni.json") << test::omni_scene_light_json();
+  const CubeFaces cube = test::omni_scene(24);
+  const char* names[kOmniFaces] = {"px", "nx", "py", "ny", "pz", "nz"};
+  for (int f = 0; f < kOmniFaces; ++f)
+    ASSERT_TRUE(write_depth_image(dir + "/omni_" + names[f] + ".exr", cube.faces[f]));
+  const std::string faces = "'" + dir + "/omni_{face}.exr'";
+  const std::string args = "--light '" + dir + "/omni.json' --camera '" + dir +
+                           "/camera.json' --depth '" + dir + "/camdepth.exr' --medium '" + dir +
+                           "/medium.json' --quiet";
+  test::CommandResult built =
+      test::run_lightvol("build " + faces + " --light '" + dir + "/omni.json' --adaptive " +
+                         "--tessellation quadtree --max-error 0.01 --out '" + dir + "/omni.ply'");
+  ASSERT_EQ(built.exit_code, 0) << built.err;
+  test::CommandResult vol = test::run_lightvol("render '" + dir + "/omni.ply' " + args +
+                                               " --out '" + dir + "/volume.exr'");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  test::CommandResult live = test::run_lightvol(
+      "render " + args + " --method live --adaptive --max-error 0.01 --shadow-map " + faces +
+      " --out '" + dir + "/live.exr' --compare '" + dir + "/volume.exr'");
+  ASSERT_EQ(live.exit_code, 0) << live.err;
+  // The same triangles (tests/render/live_adaptive_test), drawn by the same passes.
+  EXPECT_LT(number_after(live.out, "relative L2 "), 1e-4) << live.out;
+  EXPECT_GT(number_after(live.out, "mean "), 0) << live.out;
 }
 
 TEST(RenderCommand, RejectsBadInputNamingTheFile) {

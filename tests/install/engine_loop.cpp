@@ -8,6 +8,10 @@
 // image must be that frame's to 1e-3 relative L2, lit somewhere, zero where the reference is, and
 // differ between frames where the box moved.
 //
+// The context is the engine's own, made with EGL as GLFW or SDL would make one, and lightvol's
+// OpenGL functions are loaded through the engine's loader (lightvol::gl::load_functions with
+// eglGetProcAddress); where CMake finds no EGL to link, through lightvol::gl::Context instead.
+//
 //   engine_loop [SHADER_DIR]   (default: the package's lightvol_SHADER_DIR, built in)
 //
 // Exit 0 when every frame passes; 1 on a failed check; 77 (and a line saying why) when no OpenGL
@@ -30,10 +34,67 @@
 #include <lightvol/render/reference.h>
 #include <lightvol/volume/static_volume.h>
 
+#ifdef ENGINE_OWN_EGL
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#endif
+
 using namespace lightvol;
 using namespace lightvol::gl;
 
 namespace {
+
+#ifdef ENGINE_OWN_EGL
+// The engine's own headless OpenGL 4.5 core context (Mesa's surfaceless platform, else the
+// default display), current on this thread while it lives.
+struct EngineContext {
+  EGLDisplay display = EGL_NO_DISPLAY;
+  EGLContext context = EGL_NO_CONTEXT;
+  EngineContext() = default;
+  EngineContext(const EngineContext&) = delete;
+  EngineContext& operator=(const EngineContext&) = delete;
+  ~EngineContext() {
+    if (display == EGL_NO_DISPLAY) return;
+    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
+    eglTerminate(display);
+  }
+  // "" when current; else what failed.
+  std::string make() {
+    const auto platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+        eglGetProcAddress("eglGetPlatformDisplayEXT"));
+    if (platform_display != nullptr)
+      display = platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    if (display == EGL_NO_DISPLAY || eglInitialize(display, nullptr, nullptr) != EGL_TRUE) {
+      display = eglGetDisplay(EGL_DEFAULT_DISPLAY);
+      if (display == EGL_NO_DISPLAY || eglInitialize(display, nullptr, nullptr) != EGL_TRUE) {
+        display = EGL_NO_DISPLAY;
+        return "no EGL display";
+      }
+    }
+    if (eglBindAPI(EGL_OPENGL_API) != EGL_TRUE) return "eglBindAPI(EGL_OPENGL_API) failed";
+    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                 4,
+                                 EGL_CONTEXT_MINOR_VERSION,
+                                 5,
+                                 EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                 EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                                 EGL_NONE};
+    context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
+    if (context == EGL_NO_CONTEXT) return "cannot create an OpenGL 4.5 core context";
+    if (eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context) != EGL_TRUE)
+      return "cannot make the context current";
+    return "";
+  }
+};
+#endif
+
+// Exit code when there is no OpenGL 4.5 context: 77 (skipped), or 1 under LIGHTVOL_REQUIRE_GL.
+int no_context(const std::string& why) {
+  const char* require = std::getenv("LIGHTVOL_REQUIRE_GL");
+  std::fprintf(stderr, "engine_loop: no OpenGL 4.5 context: %s\n", why.c_str());
+  return require && *require && std::string(require) != "0" ? 1 : 77;
+}
 
 int fail(const std::string& message) {
   std::fprintf(stderr, "engine_loop: %s\n", message.c_str());
@@ -89,14 +150,18 @@ int main(int argc, char** argv) {
   const std::string shader = read_file(dir + "/airlight.glsl");
   if (shader.empty()) return fail(dir + "/airlight.glsl: not installed");
 
+#ifdef ENGINE_OWN_EGL
+  EngineContext context;
+  if (const std::string why = context.make(); !why.empty()) return no_context(why);
+  if (Status loaded = load_functions(eglGetProcAddress); !loaded)
+    return fail(loaded.error().message);
+  std::printf("engine_loop: the engine's EGL context, %s\n",
+              reinterpret_cast<const char*>(glGetString(GL_RENDERER)));
+#else
   Result<std::unique_ptr<Context>> context = Context::create();
-  if (!context) {
-    const char* require = std::getenv("LIGHTVOL_REQUIRE_GL");
-    std::fprintf(stderr, "engine_loop: no OpenGL 4.5 context: %s\n",
-                 context.error().message.c_str());
-    return require && *require && std::string(require) != "0" ? 1 : 77;
-  }
+  if (!context) return no_context(context.error().message);
   std::printf("engine_loop: %s\n", (*context)->renderer().c_str());
+#endif
 
   Result<Light> light = parse_light(
       R"({"type": "spot", "position": [0.3, 4, 0.2], "direction": [0, -1, 0], "up": [0, 0, -1],

@@ -1,7 +1,8 @@
 // The adaptive live volume (LiveOptions::max_error; render/live_adaptive.h): the compute passes
 // make build's quadtree (`--adaptive --tessellation quadtree`) at the same bound, triangle for
-// triangle; the read-back volume is closed, passes the light check and meets the bound at every
-// texel (rays cast against it); it draws the CPU-built volume's airlight; bad options are refused.
+// triangle (omni: build_adaptive_omni_volume's, seam rounds and seams included); the read-back
+// volume is closed, passes the light check and meets the bound at every texel (rays cast against
+// it); it draws the CPU-built volume's airlight; bad options are refused.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,10 +17,12 @@
 #include <lightvol/render/live_volume.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
+#include <lightvol/volume/omni_adaptive.h>
 
 #include "support/adaptive_support.h"
 #include "support/analytic_scene.h"
 #include "support/gl_test_context.h"
+#include "support/omni_scene.h"
 #include "support/test_support.h"
 
 namespace lightvol {
@@ -314,11 +317,237 @@ TEST(LiveAdaptive, RefusesWhatItCannotDo) {
   EXPECT_NE(message(spot, std::nan(""), 32).find("max_error: expected a finite number"),
             std::string::npos);
   EXPECT_EQ(message(spot, 0.1, 0), "live volume: max_rounds: expected 1 to 63, got 0");
+  {
+    LiveOptions o;
+    o.max_error = 0.1;
+    o.max_seam_rounds = 0;
+    Result<std::unique_ptr<LiveVolume>> live = LiveVolume::create(spot, gl_map, o);
+    ASSERT_FALSE(live);
+    EXPECT_EQ(live.error().message, "live volume: max_seam_rounds: expected 1 to 64, got 0");
+  }
   Light radial = spot;
   radial.depth = DepthEncoding::radial;
   EXPECT_NE(message(radial, 0.1, 32).find("the light's \"depth\" is \"radial\""),
             std::string::npos);
   EXPECT_EQ(message(spot, 0.1, 32), "");
+}
+
+// The omni cases: the room with a pillar and a ball (tests/support/omni_scene.h) on faces whose
+// sides are and are not 2^k + 1, in window depth, and once in linear depth.
+struct OmniCase {
+  std::string name;
+  Light light;
+  CubeFaces cube;
+};
+
+std::vector<OmniCase> omni_cases() {
+  std::vector<OmniCase> out;
+  const Light window = test::light_from_json(test::omni_scene_light_json());
+  for (const int w : {17, 24, 37})
+    out.push_back({"omni window " + std::to_string(w), window, test::omni_scene(w)});
+  // The same room in linear depth (eye −z from the window depth, rounded to float).
+  Light linear = window;
+  linear.depth = DepthEncoding::linear;
+  CubeFaces cube = test::omni_scene(24);
+  const Mat4d& p = linear.projection;
+  for (DepthImage& face : cube.faces)
+    for (float& d : face.values) {
+      const double ndc = 2.0 * d - 1;
+      d = static_cast<float>(-(ndc * p(3, 3) - p(2, 3)) / (p(2, 2) - ndc * p(3, 2)));
+    }
+  out.push_back({"omni linear 24", linear, cube});
+  // flip_y: the same images read bottom row first (other face frames, other seams).
+  Light flipped = window;
+  flipped.flip_y = true;
+  out.push_back({"omni window 24 flip_y", flipped, test::omni_scene(24)});
+  // The cascading plateaus on every face (linear depth about 0.5 from the light): fix-up rounds.
+  CubeFaces steps;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    steps.faces[f] = cascading_steps(40);
+    steps.sources[f] = omni_face_name(f);
+  }
+  out.push_back({"omni linear steps 40", linear, steps});
+  return out;
+}
+
+struct LiveOmni {
+  std::vector<TextureHandle> textures;
+  std::unique_ptr<LiveVolume> volume;
+};
+
+LiveOmni make_live_omni(const OmniCase& c, double e) {
+  LiveOmni live;
+  std::vector<GlShadowMap> maps;
+  for (const DepthImage& face : c.cube.faces) {
+    live.textures.push_back(upload_shadow_map(c.light, face));
+    maps.push_back({live.textures.back().id(), face.width, face.height});
+  }
+  LiveOptions options;
+  options.max_error = e;
+  Result<std::unique_ptr<LiveVolume>> made = LiveVolume::create(c.light, maps, options);
+  EXPECT_TRUE(made) << made.error().message;
+  if (made) live.volume = std::move(*made);
+  return live;
+}
+
+Mesh cpu_omni_volume(const OmniCase& c, double e, AdaptiveReport* report,
+                     OmniAdaptiveDetail* detail) {
+  AdaptiveOptions o;
+  o.tessellation = Tessellation::quadtree;
+  o.max_error = e;
+  Result<Mesh> mesh = build_adaptive_omni_volume(c.light, c.cube, {}, o, report, detail);
+  EXPECT_TRUE(mesh) << mesh.error().message;
+  return mesh ? std::move(*mesh) : Mesh{};
+}
+
+TEST(LiveAdaptive, OmniIsBuildsAdaptiveOmniVolumeTriangleForTriangle) {
+  REQUIRE_GL_CONTEXT();
+  for (const OmniCase& c : omni_cases()) {
+    for (const double e : c.name.find("steps") != std::string::npos
+                              ? std::vector<double>{0.001, 0.0003, 0.0001}
+                              : std::vector<double>{0.5, 0.05, 0.005, 0.0005}) {
+      SCOPED_TRACE(c.name + " E = " + std::to_string(e));
+      AdaptiveReport report;
+      OmniAdaptiveDetail detail;
+      const Mesh cpu = cpu_omni_volume(c, e, &report, &detail);
+      LiveOmni live = make_live_omni(c, e);
+      ASSERT_TRUE(live.volume);
+      Result<LiveMesh> gpu = live.volume->read_mesh();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      std::printf("  %-18s E %-6g triangles GPU %zu CPU %zu, seam rounds %d/%d, fix-up %d/%d\n",
+                  c.name.c_str(), e, gpu->mesh.num_triangles(), cpu.num_triangles(),
+                  gpu->seam_rounds, detail.seam_rounds, gpu->fixup_rounds, report.fixup_rounds);
+      EXPECT_TRUE(gpu->converged);
+      EXPECT_TRUE(gpu->seams_agree);
+      EXPECT_EQ(gpu->seam_rounds, detail.seam_rounds);
+      EXPECT_EQ(gpu->fixup_rounds, report.fixup_rounds);
+      EXPECT_EQ(gpu->grid_triangles, report.grid_triangles);
+      ASSERT_EQ(gpu->mesh.num_vertices(), cpu.num_vertices());
+      ASSERT_EQ(gpu->mesh.num_triangles(), cpu.num_triangles());
+      // The faces' triangles as sets (each face's vertices in texel order on both sides); the
+      // seams and corners in build's order, index for index.
+      EXPECT_TRUE(triangle_set(gpu->mesh.indices, gpu->grid_triangles) ==
+                  triangle_set(cpu.indices, report.grid_triangles));
+      EXPECT_TRUE(std::equal(gpu->mesh.indices.begin() + 3 * report.grid_triangles,
+                             gpu->mesh.indices.end(),
+                             cpu.indices.begin() + 3 * report.grid_triangles));
+      double scale = 0, worst = 0;
+      for (std::size_t i = 0; i < cpu.positions.size(); ++i) {
+        scale = std::max(scale, static_cast<double>(std::abs(cpu.positions[i])));
+        worst = std::max(worst,
+                         static_cast<double>(std::abs(gpu->mesh.positions[i] - cpu.positions[i])));
+      }
+      EXPECT_LE(worst, 2e-6 * scale);
+    }
+  }
+}
+
+TEST(LiveAdaptive, OmniIsClosedPassesTheLightCheckAndMeetsTheBoundAtEveryTexel) {
+  REQUIRE_GL_CONTEXT();
+  const std::vector<OmniCase> all = omni_cases();
+  for (const OmniCase& c : {all[0], all[3], all[4], all[5]}) {
+    for (const double e : {0.05, 0.005, 0.0003}) {
+      SCOPED_TRACE(c.name + " E = " + std::to_string(e));
+      LiveOmni live = make_live_omni(c, e);
+      ASSERT_TRUE(live.volume);
+      Result<LiveMesh> gpu = live.volume->read_mesh();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      const CheckReport check = check_volume_linear(gpu->mesh, &c.light);
+      EXPECT_TRUE(check.valid()) << check.first_failure();
+      EXPECT_NE(check.proof, NestingProof::none);
+      EXPECT_LE(test::omni_ray_error(gpu->mesh, c.light, c.cube), e * (1 + 1e-4) + 5e-5);
+    }
+  }
+}
+
+TEST(LiveAdaptive, OmniFollowsTheFacesFromFrameToFrame) {
+  REQUIRE_GL_CONTEXT();
+  const OmniCase first = omni_cases()[1];
+  OmniCase second = first;
+  // Something close to the light in front of face +X (a corner of its map), between frames.
+  DepthImage& face = second.cube.faces[0];
+  for (int r = 0; r < 9; ++r)
+    for (int col = 15; col < 24; ++col) face.values[static_cast<std::size_t>(r) * 24 + col] = 0.2f;
+  LiveOmni live = make_live_omni(first, 0.005);
+  ASSERT_TRUE(live.volume);
+  Result<LiveMesh> one = live.volume->read_mesh();
+  ASSERT_TRUE(one) << one.error().message;
+  // The same texture, new contents (GL row t is image row 23 - t): no call to the live volume.
+  std::vector<float> rows(face.values.size());
+  for (int t = 0; t < 24; ++t)
+    std::copy_n(face.values.begin() + (23 - t) * 24, 24, rows.begin() + t * 24);
+  glBindTexture(GL_TEXTURE_2D, live.textures[0].id());
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 24, 24, GL_RED, GL_FLOAT, rows.data());
+  glBindTexture(GL_TEXTURE_2D, 0);
+  Result<LiveMesh> two = live.volume->read_mesh();
+  ASSERT_TRUE(two) << two.error().message;
+  for (const auto& [c, gpu] : {std::pair<const OmniCase&, const LiveMesh&>{first, *one},
+                               std::pair<const OmniCase&, const LiveMesh&>{second, *two}}) {
+    AdaptiveReport report;
+    OmniAdaptiveDetail detail;
+    const Mesh cpu = cpu_omni_volume(c, 0.005, &report, &detail);
+    EXPECT_EQ(gpu.mesh.num_triangles(), cpu.num_triangles());
+    EXPECT_EQ(gpu.seam_rounds, detail.seam_rounds);
+    EXPECT_TRUE(triangle_set(gpu.mesh.indices, gpu.mesh.num_triangles()) ==
+                triangle_set(cpu.indices, cpu.num_triangles()));
+  }
+  EXPECT_NE(one->mesh.num_triangles(), two->mesh.num_triangles());
+}
+
+TEST(LiveAdaptive, OmniSeamsStayClosedWhenTheSeamRoundsAllowedDoNotConverge) {
+  REQUIRE_GL_CONTEXT();
+  const OmniCase c = omni_cases()[2];
+  AdaptiveReport report;
+  OmniAdaptiveDetail detail;
+  cpu_omni_volume(c, 0.005, &report, &detail);
+  ASSERT_GE(detail.seam_rounds, 2);
+  LiveOmni live = make_live_omni(c, 0.005);
+  ASSERT_TRUE(live.volume);
+  std::vector<GlShadowMap> maps = live.volume->shadow_maps();
+  LiveOptions options;
+  options.max_error = 0.005;
+  options.max_seam_rounds = 1;
+  Result<std::unique_ptr<LiveVolume>> one = LiveVolume::create(c.light, maps, options);
+  ASSERT_TRUE(one) << one.error().message;
+  Result<LiveMesh> gpu = (*one)->read_mesh();
+  ASSERT_TRUE(gpu) << gpu.error().message;
+  EXPECT_EQ(gpu->seam_rounds, 1);
+  EXPECT_FALSE(gpu->seams_agree);
+  EXPECT_FALSE(gpu->converged);
+  // Each seam zips its two different borders: still closed and outward.
+  const CheckReport check = check_volume_linear(gpu->mesh, &c.light);
+  EXPECT_TRUE(check.valid()) << check.first_failure();
+}
+
+TEST(LiveAdaptive, OmniDrawsTheAirlightOfTheCpuBuiltAdaptiveVolume) {
+  REQUIRE_GL_CONTEXT();
+  const OmniCase c = omni_cases()[2];
+  const double e = 0.01;
+  AdaptiveReport report;
+  OmniAdaptiveDetail detail;
+  const Mesh cpu = cpu_omni_volume(c, e, &report, &detail);
+  LiveOmni live = make_live_omni(c, e);
+  ASSERT_TRUE(live.volume);
+  // Inside the room, looking past the pillar towards the window; then from the ball's side.
+  for (auto [eye, target] :
+       {std::pair<Vec3d, Vec3d>{{4, 3, 3}, {-1, 1, -3}}, {{-4, 1, -3}, {2, 2, 2}}}) {
+    const RenderScene scene = test::make_render_scene(test::make_camera(eye, target, 64, 48),
+                                                      c.light, test::render_test_medium());
+    Result<std::unique_ptr<GlVolumeRenderer>> mesh_renderer = GlVolumeRenderer::create(scene);
+    Result<std::unique_ptr<GlVolumeRenderer>> live_renderer = GlVolumeRenderer::create(scene);
+    ASSERT_TRUE(mesh_renderer && live_renderer);
+    (*mesh_renderer)->set_volume(cpu);
+    const Image reference = (*mesh_renderer)->render();
+    ASSERT_TRUE((*live_renderer)->set_volume(*live.volume, LiveDraw::two_pass));
+    const Image image = (*live_renderer)->render();
+    const double l2 = compare_images(image, reference).relative_l2;
+    std::printf("  omni eye (%g, %g, %g): %zu triangles, relative L2 %.2e\n", eye.x, eye.y, eye.z,
+                cpu.num_triangles(), l2);
+    EXPECT_LE(l2, 0.005);
+    double sum = 0;
+    for (const double v : reference.values) sum += v;
+    EXPECT_GT(sum, 0);
+  }
 }
 
 }  // namespace

@@ -113,4 +113,45 @@ void expect_valid_volume(const Mesh& mesh) {
   EXPECT_GT(signed_volume(mesh), 0);
 }
 
+namespace {
+Vec3d vertex_of(const Mesh& mesh, std::uint32_t v) {
+  const auto p = mesh.vertex(v);
+  return {p[0], p[1], p[2]};
+}
+}  // namespace
+
+double omni_ray_error(const Mesh& mesh, const Light& light, const CubeFaces& cube) {
+  const int w = cube.size();
+  double worst = 0;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    const Unprojector u(light, w, w, f, Space::world);
+    for (int r = 0; r < w; ++r)
+      for (int c = 0; c < w; ++c) {
+        Vec3d p;
+        EXPECT_TRUE(u.point(c, r, cube.faces[f].at(c, r), &p));
+        const Vec3d o = light.position, d = normalize(p - o);
+        double hit = -1;
+        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+          const auto [i, j, k] = mesh.triangle(t);
+          const Vec3d a = vertex_of(mesh, i), e1 = vertex_of(mesh, j) - a,
+                      e2 = vertex_of(mesh, k) - a;
+          const Vec3d pv = cross(d, e2);
+          const double det = dot(e1, pv);
+          if (det == 0) continue;
+          const Vec3d tv = o - a;
+          const double uu = dot(tv, pv) / det;
+          if (uu < -1e-9 || uu > 1 + 1e-9) continue;
+          const Vec3d qv = cross(tv, e1);
+          const double vv = dot(d, qv) / det;
+          if (vv < -1e-9 || uu + vv > 1 + 1e-9) continue;
+          const double s = dot(e2, qv) / det;
+          if (s > 0) hit = std::max(hit, s);
+        }
+        EXPECT_GT(hit, 0) << "face " << f << " texel " << c << "," << r << ": ray leaves nothing";
+        worst = std::max(worst, std::abs(hit - length(p - o)));
+      }
+  }
+  return worst;
+}
+
 }  // namespace lightvol::test

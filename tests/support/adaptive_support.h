@@ -3,6 +3,7 @@
 #pragma once
 
 #include <lightvol/core/mesh.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/light/light.h>
 
@@ -19,6 +20,11 @@ struct RayErrors {
 // the volume's surface there; its distance to the texel's true point is the texel's error. A
 // texel no triangle covers is a test failure (the first five are reported).
 RayErrors ray_errors(const Mesh& mesh, const Light& light, const DepthImage& depth);
+
+// The largest distance, over every texel of every face of an omni light's `cube`, between the
+// texel's point and where its ray (from the light) leaves `mesh`: brute force over all triangles
+// (small maps only). A ray that leaves no triangle is a test failure.
+double omni_ray_error(const Mesh& mesh, const Light& light, const CubeFaces& cube);
 
 // Linear depth (world units along the view axis) of a scene under the test lights: a sloped floor,
 // box occluders with sharp edges, 1-texel bars, a sphere.

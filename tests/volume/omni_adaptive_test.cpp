@@ -12,6 +12,7 @@
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
+#include "support/adaptive_support.h"
 #include "support/omni_scene.h"
 #include "support/test_support.h"
 
@@ -52,41 +53,6 @@ double solid_angle(Vec3d a, Vec3d b, Vec3d c) {
   return ::testing::AssertionSuccess();
 }
 
-// The largest distance, over every texel of every face, between the texel's point and where its
-// ray (from the light) leaves the mesh: brute force over all triangles.
-double largest_texel_error(const Mesh& mesh, const Light& light, const CubeFaces& cube) {
-  const int w = cube.size();
-  double worst = 0;
-  for (int f = 0; f < kOmniFaces; ++f) {
-    const Unprojector u(light, w, w, f, Space::world);
-    for (int r = 0; r < w; ++r)
-      for (int c = 0; c < w; ++c) {
-        Vec3d p;
-        EXPECT_TRUE(u.point(c, r, cube.faces[f].at(c, r), &p));
-        const Vec3d o = light.position, d = normalize(p - o);
-        double hit = -1;
-        for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
-          const auto [i, j, k] = mesh.triangle(t);
-          const Vec3d a = vertex(mesh, i), e1 = vertex(mesh, j) - a, e2 = vertex(mesh, k) - a;
-          const Vec3d pv = cross(d, e2);
-          const double det = dot(e1, pv);
-          if (det == 0) continue;
-          const Vec3d tv = o - a;
-          const double uu = dot(tv, pv) / det;
-          if (uu < -1e-9 || uu > 1 + 1e-9) continue;
-          const Vec3d qv = cross(tv, e1);
-          const double vv = dot(d, qv) / det;
-          if (vv < -1e-9 || uu + vv > 1 + 1e-9) continue;
-          const double s = dot(e2, qv) / det;
-          if (s > 0) hit = std::max(hit, s);
-        }
-        EXPECT_GT(hit, 0) << "face " << f << " texel " << c << "," << r << ": ray leaves nothing";
-        worst = std::max(worst, std::abs(hit - length(p - o)));
-      }
-  }
-  return worst;
-}
-
 TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
   const Light light = scene_light();
   for (int w : {16, 37}) {
@@ -111,7 +77,7 @@ TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
         EXPECT_EQ(mesh->num_triangles(), report.grid_triangles + detail.seam_triangles + 8);
         EXPECT_LE(mesh->num_triangles(), 12u * w * w - 4);  // never more than the static volume
         if (w == 16) {
-          EXPECT_LE(largest_texel_error(*mesh, light, cube), bound * (1 + 1e-4) + 1e-5);
+          EXPECT_LE(test::omni_ray_error(*mesh, light, cube), bound * (1 + 1e-4) + 1e-5);
         }
       }
   }

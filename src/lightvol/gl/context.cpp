@@ -53,6 +53,32 @@ Status load_egl() {
   return {};
 }
 
+// Whether the functions came from an engine's loader (load_functions) rather than a Context.
+bool g_engine_loader = false;
+
+// Resolves every function of LIGHTVOL_GL_FUNCTIONS with `get`, then sets the pointers; when some
+// are missing, sets none and returns their names ("glA, glB").
+template <typename Get>
+std::string load_all(Get get) {
+  std::string missing;
+#define LIGHTVOL_GL_RESOLVE(type, name)                            \
+  const auto resolved_##name = reinterpret_cast<type>(get(#name)); \
+  if (resolved_##name == nullptr) missing += std::string(missing.empty() ? "" : ", ") + #name;
+  LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_RESOLVE)
+#undef LIGHTVOL_GL_RESOLVE
+  if (!missing.empty()) return missing;
+#define LIGHTVOL_GL_ASSIGN(type, name) name = resolved_##name;
+  LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_ASSIGN)
+#undef LIGHTVOL_GL_ASSIGN
+  return "";
+}
+
+Status load_through(const std::string& missing) {
+  if (!missing.empty()) return Error{"lightvol::gl::load_functions: the loader has no " + missing};
+  g_engine_loader = true;
+  return {};
+}
+
 std::string egl_error_name(EGLint code) {
   switch (code) {
     case EGL_SUCCESS:
@@ -172,18 +198,14 @@ Result<std::unique_ptr<Context>> Context::create(ContextVersion version) {
     return fail("cannot make a surfaceless OpenGL context current");
   }
 
-  std::string missing;
-#define LIGHTVOL_GL_LOAD(type, name)                       \
-  name = reinterpret_cast<type>(eglGetProcAddress(#name)); \
-  if (name == nullptr) missing += std::string(missing.empty() ? "" : ", ") + #name;
-  LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_LOAD)
-#undef LIGHTVOL_GL_LOAD
+  const std::string missing = load_all([](const char* name) { return eglGetProcAddress(name); });
   if (!missing.empty()) {
     eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display, context);
     return fail("missing OpenGL functions: " + missing);
   }
 
+  g_engine_loader = false;
   std::unique_ptr<Context> result(new Context());
   result->display_ = display;
   result->context_ = context;
@@ -204,12 +226,22 @@ Context::~Context() {
   eglTerminate(display);
 }
 
+Status load_functions(GlProc (*get_proc_address)(const char* name)) {
+  return load_through(load_all(get_proc_address));
+}
+
+Status load_functions(void* (*get_proc_address)(const char* name)) {
+  return load_through(load_all(get_proc_address));
+}
+
 Status require_context(int major, int minor, bool compute, const std::string& what) {
   const std::string needs = what + ": needs OpenGL " + std::to_string(major) + "." +
                             std::to_string(minor) + " core" +
                             (compute ? " with compute shaders" : "") + "; ";
-  if (glGetIntegerv == nullptr || eglGetCurrentContext == nullptr ||
-      eglGetCurrentContext() == EGL_NO_CONTEXT)
+  if (glGetIntegerv == nullptr ||
+      (!g_engine_loader &&
+       (eglGetCurrentContext == nullptr || eglGetCurrentContext() == EGL_NO_CONTEXT)) ||
+      (g_engine_loader && glGetString(GL_VERSION) == nullptr))
     return Error{needs +
                  "no OpenGL context is current on this thread (lightvol::gl::Context::create "
                  "makes one and loads lightvol's OpenGL functions)"};

@@ -11,8 +11,10 @@
 //
 // OpenGL functions are loaded through eglGetProcAddress into pointers declared in this namespace
 // under their usual names (`lightvol::gl::glDrawArrays`), so code inside `namespace lightvol::gl`
-// or with `using namespace lightvol::gl` calls them as usual. Do not also include <GL/gl.h>: it
-// declares the same names globally. Constants (GL_R32F, ...) and types come from <GL/glcorearb.h>.
+// or with `using namespace lightvol::gl` calls them as usual. An engine with a context of its own
+// (GLFW, SDL, its own EGL or GLX) loads them through its loader instead: load_functions below. Do
+// not also include <GL/gl.h>: it declares the same names globally. Constants (GL_R32F, ...) and
+// types come from <GL/glcorearb.h>.
 //
 // Threading: a Context is current on the thread that created it; all GL objects below must be
 // created, used and destroyed on that thread while the Context lives.
@@ -120,7 +122,11 @@ namespace lightvol::gl {
   X(PFNGLMEMORYBARRIERPROC, glMemoryBarrier)                         \
   X(PFNGLDRAWELEMENTSINDIRECTPROC, glDrawElementsIndirect)           \
   X(PFNGLCLEARBUFFERDATAPROC, glClearBufferData)                     \
-  X(PFNGLUNIFORM1UIPROC, glUniform1ui)
+  X(PFNGLUNIFORM1UIPROC, glUniform1ui)                               \
+  X(PFNGLUNIFORM1IVPROC, glUniform1iv)                               \
+  X(PFNGLBINDBUFFERRANGEPROC, glBindBufferRange)                     \
+  X(PFNGLBUFFERSUBDATAPROC, glBufferSubData)                         \
+  X(PFNGLCOPYBUFFERSUBDATAPROC, glCopyBufferSubData)
 
 #define LIGHTVOL_GL_DECLARE(type, name) extern type name;
 LIGHTVOL_GL_FUNCTIONS(LIGHTVOL_GL_DECLARE)
@@ -157,6 +163,25 @@ class Context {
   void* context_ = nullptr;
   std::string renderer_, version_, platform_;
 };
+
+// For an engine that makes its own OpenGL 4.5 core context (GLFW, SDL, Qt, its own EGL or GLX)
+// instead of a Context: loads lightvol's OpenGL functions (the list above) through the engine's
+// own loader, with that context current on this thread, once before the first lightvol call:
+//
+//   lightvol::gl::load_functions(glfwGetProcAddress);     // GLFW
+//   lightvol::gl::load_functions(SDL_GL_GetProcAddress);  // SDL 2 (SDL 3 too)
+//   lightvol::gl::load_functions(eglGetProcAddress);      // EGL
+//
+// Every function is resolved before any pointer changes: when the loader has not some (the Error
+// names them all, "lightvol::gl::load_functions: the loader has no glDispatchCompute, ..."), the
+// pointers stay as they were. After it lightvol draws into whatever context is current when it
+// is called (the engine's), and require_context checks that context's version as it checks a
+// Context's; whether a context is current is then the engine's to ensure (lightvol cannot ask
+// GLX or another loader). The pointers are process-wide, as with a Context: one loader at a time;
+// Context::create loads its own again.
+using GlProc = void (*)();
+Status load_functions(GlProc (*get_proc_address)(const char* name));
+Status load_functions(void* (*get_proc_address)(const char* name));
 
 // Owns one GL object name and deletes it on destruction. Move-only.
 template <void (*Delete)(GLuint)>
@@ -268,11 +293,11 @@ class GpuTimer {
 };
 
 // Whether the OpenGL context current on this thread (made by Context::create, which loads the
-// functions above) is at least `major`.`minor`, and, with `compute`, has compute shaders (4.3 or
-// later). The Error names `what` needs it and what the context is, e.g. "live volume: needs
-// OpenGL 4.5 core; the current context is OpenGL 3.3 (llvmpipe ...)", or says that no context is
-// current. Renderers call it before any other GL call, so an old context is an Error value, never
-// a GL error or a crash at draw time.
+// functions above, or the engine's, after load_functions) is at least `major`.`minor`, and, with
+// `compute`, has compute shaders (4.3 or later). The Error names `what` needs it and what the
+// context is, e.g. "live volume: needs OpenGL 4.5 core; the current context is OpenGL 3.3 (llvmpipe
+// ...)", or says that no context is current. Renderers call it before any other GL call, so an old
+// context is an Error value, never a GL error or a crash at draw time.
 Status require_context(int major, int minor, bool compute, const std::string& what);
 
 // The first pending glGetError as text ("GL_INVALID_OPERATION"), or empty when there is none.

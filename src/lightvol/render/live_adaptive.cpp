@@ -1,14 +1,18 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 
 #include <lightvol/core/check.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/render/detail/airlight_glsl.h>
 #include <lightvol/render/detail/live_adaptive_glsl.h>
 #include <lightvol/render/live_adaptive.h>
+#include <lightvol/volume/omni_volume.h>
 
 namespace lightvol::detail {
 
@@ -45,11 +49,18 @@ enum Pass {
   kTriangles,
   kVertices,
   kClose,
+  kSeamControl,
+  kReset,
+  kUnite,
+  kApply,
+  kBase,
+  kSeams,
   kPasses
 };
 constexpr const char* kPassNames[kPasses] = {
-    "LV_TEXELS",      "LV_OWN",       "LV_BALANCE",    "LV_CONTROL",   "LV_TEST",     "LV_COUNT",
-    "LV_SCAN_CHUNKS", "LV_SCAN_SUMS", "LV_SCAN_WRITE", "LV_TRIANGLES", "LV_VERTICES", "LV_CLOSE"};
+    "LV_TEXELS",       "LV_OWN",       "LV_BALANCE",    "LV_CONTROL",   "LV_TEST",     "LV_COUNT",
+    "LV_SCAN_CHUNKS",  "LV_SCAN_SUMS", "LV_SCAN_WRITE", "LV_TRIANGLES", "LV_VERTICES", "LV_CLOSE",
+    "LV_SEAM_CONTROL", "LV_RESET",     "LV_UNITE",      "LV_APPLY",     "LV_BASE",     "LV_SEAMS"};
 
 // Buffer bindings (shaders/live_adaptive.comp).
 enum Binding {
@@ -70,8 +81,19 @@ enum Binding {
   kScanIn = 14,
   kScanOut = 15,
   kOffsets = 16,
-  kBuffers = 17
+  kOmni = 17,
+  kThreshold = 18,
+  kForced = 19,
+  kUnion = 20,
+  kAllSplits = 21,  // kSplits' buffer whole (no buffer of its own)
+  kBorderIndex = 22,
+  kSeamTemplate = 23,
+  kBuffers = 24
 };
+
+// The buffers that hold one range per face (an omni light's six; bound face by face).
+constexpr Binding kPerFace[] = {kParams, kDepths, kScales, kSplits,  kFails,    kControlBuf,
+                                kBits,   kCounts, kRanks,  kOffsets, kThreshold};
 
 constexpr GLuint kStats = 160;         // control[kStats + ...] (shaders/live_adaptive.comp)
 constexpr GLuint kTriangleArgs = 100;  // LV_TRIANGLES' dispatch size, written by the GPU
@@ -79,14 +101,24 @@ constexpr GLuint kDrawCommand = 192;   // control[kDrawCommand..+4]: the indirec
 constexpr GLuint kControlSize = 256;
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
+constexpr GLuint kOmniSize = 512;  // shaders/live_adaptive.comp's omni[]
+constexpr GLuint kOmniArgs = 128;
+// The seam round's dispatch slots, per face from kOmniArgs on: 0 LV_RESET, 2..top LV_BALANCE of
+// that level, 16 LV_UNITE, 17 LV_APPLY (face 0's).
+constexpr int kSlotReset = 0, kSlotUnite = 16, kSlotApply = 17, kSlots = 18;
+static_assert(kOmniArgs + 3 * kSlots * kOmniFaces <= kOmniSize);
 
-// Dispatches enough groups of 64 for `invocations`, as rows of at most kMaxGroupsX groups
+// Enough groups of 64 for `invocations`, as rows of at most kMaxGroupsX groups
 // (shaders/live_adaptive.comp's invocation()).
 constexpr std::uint64_t kMaxGroupsX = 32768;
-void dispatch(std::uint64_t invocations) {
+std::array<GLuint, 3> groups_for(std::uint64_t invocations) {
   const std::uint64_t groups = std::max<std::uint64_t>((invocations + 63) / 64, 1);
   const std::uint64_t x = std::min(groups, kMaxGroupsX);
-  glDispatchCompute(static_cast<GLuint>(x), static_cast<GLuint>((groups + x - 1) / x), 1);
+  return {static_cast<GLuint>(x), static_cast<GLuint>((groups + x - 1) / x), 1};
+}
+void dispatch(std::uint64_t invocations) {
+  const std::array<GLuint, 3> g = groups_for(invocations);
+  glDispatchCompute(g[0], g[1], g[2]);
 }
 
 // The largest float ≤ b, as a double: a value rounded up to float exceeds b iff it exceeds this.
@@ -99,9 +131,6 @@ double float_floor(double b) {
 }  // namespace
 
 std::string live_adaptive_problem(const Light& light) {
-  if (light.type == LightType::omni)
-    return "live volume: adaptive tessellation (max_error) takes spot and directional lights; "
-           "omni lights have static live volumes only";
   const Mat4d& pj = light.projection;
   const bool linear_fast = light.depth == DepthEncoding::linear && pj(2, 0) == 0 && pj(2, 1) == 0 &&
                            pj(3, 0) == 0 && pj(3, 1) == 0;
@@ -114,27 +143,52 @@ std::string live_adaptive_problem(const Light& light) {
 
 struct LiveAdaptive::State {
   double bound = 0;
-  int rounds = 0;
+  int rounds = 0, seam_rounds = 0;
   Program programs[kPasses];
   BufferHandle buffers[kBuffers];
   VertexArrayHandle vao;
-  Params params;
+  int faces = 1;                    // 6: an omni light
+  GLintptr stride[kBuffers] = {};   // bytes between two faces' ranges (per-face buffers)
+  GLsizeiptr range[kBuffers] = {};  // bytes of one face's range
   int width = 0, height = 0, top = 0;
   std::uint64_t nx[16] = {}, ny[16] = {};  // cells per level, across and down
   std::uint64_t cells = 0, words = 0, max_vertices = 0, max_triangles = 0;
   std::uint64_t max_indices = 0, max_grid_vertices = 0;
+  GLint seam_desc[72] = {}, corner_desc[72] = {};
+
+  bool omni() const { return faces == kOmniFaces; }
+  // Binds face f's ranges of the per-face buffers, and every other buffer whole.
+  void bind_face(int f) const {
+    for (int b = 0; b < kBuffers; ++b) {
+      if (b == kScanIn || b == kScanOut || b == kUnused) continue;
+      const GLuint id = buffers[b == kAllSplits ? kSplits : b].id();
+      if (stride[b] > 0) {
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id, f * stride[b],
+                          range[b]);
+      } else {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id);
+      }
+    }
+  }
+  // Binds `b`'s range of face f at binding `at`.
+  void bind_range(GLuint at, Binding b, int f) const {
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, at, buffers[b].id(), f * stride[b], range[b]);
+  }
 };
 
 LiveAdaptive::~LiveAdaptive() = default;
 
-Result<std::unique_ptr<LiveAdaptive>> LiveAdaptive::create(double bound, int rounds) {
+Result<std::unique_ptr<LiveAdaptive>> LiveAdaptive::create(double bound, int rounds,
+                                                           int seam_rounds) {
   LV_CHECK(std::isfinite(bound) && bound >= 0);
   LV_CHECK(rounds >= 1 && rounds <= 63);
+  LV_CHECK(seam_rounds >= 1);
   std::unique_ptr<LiveAdaptive> live(new LiveAdaptive());
   live->state_ = std::make_unique<State>();
   State& s = *live->state_;
   s.bound = bound;
   s.rounds = rounds;
+  s.seam_rounds = seam_rounds;
   for (int p = 0; p < kPasses; ++p) {
     const std::string source = std::string("#version 450 core\n#define LIGHTVOL_LIVE_COMMON\n") +
                                "#define " + kPassNames[p] + "\n" + kAirlightGlsl + "\n" +
@@ -162,13 +216,13 @@ Result<std::unique_ptr<LiveAdaptive>> LiveAdaptive::create(double bound, int rou
   return live;
 }
 
-Status LiveAdaptive::resize(const Light& light, int width, int height) {
-  State& s = *state_;
-  if (std::string problem = live_adaptive_problem(light); !problem.empty()) return Error{problem};
-  Params& p = s.params;
-  p = Params{};
-  // TexelDepths' constants (tessellate/texel_depths.cpp), in the same order of operations.
-  const Mat4d view = light.view;
+namespace {
+
+// Shaders/live_adaptive.comp's Params for face `face` of `light` (0: spot, directional): the
+// constants of TexelDepths (tessellate/texel_depths.cpp), in the same order of operations.
+Params face_params(const Light& light, int face, int width, int height, double bound) {
+  Params p;
+  const Mat4d view = light.type == LightType::omni ? omni_face_view(light, face) : light.view;
   bool ok = false;
   const Mat4d inv_view = inverse(view, &ok);
   LV_CHECK(ok);
@@ -193,13 +247,41 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
   const Mat4d& pj = light.projection;
   p.pz = pj(2, 2), p.pzc = pj(2, 3), p.pw = pj(3, 2), p.pwc = pj(3, 3);
   p.near_d = light.near, p.far_d = light.far;
-  p.bound = s.bound;
-  p.pyramid_bound = float_floor(s.bound);
+  p.bound = bound;
+  p.pyramid_bound = float_floor(bound);
   p.width = width, p.height = height;
   p.flip_y = light.flip_y ? 1 : 0;
   p.encoding = light.depth == DepthEncoding::window ? 0 : 1;
-  p.standard = Unprojector(light, width, height, 0, Space::world).standard_winding() ? 1 : 0;
-  p.type = light.type == LightType::spot ? 0 : 1;
+  p.standard = Unprojector(light, width, height, face, Space::world).standard_winding() ? 1 : 0;
+  p.type = light.type == LightType::spot ? 0 : light.type == LightType::omni ? 2 : 1;
+  return p;
+}
+
+int grid_side_of(FaceBorder border) {
+  switch (border) {
+    case FaceBorder::top:
+      return 0;
+    case FaceBorder::right:
+      return 1;
+    case FaceBorder::bottom:
+      return 2;
+    case FaceBorder::left:
+      return 3;
+  }
+  return 0;
+}
+
+GLintptr round_up(std::uint64_t bytes, GLint alignment) {
+  const std::uint64_t a = static_cast<std::uint64_t>(std::max(alignment, 256));
+  return static_cast<GLintptr>((std::max<std::uint64_t>(bytes, 16) + a - 1) / a * a);
+}
+
+}  // namespace
+
+Status LiveAdaptive::resize(const Light& light, int width, int height) {
+  State& s = *state_;
+  if (std::string problem = live_adaptive_problem(light); !problem.empty()) return Error{problem};
+  s.faces = light.type == LightType::omni ? kOmniFaces : 1;
   // The quadtree (detail::Quadtree): levels 1..top (at least one level: a 2 × 2 map's one quad
   // is a level-1 cell's two triangles either way).
   const int cw = width - 1, ch = height - 1;
@@ -209,130 +291,260 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
   if (top > 15)
     return Error{"live volume: maps of more than 32769 texels a side are not supported"};
   s.top = top;
+  std::vector<Params> params(static_cast<std::size_t>(s.faces));
+  for (int f = 0; f < s.faces; ++f) params[f] = face_params(light, f, width, height, s.bound);
   std::uint64_t cells = 0;
   for (int level = 1; level <= top; ++level) {
     s.nx[level] = static_cast<std::uint64_t>((cw + (1 << level) - 1) >> level);
     s.ny[level] = static_cast<std::uint64_t>((ch + (1 << level) - 1) >> level);
-    p.nx[level] = static_cast<double>(s.nx[level]);
-    p.ny[level] = static_cast<double>(s.ny[level]);
-    p.offset[level] = static_cast<double>(cells);
+    for (Params& p : params) {
+      p.nx[level] = static_cast<double>(s.nx[level]);
+      p.ny[level] = static_cast<double>(s.ny[level]);
+      p.offset[level] = static_cast<double>(cells);
+    }
     cells += s.nx[level] * s.ny[level];
   }
-  p.offset[top + 1] = static_cast<double>(cells);
-  p.cells_total = static_cast<double>(cells);
+  for (Params& p : params) {
+    p.offset[top + 1] = static_cast<double>(cells);
+    p.cells_total = static_cast<double>(cells);
+  }
   s.width = width, s.height = height;
   s.cells = cells;
   s.words = static_cast<std::uint64_t>((width + 31) / 32) * static_cast<std::uint64_t>(height);
   const std::uint64_t texels =
       static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  const std::uint64_t faces = static_cast<std::uint64_t>(s.faces);
   const std::uint64_t perimeter =
       2 * static_cast<std::uint64_t>(cw) + 2 * static_cast<std::uint64_t>(ch);
-  s.max_grid_vertices = texels;
-  s.max_vertices = texels + perimeter + 1;
-  s.max_triangles =
-      2 * static_cast<std::uint64_t>(cw) * static_cast<std::uint64_t>(ch) + 3 * perimeter;
+  s.max_grid_vertices = faces * texels;
+  const std::uint64_t grid_triangles =
+      faces * 2 * static_cast<std::uint64_t>(cw) * static_cast<std::uint64_t>(ch);
+  if (s.omni()) {
+    // Seams: a zip of two borders of W vertices at most, 2(W − 1) triangles; corners: 8.
+    s.max_vertices = s.max_grid_vertices;
+    s.max_triangles = grid_triangles + 12 * 2 * static_cast<std::uint64_t>(cw) + 8;
+  } else {
+    s.max_vertices = texels + perimeter + 1;
+    s.max_triangles = grid_triangles + 3 * perimeter;
+  }
   s.max_indices = 3 * s.max_triangles;
   if (s.max_indices >= std::uint64_t{1} << 31)
     return Error{"live volume: " + std::to_string(width) + "x" + std::to_string(height) +
                  " texels are more than one draw call holds"};
 
-  const auto allocate = [&](Binding b, std::uint64_t bytes) {
+  GLint alignment = 16;
+  glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &alignment);
+  std::uint64_t bytes[kBuffers] = {};
+  bytes[kParams] = sizeof(Params);
+  bytes[kDepths] = 8 * texels;
+  bytes[kScales] = params[0].uniform_flag ? 8 : 8 * texels;
+  bytes[kSplits] = 4 * s.cells;
+  bytes[kFails] = 4 * s.cells;
+  bytes[kControlBuf] = 4 * kControlSize;
+  bytes[kBits] = 4 * s.words;
+  bytes[kCounts] = 4 * s.cells;
+  bytes[kOffsets] = 4 * s.cells;
+  bytes[kRanks] = 4 * s.words;
+  bytes[kThreshold] = s.omni() ? 4 * s.cells : 16;
+  for (int b = 0; b < kBuffers; ++b) s.stride[b] = 0, s.range[b] = 0;
+  for (const Binding b : kPerFace) {
+    s.range[b] = static_cast<GLsizeiptr>(std::max<std::uint64_t>(bytes[b], 16));
+    s.stride[b] = round_up(bytes[b], alignment);
+    bytes[b] = static_cast<std::uint64_t>(s.stride[b]) * faces;
+  }
+  const std::uint64_t sides = 4 * static_cast<std::uint64_t>(width) * faces;
+  bytes[kIndices] = 4 * s.max_indices;
+  bytes[kPositions] = 12 * s.max_vertices;
+  bytes[kTexelIds] = 4 * s.max_grid_vertices;
+  bytes[kScanSumsBuf] = 4 * ((std::max(s.cells, s.words) + kChunk - 1) / kChunk + 1);
+  bytes[kOmni] = 4 * kOmniSize;
+  bytes[kForced] = s.omni() ? 4 * sides : 16;
+  bytes[kUnion] = s.omni() ? 4 * sides : 16;
+  bytes[kBorderIndex] = s.omni() ? 4 * sides : 16;
+  bytes[kSeamTemplate] = 4 * 3 * kSlots;
+  for (int b = 0; b < kBuffers; ++b) {
+    if (b == kScanIn || b == kScanOut || b == kUnused || b == kAllSplits || b == kParams) continue;
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[b].id());
     glBufferData(GL_SHADER_STORAGE_BUFFER,
-                 static_cast<GLsizeiptr>(std::max<std::uint64_t>(bytes, 16)), nullptr,
+                 static_cast<GLsizeiptr>(std::max<std::uint64_t>(bytes[b], 16)), nullptr,
                  GL_DYNAMIC_COPY);
-  };
+  }
+  std::vector<unsigned char> param_bytes(static_cast<std::size_t>(bytes[kParams]), 0);
+  for (int f = 0; f < s.faces; ++f)
+    std::memcpy(param_bytes.data() + f * s.stride[kParams], &params[f], sizeof(Params));
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[kParams].id());
-  glBufferData(GL_SHADER_STORAGE_BUFFER, sizeof(Params), &p, GL_STATIC_DRAW);
-  allocate(kDepths, 8 * texels);
-  allocate(kScales, p.uniform_flag ? 8 : 8 * texels);
-  allocate(kSplits, 4 * s.cells);
-  allocate(kFails, 4 * s.cells);
-  allocate(kControlBuf, 4 * kControlSize);
-  allocate(kBits, 4 * s.words);
-  allocate(kCounts, 4 * s.cells);
-  allocate(kOffsets, 4 * s.cells);
-  allocate(kRanks, 4 * s.words);
-  allocate(kIndices, 4 * s.max_indices);
-  allocate(kPositions, 12 * s.max_vertices);
-  allocate(kTexelIds, 4 * s.max_grid_vertices);
-  allocate(kScanSumsBuf, 4 * ((std::max(s.cells, s.words) + kChunk - 1) / kChunk + 1));
+  glBufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(param_bytes.size()),
+               param_bytes.data(), GL_STATIC_DRAW);
+  // The seam round's dispatch sizes (omni).
+  std::array<GLuint, 3 * kSlots> slots{};
+  const auto slot = [&](int k, std::uint64_t invocations) {
+    const std::array<GLuint, 3> g = groups_for(invocations);
+    std::copy(g.begin(), g.end(), slots.begin() + 3 * k);
+  };
+  slot(kSlotReset, s.cells);
+  for (int level = 2; level <= top; ++level) slot(level, s.nx[level] * s.ny[level]);
+  slot(kSlotUnite, 12 * static_cast<std::uint64_t>(width));
+  slot(kSlotApply, 24 * static_cast<std::uint64_t>(width));
+  glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[kSeamTemplate].id());
+  glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof slots, slots.data());
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+  if (s.omni()) {
+    const OmniAdjacency adjacency = omni_adjacency(light);
+    for (int k = 0; k < 12; ++k) {
+      const OmniSeam& seam = adjacency.seams[static_cast<std::size_t>(k)];
+      const GLint desc[6] = {seam.face[0],          grid_side_of(seam.border[0]),
+                             seam.face[1],          grid_side_of(seam.border[1]),
+                             seam.reversed ? 1 : 0, seam.flip ? 1 : 0};
+      std::copy(desc, desc + 6, s.seam_desc + 6 * k);
+    }
+    for (int k = 0; k < 8; ++k) {
+      const OmniCorner& corner = adjacency.corners[static_cast<std::size_t>(k)];
+      for (int m = 0; m < 3; ++m) {
+        GLint* out = s.corner_desc + 9 * k + 3 * m;
+        out[0] = corner.face[static_cast<std::size_t>(m)];
+        out[1] = corner.last_col[static_cast<std::size_t>(m)] ? 1 : 0;
+        out[2] = corner.last_row[static_cast<std::size_t>(m)] ? 1 : 0;
+      }
+    }
+  }
   if (std::string e = pending_error(); !e.empty())
     return Error{"OpenGL: sizing the live adaptive volume's buffers for " + std::to_string(width) +
                  "x" + std::to_string(height) + " texels: " + e};
   return {};
 }
 
+// Long (over 80 lines) on purpose: one frame's passes in their order, with the seam rounds of an
+// omni light around the per-face tessellation; split, the order would be harder to follow.
 void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) const {
   const State& s = *state_;
-  for (int b = 0; b < kBuffers; ++b)
-    if (b != kScanIn && b != kScanOut && b != kUnused)
-      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, s.buffers[b].id());
-  const GLuint zero = 0;
-  for (Binding b : {kSplits, kFails, kControlBuf, kBits}) {
+  const GLuint zero = 0, none = 0xFFFFFFFFu;
+  const auto clear = [&](Binding b, const GLuint* value) {
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[b].id());
-    glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, value);
+  };
+  for (Binding b : {kSplits, kFails, kControlBuf, kBits, kOmni}) clear(b, &zero);
+  if (s.omni()) {
+    clear(kForced, &zero);
+    clear(kBorderIndex, &none);
   }
   glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
   const auto barrier = [] {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   };
+  int face = 0;
   const auto use = [&](Pass pass) -> const Program& {
     s.programs[pass].use();
     glUniform1i(s.programs[pass].uniform("top_level"), s.top);
+    glUniform1i(s.programs[pass].uniform("lv_face"), face);
     return s.programs[pass];
+  };
+  const auto indirect = [&](Binding b, std::uint64_t uint_offset) {
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[b].id());
+    glDispatchComputeIndirect(static_cast<GLintptr>(
+        (b == kControlBuf ? face * s.stride[kControlBuf] : 0) + 4 * uint_offset));
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   };
   const std::uint64_t texels =
       static_cast<std::uint64_t>(s.width) * static_cast<std::uint64_t>(s.height);
 
-  bind(use(kTexels));
-  dispatch(texels);
-  barrier();
-  // The pyramid, thresholded at E: level by level from the finest.
-  const Program& own = use(kOwn);
-  for (int level = 1; level <= s.top; ++level) {
-    const std::uint64_t bands = static_cast<std::uint64_t>(((1 << level) + kBandRows) / kBandRows);
-    glUniform1i(own.uniform("level"), level);
-    dispatch(s.nx[level] * s.ny[level] * bands);
+  // Per face: the texels and the pyramid, thresholded at E, level by level from the finest.
+  for (face = 0; face < s.faces; ++face) {
+    s.bind_face(face);
+    bind(use(kTexels));
+    dispatch(texels);
     barrier();
-  }
-  const Program& balance = use(kBalance);
-  glUniform1i(balance.uniform("round_"), 0);
-  for (int level = 2; level <= s.top; ++level) {
-    glUniform1i(balance.uniform("level"), level);
-    dispatch(s.nx[level] * s.ny[level]);
-    barrier();
-  }
-  // The fix-up rounds: each one's dispatch sizes written by the GPU (zero once a round split
-  // nothing).
-  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[kControlBuf].id());
-  for (int round = 1; round <= s.rounds && s.top >= 2; ++round) {
-    const Program& control = use(kControl);
-    glUniform1i(control.uniform("round_"), round);
-    dispatch(1);
-    barrier();
-    const Program& test = use(kTest);
-    glUniform1i(test.uniform("round_"), round);
-    glDispatchComputeIndirect(64 * sizeof(GLuint));
-    barrier();
-    const Program& rebalance = use(kBalance);
-    glUniform1i(rebalance.uniform("round_"), round);
-    for (int level = 2; level <= s.top; ++level) {
-      glUniform1i(rebalance.uniform("level"), level);
-      glDispatchComputeIndirect(static_cast<GLintptr>((64 + 3 * (level - 1)) * sizeof(GLuint)));
+    const Program& own = use(kOwn);
+    for (int level = 1; level <= s.top; ++level) {
+      const std::uint64_t bands =
+          static_cast<std::uint64_t>(((1 << level) + kBandRows) / kBandRows);
+      glUniform1i(own.uniform("level"), level);
+      dispatch(s.nx[level] * s.ny[level] * bands);
       barrier();
     }
+    if (s.omni()) {
+      glBindBuffer(GL_COPY_READ_BUFFER, s.buffers[kSplits].id());
+      glBindBuffer(GL_COPY_WRITE_BUFFER, s.buffers[kThreshold].id());
+      glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, face * s.stride[kSplits],
+                          face * s.stride[kThreshold], static_cast<GLsizeiptr>(4 * s.cells));
+      glBindBuffer(GL_COPY_READ_BUFFER, 0);
+      glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+    }
   }
-  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-  // Emission: counts and the vertex bitmap, the two scans, the triangles and vertices, the
-  // closing and the draw command.
-  use(kCount);
-  dispatch(s.cells);
-  barrier();
+  // The balance and the fix-up rounds (each one's dispatch sizes written by the GPU: zero once a
+  // round split nothing). Omni: from each face's threshold with its forced border vertices, in
+  // seam rounds until the seams' borders agree (the round's dispatch sizes written by the GPU).
+  const auto tessellate = [&] {
+    const Program& balance = use(kBalance);
+    glUniform1i(balance.uniform("round_"), 0);
+    for (int level = 2; level <= s.top; ++level) {
+      glUniform1i(balance.uniform("level"), level);
+      if (s.omni()) {
+        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) +
+                                         static_cast<std::uint64_t>(level)));
+      } else {
+        dispatch(s.nx[level] * s.ny[level]);
+      }
+      barrier();
+    }
+    for (int round = 1; round <= s.rounds && s.top >= 2; ++round) {
+      const Program& control = use(kControl);
+      glUniform1i(control.uniform("round_"), round);
+      dispatch(1);
+      barrier();
+      const Program& test = use(kTest);
+      glUniform1i(test.uniform("round_"), round);
+      indirect(kControlBuf, 64);
+      barrier();
+      const Program& rebalance = use(kBalance);
+      glUniform1i(rebalance.uniform("round_"), round);
+      for (int level = 2; level <= s.top; ++level) {
+        glUniform1i(rebalance.uniform("level"), level);
+        indirect(kControlBuf, 64 + 3 * static_cast<std::uint64_t>(level - 1));
+        barrier();
+      }
+    }
+  };
+  if (!s.omni()) {
+    face = 0;
+    tessellate();
+  } else {
+    const auto seam_control = [&](int round) {
+      face = 0;
+      s.bind_face(0);
+      const Program& control = use(kSeamControl);
+      glUniform1i(control.uniform("round_"), round);
+      glUniform1i(control.uniform("rounds"), s.seam_rounds);
+      glUniform1i(control.uniform("seam_slots"), kSlots);
+      dispatch(1);
+      barrier();
+    };
+    for (int round = 1; round <= s.seam_rounds; ++round) {
+      seam_control(round);
+      for (face = 0; face < s.faces; ++face) {
+        s.bind_face(face);
+        use(kReset);
+        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) + kSlotReset));
+        barrier();
+        tessellate();
+      }
+      face = 0;
+      s.bind_face(0);
+      const Program& unite = use(kUnite);
+      glUniform1i(unite.uniform("split_stride"), static_cast<GLint>(s.stride[kSplits] / 4));
+      glUniform1iv(unite.uniform("seam_desc"), 72, s.seam_desc);
+      indirect(kOmni, kOmniArgs + 3 * kSlotUnite);
+      barrier();
+      use(kApply);
+      indirect(kOmni, kOmniArgs + 3 * kSlotApply);
+      barrier();
+    }
+    seam_control(s.seam_rounds + 1);
+  }
+  // Emission, face by face: counts and the vertex bitmap, the two scans, the triangles and
+  // vertices; then the closing (omni: the seams and corners) and the draw command.
   const auto scan = [&](Binding in, Binding out, std::uint64_t n, bool popcount, GLuint total) {
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kScanIn, s.buffers[in].id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kScanOut, s.buffers[out].id());
+    s.bind_range(kScanIn, in, face);
+    s.bind_range(kScanOut, out, face);
     const std::uint64_t chunks = (n + kChunk - 1) / kChunk;
     for (Pass pass : {kScanChunks, kScanSums, kScanWrite}) {
       const Program& program = use(pass);
@@ -343,19 +555,38 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       barrier();
     }
   };
-  scan(kCounts, kOffsets, s.cells, false, kStats + 3);
-  scan(kBits, kRanks, s.words, true, kStats + 2);
-  use(kTriangles);
-  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[kControlBuf].id());
-  glDispatchComputeIndirect(static_cast<GLintptr>(kTriangleArgs * sizeof(GLuint)));
-  glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-  bind(use(kVertices));
-  dispatch(s.words);
-  barrier();
-  const Program& close = use(kClose);
-  bind(close);
-  glUniform1i(close.uniform("rounds"), s.rounds);
-  dispatch(1);
+  for (face = 0; face < s.faces; ++face) {
+    s.bind_face(face);
+    use(kCount);
+    dispatch(s.cells);
+    barrier();
+    scan(kCounts, kOffsets, s.cells, false, kStats + 3);
+    scan(kBits, kRanks, s.words, true, kStats + 2);
+    if (s.omni()) {
+      const Program& base = use(kBase);
+      glUniform1i(base.uniform("rounds"), s.rounds);
+      dispatch(1);
+      barrier();
+    }
+    use(kTriangles);
+    indirect(kControlBuf, kTriangleArgs);
+    bind(use(kVertices));
+    dispatch(s.words);
+    barrier();
+  }
+  face = 0;
+  s.bind_face(0);
+  if (s.omni()) {
+    const Program& seams = use(kSeams);
+    glUniform1iv(seams.uniform("seam_desc"), 72, s.seam_desc);
+    glUniform1iv(seams.uniform("corner_desc"), 72, s.corner_desc);
+    dispatch(1);
+  } else {
+    const Program& close = use(kClose);
+    bind(close);
+    glUniform1i(close.uniform("rounds"), s.rounds);
+    dispatch(1);
+  }
   glMemoryBarrier(GL_ELEMENT_ARRAY_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT |
                   GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT |
                   GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -385,14 +616,25 @@ Result<LiveMesh> LiveAdaptive::read_back() const {
     glGetBufferSubData(GL_COPY_READ_BUFFER, static_cast<GLintptr>(offset),
                        static_cast<GLsizeiptr>(bytes), out);
   };
-  GLuint stats[6] = {};
-  read(kControlBuf, 4 * kStats, sizeof stats, stats);
   LiveMesh r;
-  r.fixup_rounds = static_cast<int>(stats[0]);
-  r.converged = stats[1] != 0;
-  const std::uint64_t grid_vertices = stats[2];
-  r.grid_triangles = stats[3];
-  const std::uint64_t vertices = stats[4], triangles = stats[5];
+  std::uint64_t grid_vertices = 0, vertices = 0, triangles = 0;
+  for (int f = 0; f < s.faces; ++f) {
+    GLuint stats[6] = {};
+    read(kControlBuf, static_cast<std::size_t>(f * s.stride[kControlBuf]) + 4 * kStats,
+         sizeof stats, stats);
+    r.fixup_rounds = std::max(r.fixup_rounds, static_cast<int>(stats[0]));
+    r.converged = r.converged && stats[1] != 0;
+    grid_vertices += stats[2];
+    r.grid_triangles += stats[3];
+    if (f == 0) vertices = stats[4], triangles = stats[5];
+  }
+  if (s.omni()) {
+    GLuint omni[2] = {};
+    read(kOmni, 0, sizeof omni, omni);
+    r.seam_rounds = static_cast<int>(omni[1]);
+    r.seams_agree = omni[0] != 0;
+    r.converged = r.converged && r.seams_agree;
+  }
   LV_CHECK_LE(vertices, s.max_vertices);
   LV_CHECK_LE(triangles, s.max_triangles);
   r.mesh.positions.resize(3 * vertices);

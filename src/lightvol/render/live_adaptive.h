@@ -2,9 +2,11 @@
 // "Live volumes"): compute passes (shaders/live_adaptive.comp) that tessellate the shadow map at
 // a bound E every frame, as `lightvol build --adaptive --tessellation quadtree` does on the CPU
 // (the same quadtree: pyramid, 2:1 balance, fix-up rounds, 16 edge-split configurations, the
-// closing through the border vertices), into a vertex and an index buffer sized once for the
-// largest tessellation, and the indirect draw command that draws exactly what was made. No
-// read-back and no allocation per frame. Internal to the render stage.
+// closing through the border vertices; omni: the six faces in seam rounds until the seams' borders
+// agree, then the seam strips and corners, as build_adaptive_omni_volume makes them), into a vertex
+// and an index buffer sized once for the largest tessellation, and the indirect draw command that
+// draws exactly what was made. No read-back and no allocation per frame. Internal to the render
+// stage.
 #pragma once
 
 #include <cstdint>
@@ -23,12 +25,13 @@ namespace lightvol::detail {
 class LiveAdaptive {
  public:
   // Compiles the passes. `bound`: E in world units (finite, ≥ 0); `rounds`: the most fix-up
-  // rounds a frame runs (1..63).
-  static Result<std::unique_ptr<LiveAdaptive>> create(double bound, int rounds);
+  // rounds a frame runs (1..63); `seam_rounds`: an omni light's most seam rounds (≥ 1).
+  static Result<std::unique_ptr<LiveAdaptive>> create(double bound, int rounds, int seam_rounds);
   ~LiveAdaptive();
 
-  // Sizes the buffers for W × H maps of `light` (spot or directional; window or linear depth
-  // with a projection whose depth row sees eye z only). Errors name what is not supported.
+  // Sizes the buffers for W × H maps of `light` (spot or directional; omni: six W × W faces;
+  // window or linear depth with a projection whose depth row sees eye z only). Errors name what
+  // is not supported.
   Status resize(const Light& light, int width, int height);
 
   // Runs the passes. `bind` sets the live_* uniforms and shadow_maps samplers (LiveVolume::bind)

@@ -202,10 +202,13 @@ Result<std::unique_ptr<LiveVolume>> LiveVolume::create(const Light& light,
     if (options.max_rounds < 1 || options.max_rounds > 63)
       return Error{"live volume: max_rounds: expected 1 to 63, got " +
                    std::to_string(options.max_rounds)};
+    if (options.max_seam_rounds < 1 || options.max_seam_rounds > 64)
+      return Error{"live volume: max_seam_rounds: expected 1 to 64, got " +
+                   std::to_string(options.max_seam_rounds)};
     if (std::string problem = detail::live_adaptive_problem(light); !problem.empty())
       return Error{problem};
     Result<std::unique_ptr<detail::LiveAdaptive>> adaptive =
-        detail::LiveAdaptive::create(e, options.max_rounds);
+        detail::LiveAdaptive::create(e, options.max_rounds, options.max_seam_rounds);
     if (!adaptive) return adaptive.error();
     s.adaptive = std::move(*adaptive);
   }

@@ -50,12 +50,19 @@ struct LiveOptions {
   // --tessellation quadtree --max-error E`'s quadtree (the same cells, balance, fix-up and
   // configurations: the same triangles), closed as build closes it, drawn with an indirect draw
   // whose count the GPU writes. Every texel's point lies within E of its ray's point on the
-  // volume. Spot and directional lights, window depth or linear depth (docs/rendering.md).
+  // volume. Spot, directional and omni lights (omni: each face tessellated in the seam rounds of
+  // build's adaptive omni volume, the seams and corners closed as build closes them), window
+  // depth or linear depth (docs/rendering.md).
   std::optional<double> max_error;
   // The most fix-up rounds (splitting leaves whose configuration breaks E) a frame runs, 1..63;
   // rounds after the first that splits nothing cost nothing. read_mesh() tells whether a frame
   // converged.
   int max_rounds = 32;
+  // Omni: the most seam rounds (each face tessellated again with the border vertices its seams'
+  // other faces have) a frame runs, 1..64; rounds after the borders agree cost nothing but their
+  // (empty) dispatches. Unconverged, the seams still close the volume (each zips its two
+  // borders), but E may not hold along them: read_mesh() tells.
+  int max_seam_rounds = 8;
 };
 
 // A generated volume read back (LiveVolume::read_mesh; tests and tools only).
@@ -63,9 +70,13 @@ struct LiveMesh {
   Mesh mesh;  // world space; static: build's vertices and triangles; adaptive: the grid's
               // vertices in texel order, then the closing's
   std::vector<std::uint32_t> vertex_texels;  // adaptive: per grid vertex, row * W + col
+                                             // (omni: face * W * W + row * W + col)
   std::uint64_t grid_triangles = 0;          // adaptive: triangles before the closing
-  int fixup_rounds = 0;                      // adaptive: rounds that split a leaf
-  bool converged = true;  // adaptive: the last round allowed split nothing (the bound holds)
+  int fixup_rounds = 0;                      // adaptive: rounds that split a leaf (omni: on a face)
+  bool converged = true;    // adaptive: the last round allowed split nothing (the bound holds);
+                            // omni: on every face, and the seams' borders agree
+  int seam_rounds = 0;      // adaptive omni: seam rounds run (OmniAdaptiveDetail::seam_rounds)
+  bool seams_agree = true;  // adaptive omni: the last seam round changed no border
 };
 
 namespace detail {
@@ -79,7 +90,7 @@ class LiveVolume {
   // rendered with omni_face_view and the light's projection). Compiles the capture program and
   // uploads build's triangles for the maps' size. Errors: set_shadow_maps'.
   // With options.max_error, the adaptive volume (LiveOptions); errors also: a bound that is not
-  // finite and >= 0, rounds outside 1..63, an omni light, a radial depth encoding.
+  // finite and >= 0, rounds outside 1..63, seam rounds outside 1..64, a radial depth encoding.
   static Result<std::unique_ptr<LiveVolume>> create(const Light& light,
                                                     const std::vector<GlShadowMap>& maps,
                                                     const LiveOptions& options = {});
