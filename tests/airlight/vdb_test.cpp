@@ -128,7 +128,9 @@ TEST(VdbDensity, BadFilesAreRefusedWithOneLineNamingThem) {
       {"missing.vdb", at + "missing.vdb: no such file"},
       {"folder.vdb", at + "folder.vdb: is a directory, not an OpenVDB file"},
       {"text.vdb", at + "text.vdb: not an OpenVDB file"},
-      {"magic.vdb", at + "magic.vdb: OpenVDB cannot read it (a truncated or corrupt file?): "},
+      // OpenVDB 10 opens a file of its magic number alone and finds no grids in it.
+      {"magic.vdb", at + "magic.vdb: has no grid named 'density' (its grids: none: a truncated "
+                         "or corrupt file?)"},
       {"truncated.vdb", at + "truncated.vdb: "},
       {"corrupt.vdb", at + "corrupt.vdb: "},
       {R"(sphere.vdb", "grid": "smoke)",

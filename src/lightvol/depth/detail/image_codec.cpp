@@ -212,18 +212,19 @@ void serve_write(ChildOutput& channel, int threads) {
 }  // namespace
 
 bool serve_image_request(ChildOutput& channel, int threads) {
-  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader
-  // allocates unknown attributes at whatever size the file claims and reads known ones (channel
-  // lists) past their stated size. The core checks most sizes; check_exr_header refuses what
-  // made either of them lose its place in fuzzing.
-  static const bool exr_core = OIIO::attribute("openexr:core", 1);
-  (void)exr_core;
   ImageRequest request{};
   if (!channel.read_value(&request)) return false;
   return serve_image_request(channel, threads, request);
 }
 
 bool serve_image_request(ChildOutput& channel, int threads, ImageRequest request) {
+  // EXR through OpenEXR's C core (OpenEXRCore) rather than its C++ library, whose header reader
+  // allocates unknown attributes at whatever size the file claims and reads known ones (channel
+  // lists) past their stated size. The core checks most sizes; check_exr_header refuses what
+  // made either of them lose its place in fuzzing. Set here, where every image request of every
+  // server (lightvol-image's loop, the in-process and fake servers) passes.
+  static const bool exr_core = OIIO::attribute("openexr:core", 1);
+  (void)exr_core;
   if (request == ImageRequest::read) serve_read(channel, threads);
   if (request == ImageRequest::write) serve_write(channel, threads);
   return request == ImageRequest::read || request == ImageRequest::write;
