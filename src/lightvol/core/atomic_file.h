@@ -15,10 +15,11 @@ namespace lightvol {
 // The temporary file is created exclusively (O_EXCL | O_NOFOLLOW) under an unguessable name in
 // the same directory, short enough to fit wherever `path`'s name fits, with `path`'s extension (so
 // format-by-extension writers still pick the right format); `write` opens it by name and
-// overwrites it. If `path` exists, the result keeps its permission bits. If `write` fails or
-// throws, the temporary file is removed and `path` is left untouched. SIGINT, SIGTERM and SIGHUP
-// while the temporary file exists remove it before the process dies (unless the program handles or
-// ignores those signals itself).
+// overwrites it (without creating it: it exists, empty; a signal's cleanup may unlink it while
+// another thread is about to open it, and an open that creates would leave it behind). If `path`
+// exists, the result keeps its permission bits. If `write` fails or throws, the temporary file is
+// removed and `path` is left untouched. SIGINT, SIGTERM and SIGHUP while the temporary file exists
+// remove it before the process dies (unless the program handles or ignores those signals itself).
 //
 // Where the output lands (core/path.h): a symlink is followed to the file it leads to; the
 // temporary is made beside that file and renamed onto it, and the symlink stays a symlink. A path

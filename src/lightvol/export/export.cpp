@@ -64,7 +64,9 @@ Status write_with_openmesh(const std::string& path, const std::string& temp, Mes
   // OpenMesh chats on its log streams; a command-line tool speaks for itself.
   omlog().disable();
   omout().disable();
-  std::ofstream out(temp, std::ios::binary);
+  // The temporary exists (write_file_atomically made it): opened without creating it, so that a
+  // signal's cleanup that unlinked it while this thread was about to open it is not undone.
+  std::ofstream out(temp, std::ios::binary | std::ios::in | std::ios::out);
   if (!out) return Error{path + ": cannot create file: " + std::strerror(errno)};
   std::vector<char> buffer(1 << 20);
   out.rdbuf()->pubsetbuf(buffer.data(), static_cast<std::streamsize>(buffer.size()));
@@ -79,7 +81,7 @@ Status write_with_openmesh(const std::string& path, const std::string& temp, Mes
 
 Status write_ply_file(const std::string& path, MeshStream& mesh, const ExportOptions& options) {
   return write_file_atomically(path, [&](const std::string& temp) -> Status {
-    std::FILE* f = std::fopen(temp.c_str(), "wb");
+    std::FILE* f = std::fopen(temp.c_str(), "r+b");  // exists and is empty: never re-created
     if (!f) return Error{path + ": cannot create file: " + std::strerror(errno)};
     bool write_failed = false;
     const Status streamed = detail::write_ply(f, mesh, options.ascii, &write_failed);
