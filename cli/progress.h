@@ -6,6 +6,7 @@
 #include <string>
 
 #include <lightvol/core/stages.h>
+#include <lightvol/core/text.h>  // thousands
 
 namespace lightvol::cli {
 
@@ -30,8 +31,6 @@ class Progress {
 
 // "1024x768".
 std::string size_text(int width, int height);
-// Formats 33538050 as "33,538,050".
-std::string thousands(unsigned long long n);
 // Formats bytes as "1.23 GiB", "512 MiB", ...
 std::string human_bytes(unsigned long long bytes);
 

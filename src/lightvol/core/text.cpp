@@ -71,4 +71,13 @@ std::optional<long long> parse_decimal_integer(std::string_view text) {
   return value;
 }
 
+std::string thousands(unsigned long long n) {
+  std::string digits = std::to_string(n), out;
+  for (std::size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
 }  // namespace lightvol

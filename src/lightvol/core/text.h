@@ -13,6 +13,9 @@ namespace lightvol {
 // anywhere).
 std::string utf8_prefix(std::string_view s, std::size_t max_bytes);
 
+// A count for people: 33538050 as "33,538,050".
+std::string thousands(unsigned long long n);
+
 // A number as a flag or a list on a command line gives it, in decimal only: an optional '-',
 // digits with at most one '.' (at least one digit), then an optional exponent (e or E, an
 // optional sign, digits). Nothing else: no spaces, no '+' in front, no hexadecimal (0x10), no

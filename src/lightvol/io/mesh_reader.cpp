@@ -416,16 +416,7 @@ Result<Mesh> read_with_openmesh(const std::string& path, std::uintmax_t size) {
       },
       [&](ChildInput& in) -> Status {
         const Error broken{path + ": OpenMesh's reader broke off its answer"};
-        Error refusal;
-        switch (in.read_verdict(&refusal)) {
-          case ChildInput::Verdict::broken:
-            return broken;
-          case ChildInput::Verdict::refused:
-            result = refusal;
-            return {};
-          case ChildInput::Verdict::accepted:
-            break;
-        }
+        if (Status answer; !in.read_go_on(&result, broken, &answer)) return answer;
         Mesh mesh;
         Status refused;
         if (!in.read_mesh(&mesh, path, &refused)) return refused ? Status{broken} : refused;

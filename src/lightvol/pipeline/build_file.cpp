@@ -9,6 +9,7 @@
 #include <lightvol/core/atomic_file.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/path.h>
+#include <lightvol/core/text.h>
 #include <lightvol/core/text_file.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/export/export.h>
@@ -262,11 +263,7 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   AdaptiveReport adaptive_report;
   Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
   if (!mesh) return failed(mesh.error());
-  // "1,234 triangles"
-  std::string count = std::to_string(mesh->num_triangles());
-  for (auto at = static_cast<std::ptrdiff_t>(count.size()) - 3; at > 0; at -= 3)
-    count.insert(static_cast<std::size_t>(at), ",");
-  log.end(count + " triangles");
+  log.end(thousands(mesh->num_triangles()) + " triangles");
   r.seconds.build = log.last_seconds();
 
   const Light frame_light = light_in_space(*light, options.space);

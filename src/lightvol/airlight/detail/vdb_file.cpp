@@ -40,27 +40,12 @@ Result<std::shared_ptr<const VoxelGrid>> read_vdb_grid(const std::string& path,
   const std::string source = path + ": grid '" + utf8_prefix(grid, 80) + "'";
   Result<std::shared_ptr<const VoxelGrid>> result = Error{""};
   const Error broken{path + ": the OpenVDB reader broke off its answer"};
-  const auto accepted = [&](ChildInput& in, Status* answer) {
-    Error refusal;
-    switch (in.read_verdict(&refusal)) {
-      case ChildInput::Verdict::accepted:
-        return true;
-      case ChildInput::Verdict::refused:
-        result = refusal;
-        *answer = {};
-        return false;
-      case ChildInput::Verdict::broken:
-        *answer = broken;
-        return false;
-    }
-    return false;
-  };
   // The conversation of vdb_codec.h serve_vdb_request.
   const auto parent = [&](ChildInput& in) -> Status {
     if (!in.write_value(ImageRequest::vdb) || !in.write_string(path) || !in.write_string(grid))
       return broken;
     Status answer;
-    if (!accepted(in, &answer)) return answer;
+    if (!in.read_go_on(&result, broken, &answer)) return answer;
     auto out = std::make_shared<VoxelGrid>();
     out->source = source;
     std::int64_t dims[3] = {};
@@ -102,7 +87,7 @@ Result<std::shared_ptr<const VoxelGrid>> read_vdb_grid(const std::string& path,
     const auto voxels = static_cast<std::size_t>(count);
     in.allow_more(2 + 50e-9 * count);
     if (!in.write_value(std::int32_t{1})) return broken;
-    if (!accepted(in, &answer)) return answer;
+    if (!in.read_go_on(&result, broken, &answer)) return answer;
     out->values.resize(voxels);
     if (!in.read(out->values.data(), voxels * sizeof(float))) return broken;
     // Nothing the reader sends is trusted: the same checks it made.

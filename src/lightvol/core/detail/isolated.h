@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <lightvol/core/mesh.h>
@@ -85,6 +86,25 @@ class ChildInput {
   // A verdict as ChildOutput::accept or refuse sends it (`*refusal` the refusal's Error).
   enum class Verdict { accepted, refused, broken };
   Verdict read_verdict(Error* refusal);
+  // The verdict in a conversation whose result is `*result`: true when the child went on; else
+  // false with `*answer` saying how the conversation ends (a refusal becomes `*result` and the
+  // conversation ends well; a broken answer ends it with `broken`).
+  template <class T>
+  bool read_go_on(Result<T>* result, const Error& broken, Status* answer) {
+    Error refusal;
+    switch (read_verdict(&refusal)) {
+      case Verdict::accepted:
+        return true;
+      case Verdict::refused:
+        *result = std::move(refusal);
+        *answer = {};
+        return false;
+      case Verdict::broken:
+        *answer = broken;
+        return false;
+    }
+    return false;
+  }
   bool timed_out() const { return timed_out_; }
   // The channel was closed, or broke, under a read or a send (the child ended or closed its end).
   bool closed() const { return closed_; }

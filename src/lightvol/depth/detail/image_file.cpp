@@ -292,23 +292,6 @@ Result<ImageChannel> read_image_channel(
 
   Result<ImageChannel> result = Error{""};
   const Error broken{path + ": the image reader broke off its answer"};
-  // A verdict: true when the reader went on; else `*answer` says how this reading ends (the
-  // reader's refusal is the result, a broken answer the error).
-  const auto accepted = [&](ChildInput& in, Status* answer) {
-    Error refusal;
-    switch (in.read_verdict(&refusal)) {
-      case ChildInput::Verdict::accepted:
-        return true;
-      case ChildInput::Verdict::refused:
-        result = refusal;
-        *answer = {};
-        return false;
-      case ChildInput::Verdict::broken:
-        *answer = broken;
-        return false;
-    }
-    return false;
-  };
   // The conversation of image_codec.h serve_image_request.
   const auto parent = [&](ChildInput& in) -> Status {
     if (!in.write_value(ImageRequest::read) || !in.write_string(path) ||
@@ -316,7 +299,7 @@ Result<ImageChannel> read_image_channel(
         !in.write_string(read_failure))
       return broken;
     Status answer;
-    if (!accepted(in, &answer)) return answer;
+    if (!in.read_go_on(&result, broken, &answer)) return answer;
     ImageHeader header;
     std::int32_t channels = 0;
     std::uint8_t eight_bit = 0;
@@ -340,7 +323,7 @@ Result<ImageChannel> read_image_channel(
     };
     if (Status s = within_budget(header); !s) return stop(s.error());
     if (!in.write_value(std::int32_t{1})) return broken;
-    if (!accepted(in, &answer)) return answer;
+    if (!in.read_go_on(&result, broken, &answer)) return answer;
     const Result<int> channel = select(header);
     if (!channel) return stop(channel.error());
     if (*channel < 0 || *channel >= channels) return stop(Error{path + ": no such channel"});
@@ -350,7 +333,7 @@ Result<ImageChannel> read_image_channel(
       return stop(s.error());
     in.allow_more(2 + 200e-9 * static_cast<double>(texels));
     if (!in.write_value(std::int32_t{*channel})) return broken;
-    if (!accepted(in, &answer)) return answer;
+    if (!in.read_go_on(&result, broken, &answer)) return answer;
     ImageChannel image;
     image.width = header.width;
     image.height = header.height;

@@ -125,16 +125,7 @@ void send(const Result<DracoMesh>& decoded, ChildOutput& out) {
 // whole triangles, every index naming a point.
 Status receive(ChildInput& in, Result<DracoMesh>* result) {
   const Error broken{"Draco's decoder broke off its answer"};
-  Error refusal;
-  switch (in.read_verdict(&refusal)) {
-    case ChildInput::Verdict::broken:
-      return broken;
-    case ChildInput::Verdict::refused:
-      *result = refusal;
-      return {};
-    case ChildInput::Verdict::accepted:
-      break;
-  }
+  if (Status answer; !in.read_go_on(result, broken, &answer)) return answer;
   DracoMesh out;
   if (!in.read_value(&out.step) || !std::isfinite(out.step) || out.step < 0) return broken;
   Status refused;
