@@ -13,8 +13,13 @@ namespace lightvol::detail {
 
 namespace {
 
-// OpenVDB's files start with the int32 0x56444220 ("VDB "), little-endian.
-constexpr char kVdbMagic[4] = {0x20, 0x42, 0x44, 0x56};
+// OpenVDB's files start with the int64 0x56444220 (" BDV" and four zeros, little-endian), then
+// the file version (4 bytes), the library's version (8), whether grids have offsets (1) and the
+// file's UUID (36 characters): 57 bytes before the first metadata. OpenVDB reads this header
+// without checking each read, so a shorter file would leave it judging bytes it never read (a
+// verdict that changed from run to run); such a file is refused here.
+constexpr char kVdbMagic[8] = {0x20, 0x42, 0x44, 0x56, 0, 0, 0, 0};
+constexpr std::uintmax_t kVdbHeaderBytes = 57;
 
 Status check_vdb_file(const std::string& path) {
   std::error_code ec;
@@ -25,10 +30,16 @@ Status check_vdb_file(const std::string& path) {
   if (!std::filesystem::is_regular_file(status))
     return Error{path + ": is not a regular file (a device or a pipe); grids are read from files"};
   std::ifstream in(path, std::ios::binary);
-  char magic[4] = {};
-  in.read(magic, 4);
-  if (in.gcount() != 4 || !std::equal(magic, magic + 4, kVdbMagic))
+  char magic[8] = {};
+  in.read(magic, 8);
+  const std::streamsize got = in.gcount();
+  if (!std::equal(magic, magic + got, kVdbMagic) || got < 4)
     return Error{path + ": not an OpenVDB file (it does not start with OpenVDB's magic number)"};
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec || size < kVdbHeaderBytes)
+    return Error{path + ": a truncated OpenVDB file (" + std::to_string(ec ? 0 : size) +
+                 " bytes, shorter than OpenVDB's " + std::to_string(kVdbHeaderBytes) +
+                 "-byte header)"};
   return {};
 }
 

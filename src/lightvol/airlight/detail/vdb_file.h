@@ -15,7 +15,7 @@ namespace lightvol::detail {
 
 // The scalar grid `grid` of the OpenVDB file at `path`, made dense over its active voxels'
 // bounding box, with its background and its linear transform. lightvol's own look first (a
-// regular file that starts with OpenVDB's magic number), then a conversation that refuses before
+// regular file that starts with OpenVDB's magic number and holds its whole header), then a conversation that refuses before
 // anything large is allocated: lightvol-image opens the file, finds the grid (its value type must
 // be float or double, its transform linear, its background finite and ≥ 0, some voxel active)
 // and sends the box and the transform; lightvol checks the dense grid against the memory budget;
