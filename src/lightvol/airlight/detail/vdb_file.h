@@ -15,12 +15,12 @@ namespace lightvol::detail {
 
 // The scalar grid `grid` of the OpenVDB file at `path`, made dense over its active voxels'
 // bounding box, with its background and its linear transform. lightvol's own look first (a
-// regular file that starts with OpenVDB's magic number and holds its whole header), then a conversation that refuses before
-// anything large is allocated: lightvol-image opens the file, finds the grid (its value type must
-// be float or double, its transform linear, its background finite and ≥ 0, some voxel active)
-// and sends the box and the transform; lightvol checks the dense grid against the memory budget;
-// only then are the voxels made dense, checked (finite, ≥ 0: the first bad one is named by its
-// index) and sent. Errors name `path` (and the grid): one line each.
+// regular file that starts with OpenVDB's magic number and holds its whole header), then a
+// conversation that refuses before anything large is allocated: lightvol-image opens the file,
+// finds the grid (its value type must be float or double, its transform linear, its background
+// finite and ≥ 0, some voxel active) and sends the box and the transform; lightvol checks the dense
+// grid against the memory budget; only then are the voxels made dense, checked (finite, ≥ 0: the
+// first bad one is named by its index) and sent. Errors name `path` (and the grid): one line each.
 Result<std::shared_ptr<const VoxelGrid>> read_vdb_grid(const std::string& path,
                                                        const std::string& grid);
 
