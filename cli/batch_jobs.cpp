@@ -1,16 +1,15 @@
 // The jobs file of `lightvol batch` (docs/batch.md) as build command lines: each line's arguments
 // parsed by build's own flag definitions (build_flags.h), its paths resolved against the jobs
-// file's folder, and the outputs of the run checked against each other and against its inputs.
+// file's folder, and the outputs of the run checked against each other and against its inputs
+// (refuse_clashing_outputs, pipeline/build_job.h).
 #include "batch_jobs.h"
 
 #include <algorithm>
 #include <filesystem>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include <lightvol/core/jobs_file.h>
-#include <lightvol/core/path.h>
 
 #include "commands.h"
 
@@ -95,11 +94,9 @@ Job parse_job(const JobLine& line, const std::string& where, const fs::path& bas
   return job;
 }
 
-// Every job of the jobs file at `jobs_path`, so that a job's number, and so its shard, is the same
-// in every shard; an output named by an earlier job fails the later one, whichever shards they
-// fall in. `written`: each output's identity, and its job's line.
-Result<std::vector<Job>> read_jobs(const std::string& jobs_path,
-                                   std::unordered_map<std::string, int>* written) {
+// Every job of the jobs file at `jobs_path`, in order, so that a job's number, and so its shard,
+// is the same in every shard.
+Result<std::vector<Job>> read_jobs(const std::string& jobs_path) {
   Result<std::string> text = read_jobs_file(jobs_path);
   if (!text) return text.error();
   Result<std::vector<JobLine>> lines = parse_jobs_text(*text, jobs_path);
@@ -108,83 +105,37 @@ Result<std::vector<Job>> read_jobs(const std::string& jobs_path,
   const fs::path base = fs::path(jobs_path).parent_path();
   std::vector<Job> all;
   all.reserve(lines->size());
-  for (const JobLine& line : *lines) {
-    Job job = parse_job(line, job_where(jobs_path, line.line), base);
-    if (job.error.empty()) {
-      const std::string* const paths[2] = {&job.options.out_path, &job.options.report_path};
-      std::string identity[2];
-      for (int k = 0; k < 2 && job.error.empty(); ++k) {
-        identity[k] = file_identity(*paths[k]);
-        if (const auto earlier = written->find(identity[k]); earlier != written->end())
-          job.error = job_where(jobs_path, line.line) + ": " + *paths[k] +
-                      ": also an output of line " + std::to_string(earlier->second) +
-                      "; give each job its own out (and report)";
-      }
-      if (job.error.empty())
-        for (const std::string& id : identity) written->emplace(id, line.line);
-    }
-    all.push_back(std::move(job));
-  }
+  for (const JobLine& line : *lines)
+    all.push_back(parse_job(line, job_where(jobs_path, line.line), base));
   return all;
 }
 
-// The paths of `o` that name what a build reads.
-BuildFileOptions paths_of(const BuildCommandOptions& o) {
-  BuildFileOptions paths;
-  paths.depth_paths = o.depth_paths;
-  paths.light_path = o.light_path;
-  paths.medium_path = o.medium_path;
-  return paths;
-}
-
-// The library's job for `job`, which "<jobs file>:<line>" names.
-BuildJob build_job(const Job& job, const std::string& where) {
+// The library's job for `job`, which "<jobs file>:<line>" names, before its flags become the
+// build's options: its files only (what refuse_clashing_outputs compares).
+BuildJob job_files(const Job& job, const std::string& where) {
   BuildJob b;
   b.where = where;
+  b.line = job.line;
   b.refused = job.error;
   if (!job.error.empty()) return b;
-  Result<BuildFileOptions> options = build_file_options(job.options);
-  if (!options) {
-    b.refused = where + ": " + options.error().message;
-    return b;
-  }
-  b.options = std::move(*options);
-  b.options_key = json_text(output_options_json(job.options));
+  const BuildCommandOptions& o = job.options;
+  b.options.depth_paths = o.depth_paths;
+  b.options.light_path = o.light_path;
+  b.options.medium_path = o.medium_path;
+  b.options.out_path = o.out_path;
+  b.options.report_path = o.report_path;
   return b;
 }
 
-// No output of the run may be one of its inputs (compared by core/path.h file_identity: the same
-// inode, or the same new path): a job whose out or report is read by any job, or is the jobs file,
-// fails; --results naming an input, the jobs file or a job's output stops the batch, returning its
-// message ("" when nothing clashes). `written`: each job output's identity and its job's line.
-std::string check_outputs(const std::string& jobs_path, const std::string& results_path,
-                          std::vector<Job>& all,
-                          const std::unordered_map<std::string, int>& written) {
-  std::unordered_map<std::string, std::string> read;  // identity: what reads it
-  read.emplace(file_identity(jobs_path), "the jobs file");
-  for (const Job& job : all)
-    if (job.error.empty())
-      for (const auto& [key, path] : build_input_files(paths_of(job.options)))
-        read.emplace(file_identity(path), path + ", an input of line " + std::to_string(job.line) +
-                                              " (key '" + key + "')");
-  for (Job& job : all) {
-    if (!job.error.empty()) continue;
-    for (const std::string* out : {&job.options.out_path, &job.options.report_path})
-      if (const auto input = read.find(file_identity(*out)); input != read.end()) {
-        job.error = job_where(jobs_path, job.line) + ": " + *out + ": is also " + input->second +
-                    "; an output may not replace an input";
-        break;
-      }
+// `b` with the build's options of `job`'s flags, or refused with the flags that conflict.
+void set_build_options(const Job& job, BuildJob& b) {
+  Result<BuildFileOptions> options = build_file_options(job.options);
+  if (!options) {
+    b.refused = b.where + ": " + options.error().message;
+    return;
   }
-  if (results_path.empty()) return {};
-  const std::string results = file_identity(results_path);
-  if (const auto input = read.find(results); input != read.end())
-    return "--results " + results_path + ": is also " + input->second +
-           "; an output may not replace an input";
-  if (const auto output = written.find(results); output != written.end())
-    return "--results " + results_path + ": is also an output of line " +
-           std::to_string(output->second) + "; give the results their own file";
-  return {};
+  b.options = std::move(*options);
+  b.options_key = json_text(output_options_json(job.options));
 }
 
 }  // namespace
@@ -195,13 +146,18 @@ std::string job_where(const std::string& jobs_path, int line) {
 
 Result<std::vector<Job>> read_batch_jobs(const std::string& jobs_path,
                                          const std::string& results_path) {
-  std::unordered_map<std::string, int> written;  // each output's identity, and its job's line
-  Result<std::vector<Job>> jobs = read_jobs(jobs_path, &written);
+  Result<std::vector<Job>> jobs = read_jobs(jobs_path);
   if (!jobs) return jobs.error();
-  if (const std::string clash = check_outputs(jobs_path, results_path, *jobs, written);
-      !clash.empty())
-    return Error{clash};
-  for (Job& job : *jobs) job.build = build_job(job, job_where(jobs_path, job.line));
+  std::vector<BuildJob*> builds;
+  for (Job& job : *jobs) {
+    job.build = job_files(job, job_where(jobs_path, job.line));
+    builds.push_back(&job.build);
+  }
+  if (Status s = refuse_clashing_outputs(builds, {jobs_path, results_path}); !s) return s.error();
+  for (Job& job : *jobs) {
+    job.error = job.build.refused;
+    if (job.error.empty()) set_build_options(job, job.build);
+  }
   return jobs;
 }
 

@@ -27,6 +27,9 @@ constexpr std::pair<std::string_view, std::string_view> kParameterFlags[] = {
     {"BuildFileOptions::out_path", "--out"},
     {"BuildFileOptions::report_path", "--report"},
     {"BuildFileOptions::medium_path", "--medium"},
+    {"DemoOptions::data_dir", "--data"},
+    {"RenderRequest::method", "--method"},
+    {"BatchFiles::results_path", "--results"},
 };
 
 }  // namespace

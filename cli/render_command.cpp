@@ -1,28 +1,18 @@
 // lightvol render: the OpenGL checker. Renders the signed single-scattering airlight of a light
 // volume (or, for comparison, ray marching and radial blur from the shadow maps) from a camera.
-#include <algorithm>
-#include <chrono>
-#include <cmath>
+// The steps are the library's (render/airlight_render.h, render/gl_airlight_render.h); here the
+// flags, the volume's read and the printed lines.
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include <lightvol/airlight/airlight.h>
 #include <lightvol/core/mesh.h>
-#include <lightvol/depth/depth_image.h>
-#include <lightvol/depth/shadow_maps.h>
 #include <lightvol/io/mesh_reader.h>
-#include <lightvol/light/camera.h>
-#include <lightvol/light/light.h>
+#include <lightvol/render/airlight_render.h>
 #include <lightvol/render/image_io.h>
-#include <lightvol/render/reference.h>
-#include <lightvol/render/scene.h>
 #include <lightvol/render/surfaces.h>
 #ifdef LIGHTVOL_WITH_GL
-#include <lightvol/gl/context.h>
-#include <lightvol/render/gl_marchers.h>
-#include <lightvol/render/gl_volume.h>
-#include <lightvol/render/live_volume.h>
+#include <lightvol/render/gl_airlight_render.h>
 #endif
 
 #include "commands.h"
@@ -58,13 +48,6 @@ struct RenderOptions {
   int opacity_layers = 64;
 };
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty()
-             ? 0
-             : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-
 bool needs_mesh(const RenderOptions& o) { return o.method == "volume" || o.method == "reference"; }
 
 // Flag combinations that make no sense; "" when the flags agree.
@@ -96,141 +79,40 @@ std::string conflicting_flags(const RenderOptions& o) {
   return "";
 }
 
-// The camera, light and medium, and the surface distances of the camera depth.
-Result<RenderScene> load_render_scene(const RenderOptions& o, Progress& progress) {
-  RenderScene scene;
-  Result<Camera> camera = load_camera(o.camera_path);
-  if (!camera) return camera.error();
-  scene.camera = *camera;
-  Result<Light> light = load_light(o.light_path);
-  if (!light) return light.error();
-  scene.light = *light;
-  Result<Medium> medium = load_medium(o.medium_path);
-  if (!medium) return medium.error();
-  scene.medium = *medium;
-  if (scene.medium.profile.enabled() && scene.light.type != LightType::spot)
-    return Error{o.medium_path + ": key 'profile': applies to spot lights only, " + o.light_path +
-                 " is a " + std::string(to_string(scene.light.type)) + " light"};
-  if (scene.medium.density.varying() && o.method != "reference" && o.method != "volume" &&
-      o.method != "raymarch")
-    return Error{o.medium_path + ": key 'density': --method " + o.method +
-                 " renders homogeneous media only (volume, reference and raymarch take a density)"};
-  progress.begin("reading " + o.depth_path);
-  Result<DepthImage> depth = read_depth_image(o.depth_path, {o.channel});
-  if (!depth) return depth.error();
-  Result<std::vector<double>> surface =
-      surface_distances(scene.camera, depth->values, depth->width, depth->height, o.depth_path);
-  if (!surface) return surface.error();
-  scene.surface = std::move(*surface);
-  progress.end(size_text(depth->width, depth->height));
-  return scene;
-}
-
-#ifdef LIGHTVOL_WITH_GL
-// Renders once, then `frames` more times, timing those.
-template <class Renderer>
-Image render_frames(Renderer& renderer, int frames, std::vector<double>* frame_seconds) {
-  Image image = renderer.render();
-  for (int i = 0; i < frames; ++i) {
-    double s = 0;
-    renderer.render(&s);
-    frame_seconds->push_back(s);
-  }
-  return image;
-}
-#endif
-
-// The airlight by --method: the CPU reference, or on the GPU the volume, ray marching or the
-// radial blur.
-// `generation_seconds` receives, for --method live with --frames K, K timings of the volume's
-// generation alone (LiveVolume::generate and glFinish: the paper's "tessellate" row).
-Result<Image> render_airlight(const RenderOptions& o, const RenderScene& scene, const Mesh& volume,
-                              Progress& progress, std::vector<double>* frame_seconds,
-                              std::vector<double>* generation_seconds, std::string* renderer_name) {
-  if (o.method == "reference") {
-    progress.begin("rendering reference (CPU, double precision)");
-    Image image = render_reference(volume, scene);
-    progress.end();
-    return image;
-  }
-#ifdef LIGHTVOL_WITH_GL
-  Result<std::unique_ptr<gl::Context>> context = gl::Context::create();
-  if (!context) return context.error();
-  *renderer_name = (*context)->renderer();
-  progress.begin("rendering " + o.method + " on " + (*context)->renderer());
-  Image image;
-  if (o.method == "volume") {
-    GlVolumeOptions vo;
-    vo.density.tile = o.grid_tile;
-    vo.density.slices = o.grid_slices;
-    vo.density.opacity.size = o.opacity_size;
-    vo.density.opacity.layers = o.opacity_layers;
-    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene, vo);
-    if (!renderer) return renderer.error();
-    (*renderer)->set_volume(volume);
-    image = render_frames(**renderer, o.frames, frame_seconds);
-  } else if (o.method == "live") {
-    // The shadow map goes to the GPU as a texture; each frame makes the volume from it there.
-    Result<ShadowMaps> maps = read_shadow_maps(scene.light, o.shadow_maps, {o.channel});
-    if (!maps) return maps.error();
-    std::vector<gl::TextureHandle> textures;
-    std::vector<GlShadowMap> on_gpu;
-    for (const DepthImage& map : maps->images()) {
-      textures.push_back(upload_shadow_map(scene.light, map));
-      on_gpu.push_back({textures.back().id(), map.width, map.height});
-    }
-    LiveOptions live_options;
-    if (o.adaptive) live_options.max_error = o.max_error;
-    Result<std::unique_ptr<LiveVolume>> live =
-        LiveVolume::create(scene.light, on_gpu, live_options);
-    if (!live) return live.error();
-    Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
-    if (!renderer) return renderer.error();
-    if (Status s = (*renderer)->set_volume(**live); !s) return s.error();
-    image = render_frames(**renderer, o.frames, frame_seconds);
-    for (int i = 0; i < o.frames; ++i) {
-      const auto start = std::chrono::steady_clock::now();
-      (*live)->generate();
-      gl::glFinish();
-      generation_seconds->push_back(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    }
-  } else {
-    ShadowMaps maps;  // radial needs none
-    if (!o.shadow_maps.empty()) {
-      Result<ShadowMaps> read = read_shadow_maps(scene.light, o.shadow_maps, {o.channel});
-      if (!read) return read.error();
-      maps = std::move(*read);
-    }
-    MarchOptions mo;
-    mo.samples = o.samples;
-    mo.interleave = o.interleave;
-    mo.method = o.method == "radial" ? MarchMethod::radial : MarchMethod::raymarch;
-    mo.opacity.size = o.opacity_size;
-    mo.opacity.layers = o.opacity_layers;
-    Result<std::unique_ptr<GlMarcher>> marcher =
-        o.shadow_maps.empty() ? GlMarcher::create(scene, {}, {}, mo)
-                              : GlMarcher::create(scene, maps.images(), maps.sources(), mo);
-    if (!marcher) return marcher.error();
-    image = render_frames(**marcher, o.frames, frame_seconds);
-  }
-  progress.end();
-  return image;
-#else
-  (void)scene, (void)volume, (void)frame_seconds, (void)generation_seconds, (void)renderer_name;
-  return Error{"--method " + o.method +
-               ": this lightvol was built without OpenGL (LIGHTVOL_WITH_GL=OFF)"};
-#endif
+// The library's request for the flags `o`.
+RenderRequest render_request(const RenderOptions& o) {
+  RenderRequest r;
+  r.method = o.method == "live"        ? RenderMethod::live
+             : o.method == "reference" ? RenderMethod::reference
+             : o.method == "raymarch"  ? RenderMethod::raymarch
+             : o.method == "radial"    ? RenderMethod::radial
+                                       : RenderMethod::volume;
+  r.camera_path = o.camera_path;
+  r.light_path = o.light_path;
+  r.medium_path = o.medium_path;
+  r.depth_path = o.depth_path;
+  r.channel = o.channel;
+  r.shadow_map_paths = o.shadow_maps;
+  r.samples = o.samples;
+  r.interleave = o.interleave;
+  if (o.adaptive) r.max_error = o.max_error;
+  r.frames = o.frames;
+  r.grid_tile = o.grid_tile;
+  r.grid_slices = o.grid_slices;
+  r.opacity_size = o.opacity_size;
+  r.opacity_layers = o.opacity_layers;
+  return r;
 }
 
 int run_render(const RenderOptions& o) {
   Progress progress(o.quiet);
   if (const std::string conflict = conflicting_flags(o); !conflict.empty()) return fail(conflict);
+  const RenderRequest request = render_request(o);
 
-  Result<RenderScene> scene = load_render_scene(o, progress);
+  Result<RenderScene> scene = load_render_scene(request, progress.log());
   if (!scene) return fail(scene.error());
   Mesh volume;
-  if (needs_mesh(o)) {
+  if (method_takes_mesh(request.method)) {
     progress.begin("reading " + o.mesh_path);
     Result<Mesh> mesh = read_mesh(o.mesh_path);
     if (!mesh) return fail(mesh.error());
@@ -238,41 +120,40 @@ int run_render(const RenderOptions& o) {
     progress.end(thousands(volume.num_triangles()) + " triangles");
   }
 
-  std::vector<double> frame_seconds, generation_seconds;
-  std::string renderer_name;
-  Result<Image> image = render_airlight(o, *scene, volume, progress, &frame_seconds,
-                                        &generation_seconds, &renderer_name);
-  if (!image) return fail(image.error());
+#ifdef LIGHTVOL_WITH_GL
+  Result<AirlightRender> render = render_airlight(request, *scene, volume, progress.log());
+#else
+  Result<AirlightRender> render =
+      request.method == RenderMethod::reference
+          ? render_airlight_reference(*scene, volume, progress.log())
+          : Result<AirlightRender>(Error{"--method " + o.method +
+                                         ": this lightvol was built without OpenGL "
+                                         "(LIGHTVOL_WITH_GL=OFF)"});
+#endif
+  if (!render) return fail(render.error());
+  Image& image = render->image;
   // Surfaces of constant radiance `background` seen through the medium.
-  if (o.composite) add_constant_surfaces(*scene, o.background, &*image);
+  if (o.composite) add_constant_surfaces(*scene, o.background, &image);
 
   progress.begin("writing " + o.out_path);
-  if (Status s = write_image(o.out_path, *image, o.exposure); !s) return fail(s.error());
+  if (Status s = write_image(o.out_path, image, o.exposure); !s) return fail(s.error());
   progress.end();
 
-  double sum = 0, peak = 0;
-  for (double v : image->values) {
-    sum += v;
-    peak = std::max(peak, std::abs(v));
-  }
+  const ImageLevels levels = image_levels(image);
   std::printf("%s: %dx%d airlight, method %s, mean %.6g, max %.6g\n", o.out_path.c_str(),
-              image->width, image->height, o.method.c_str(),
-              image->values.empty() ? 0.0 : sum / static_cast<double>(image->values.size()), peak);
-  if (!frame_seconds.empty())
-    std::printf("time per frame: %.3f ms (median of %zu frames, %s)\n", 1e3 * median(frame_seconds),
-                frame_seconds.size(), renderer_name.c_str());
-  if (!generation_seconds.empty())
+              image.width, image.height, o.method.c_str(), levels.mean, levels.peak);
+  if (!render->frame_seconds.empty())
+    std::printf("time per frame: %.3f ms (median of %zu frames, %s)\n",
+                1e3 * median(render->frame_seconds), render->frame_seconds.size(),
+                render->renderer.c_str());
+  if (!render->generation_seconds.empty())
     std::printf("volume generation alone: %.3f ms (median of %zu)\n",
-                1e3 * median(generation_seconds), generation_seconds.size());
+                1e3 * median(render->generation_seconds), render->generation_seconds.size());
   if (o.compare_path.empty()) return 0;
-  Result<Image> ref = read_image(o.compare_path);
-  if (!ref) return fail(ref.error());
-  if (ref->width != image->width || ref->height != image->height)
-    return fail(o.compare_path + ": image is " + size_text(ref->width, ref->height) +
-                ", the render is " + size_text(image->width, image->height));
-  const ImageDifference d = compare_images(*image, *ref);
+  const Result<ImageDifference> d = compare_with_image_file(image, o.compare_path);
+  if (!d) return fail(d.error());
   std::printf("compared with %s: relative L2 %.3e, max abs error %.3e, PSNR %.2f dB\n",
-              o.compare_path.c_str(), d.relative_l2, d.max_abs, d.psnr_db);
+              o.compare_path.c_str(), d->relative_l2, d->max_abs, d->psnr_db);
   return 0;
 }
 

@@ -26,6 +26,7 @@ struct BuildJob {
   // content hash, so that a job whose options changed is built again).
   std::string options_key;
   std::string where;  // begins the job's errors ("jobs.jsonl:3")
+  int line = 0;       // the job's line in its jobs file, as other jobs' messages name it
   // When not empty, the job is not run: it fails with this message (a jobs-file line that is not a
   // job). Not prefixed with `where`.
   std::string refused;
@@ -35,6 +36,22 @@ struct BuildJob {
 // depth inputs ("inputs"; {face} expanded to six, depth_input_files), the light ("light"), the
 // medium ("args: --medium").
 std::vector<std::pair<std::string, std::string>> build_input_files(const BuildFileOptions& options);
+
+// The files a batch names besides its jobs' own: the jobs file, and the file its results go to
+// ("" for none).
+struct BatchFiles {
+  std::string jobs_path;
+  std::string results_path;
+};
+
+// Checks that no output of a batch replaces another or an input (compared by core/path.h
+// file_identity: the same inode, or the same new path), in job order: a job whose out_path or
+// report_path is an output of an earlier job is refused (BuildJob::refused, naming that job's
+// line); then a job whose out_path or report_path is a file any job reads (build_input_files) or
+// the jobs file is refused. Jobs refused already take no part (their files are neither outputs
+// nor inputs). An Error when BatchFiles::results_path is the jobs file, an input or a job's
+// output. Call before running the jobs: only options' paths are read.
+Status refuse_clashing_outputs(const std::vector<BuildJob*>& jobs, const BatchFiles& files);
 
 enum class JobStatus { ok, skipped, failed };
 
