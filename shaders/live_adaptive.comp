@@ -15,12 +15,14 @@
 //   LV_OWN       per level 1..top, per cell and band of rows: a cell splits when a child did, or
 //                when one of its texels lies farther than E from the cell's two triangles (the
 //                pyramid's value above E).
-//   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1);
-//                in fix-up round r, first the cells the round's test failed.
+//   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1).
 //   LV_CONTROL   one invocation before fix-up round r: the round's dispatch sizes, zero when the
 //                round before split nothing.
 //   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
 //                leaf, later rounds those whose parent or neighbour split in the round before).
+//   LV_PROPAGATE fix-up round r's balance in one pass: each cell the test failed splits, and
+//                every cell that LV_BALANCE's rule then splits, level after level upwards (the
+//                same closure that LV_BALANCE's level-by-level passes reach).
 //   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
 //   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
 //   LV_TRIANGLES per emitting cell (listed by LV_COUNT): its triangles, as indices of vertex
@@ -141,7 +143,7 @@ layout(std430, binding = 23) buffer SeamTemplate { uint seam_template[]; };
 // passes on llvmpipe).
 uniform int top_level;
 uniform int level;   // LV_OWN, LV_BALANCE
-uniform int round_;  // LV_BALANCE, LV_TEST, LV_CONTROL
+uniform int round_;  // LV_BALANCE, LV_TEST, LV_CONTROL, LV_PROPAGATE
 uniform int rounds;  // LV_CONTROL, LV_CLOSE: the most fix-up rounds a frame runs
 uniform int lv_face;  // the face the per-face passes run on (0: spot, directional)
 uniform int split_stride;  // LV_UNITE: uints between two faces' split[] in all_split[]
@@ -170,6 +172,12 @@ int invocation() {
              gl_GlobalInvocationID.x);
 }
 
+// a / b (integer quotient) for 0 <= a < 2^31 and b > 0, through a double division, which llvmpipe
+// vectorises where it divides integers one lane at a time. Exact: a quotient that is not an
+// integer lies at least 1 / b from the next one, and the division rounds it by at most
+// (a / b) · 2^-53, less than that for any a below 2^53; an integer quotient is exact.
+int idiv(int a, int b) { return int(double(a) / double(b)); }
+
 int cell_index(int L, int i, int j) { return offset_at(L) + j * nx_at(L) + i; }
 
 bool in_level(int L, int i, int j) {
@@ -194,7 +202,8 @@ ivec3 cell_of(int c, int first) {
   int L = first;
   while (L < top_level && c >= offset_at(L + 1)) ++L;
   int k = c - offset_at(L);
-  return ivec3(L, k % nx_at(L), k / nx_at(L));
+  int j = idiv(k, nx_at(L));
+  return ivec3(L, k - j * nx_at(L), j);
 }
 
 // Configuration of a leaf: the edges whose same-level neighbour is split and whose midpoint lies
@@ -252,7 +261,7 @@ int cell_triangles(ivec4 b, int half_, uint config, out ivec2 tri[18]) {
 void main() {
   int v = invocation();
   if (v >= width * height) return;
-  int col = v % width, row = v / width;
+  int row = idiv(v, width), col = v - row * width;
   int texture_row = flip_y == 1 ? row : height - 1 - row;
   double stored = double(live_fetch(lv_face, ivec2(col, texture_row)));
   double d;
@@ -292,8 +301,8 @@ void main() {
   int bands = ((1 << L) + kBandRows) / kBandRows;
   int task = invocation();
   if (task >= nx_at(L) * ny_at(L) * bands) return;
-  int cell = task / bands, band = task - cell * bands;
-  int i = cell % nx_at(L), j = cell / nx_at(L);
+  int cell = idiv(task, bands), band = task - cell * bands;
+  int j = idiv(cell, nx_at(L)), i = cell - j * nx_at(L);
   int c = cell_index(L, i, j);
   if (split[c] != 0u) return;
   if (L > 1 && (is_split(L - 1, 2 * i, 2 * j) || is_split(L - 1, 2 * i + 1, 2 * j) ||
@@ -328,7 +337,7 @@ void main() {
   int y_begin = b.y + band * kBandRows, y_end = min(b.y + (band + 1) * kBandRows, b.w + 1);
   for (int y = y_begin; y < y_end; ++y) {
     int s = y - b.y;
-    int xs = b.x + (wx == wy ? wy - s : (wx * (wy - s)) / wy);
+    int xs = b.x + (wx == wy ? wy - s : idiv(wx * (wy - s), wy));
     double base1 = da + g1y * double(s), base2 = dd + g2y * double(y - b.w);
     double w0y = w0_c + 0.0LF * w0_dc + double(y) * w0_dr;
     for (int x = b.x; x <= b.z; ++x) {
@@ -353,13 +362,9 @@ void main() {
   int L = level;
   int cell = invocation();
   if (cell >= nx_at(L) * ny_at(L)) return;
-  int i = cell % nx_at(L), j = cell / nx_at(L);
+  int j = idiv(cell, nx_at(L)), i = cell - j * nx_at(L);
   int c = cell_index(L, i, j);
   uint mark = uint(round_) + 1u;
-  if (round_ > 0 && fail[c] == uint(round_)) {
-    split[c] = mark;
-    return;
-  }
   if (split[c] != 0u) return;
   int l = L - 1, ci = 2 * i, cj = 2 * j;
   bool any = is_split(l, ci, cj) || is_split(l, ci + 1, cj) || is_split(l, ci, cj + 1) ||
@@ -394,7 +399,8 @@ void main() {
 // The largest error (TexelDepths::error) over the texels of the closed triangle (a, b, c) whose
 // window depth is the plane through its corners' depths: detail::triangle_error, early out above
 // E (returns a value above E then).
-int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+// floor(a / b) for b > 0 and |a| < 2^31, through a double division (exact, as idiv's).
+int floor_div(int a, int b) { return int(floor(double(a) / double(b))); }
 
 bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
   int area2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
@@ -468,6 +474,49 @@ void main() {
       atomicAdd(control[round_], 1u);
       return;
     }
+  }
+}
+#endif
+
+#ifdef LV_PROPAGATE
+// LV_BALANCE's rule read backwards: a split cell (l, i, j) splits the cells (l + 1, I, J) whose
+// children or children's edge neighbours include it: I in {(i - 1) >> 1, (i + 1) >> 1} with
+// J = j >> 1, or I = i >> 1 with J in {(j - 1) >> 1, (j + 1) >> 1}. The tree before the round is
+// balanced (LV_BALANCE's closure), so only this round's splits force more; each is followed by
+// the invocation whose atomic compare-and-swap split it, so every forced cell is reached once and
+// the result is LV_BALANCE's closure whatever the order. From one cell, the cells it forces at
+// each level lie in a box of at most 3 × 3 cells (widths 1, 2, then at most 3).
+void main() {
+  int c = offset_at(min(2, top_level + 1)) + invocation();
+  if (c >= cells_total || top_level < 2) return;
+  if (fail[c] != uint(round_)) return;
+  uint mark = uint(round_) + 1u;
+  if (atomicCompSwap(split[c], 0u, mark) != 0u) return;
+  ivec3 cl = cell_of(c, 2);
+  ivec2 cur[9];
+  cur[0] = cl.yz;
+  int n = 1;
+  for (int L = cl.x; L < top_level && n > 0; ++L) {
+    ivec2 next[9];
+    int m = 0;
+    for (int k = 0; k < n; ++k) {
+      ivec2 p = cur[k];
+      ivec2 forced[5] = ivec2[5](ivec2(p.x >> 1, p.y >> 1), ivec2((p.x - 1) >> 1, p.y >> 1),
+                                 ivec2((p.x + 1) >> 1, p.y >> 1), ivec2(p.x >> 1, (p.y - 1) >> 1),
+                                 ivec2(p.x >> 1, (p.y + 1) >> 1));
+      for (int f = 0; f < 5; ++f) {
+        ivec2 q = forced[f];
+        if (!in_level(L + 1, q.x, q.y)) continue;
+        bool seen = false;
+        for (int t = 0; t < m; ++t) seen = seen || next[t] == q;
+        if (seen || m == 9) continue;
+        if (atomicCompSwap(split[cell_index(L + 1, q.x, q.y)], 0u, mark) != 0u) continue;
+        next[m] = q;
+        ++m;
+      }
+    }
+    cur = next;
+    n = m;
   }
 }
 #endif
@@ -627,7 +676,7 @@ void main() {
   int words = (width + 31) / 32;
   int k = invocation();
   if (k >= words * height) return;
-  int row = k / words, col0 = (k % words) * 32;
+  int row = idiv(k, words), col0 = (k - row * words) * 32;
   uint r = omni[32 + lv_face] + word_rank[k];
   for (uint w = bits[k]; w != 0u; w &= w - 1u) {
     int col = col0 + findLSB(w);

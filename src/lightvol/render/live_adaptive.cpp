@@ -1,9 +1,11 @@
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <ctime>
 #include <limits>
 #include <string>
 
@@ -55,12 +57,17 @@ enum Pass {
   kApply,
   kBase,
   kSeams,
+  kPropagate,
   kPasses
 };
+// Profiling's names for the commands that are not passes (after the passes).
+constexpr int kClearCommand = kPasses, kCopyCommand = kPasses + 1;
+constexpr const char* kPhaseNames[] = {"clear", "pyramid", "tessellation", "emission"};
 constexpr const char* kPassNames[kPasses] = {
-    "LV_TEXELS",       "LV_OWN",       "LV_BALANCE",    "LV_CONTROL",   "LV_TEST",     "LV_COUNT",
-    "LV_SCAN_CHUNKS",  "LV_SCAN_SUMS", "LV_SCAN_WRITE", "LV_TRIANGLES", "LV_VERTICES", "LV_CLOSE",
-    "LV_SEAM_CONTROL", "LV_RESET",     "LV_UNITE",      "LV_APPLY",     "LV_BASE",     "LV_SEAMS"};
+    "LV_TEXELS",   "LV_OWN",         "LV_BALANCE",      "LV_CONTROL",    "LV_TEST",
+    "LV_COUNT",    "LV_SCAN_CHUNKS", "LV_SCAN_SUMS",    "LV_SCAN_WRITE", "LV_TRIANGLES",
+    "LV_VERTICES", "LV_CLOSE",       "LV_SEAM_CONTROL", "LV_RESET",      "LV_UNITE",
+    "LV_APPLY",    "LV_BASE",        "LV_SEAMS",        "LV_PROPAGATE"};
 
 // Buffer bindings (shaders/live_adaptive.comp).
 enum Binding {
@@ -116,7 +123,7 @@ std::array<GLuint, 3> groups_for(std::uint64_t invocations) {
   const std::uint64_t x = std::min(groups, kMaxGroupsX);
   return {static_cast<GLuint>(x), static_cast<GLuint>((groups + x - 1) / x), 1};
 }
-void dispatch(std::uint64_t invocations) {
+void dispatch_groups(std::uint64_t invocations) {
   const std::array<GLuint, 3> g = groups_for(invocations);
   glDispatchCompute(g[0], g[1], g[2]);
 }
@@ -155,6 +162,14 @@ struct LiveAdaptive::State {
   std::uint64_t cells = 0, words = 0, max_vertices = 0, max_triangles = 0;
   std::uint64_t max_indices = 0, max_grid_vertices = 0;
   GLint seam_desc[72] = {}, corner_desc[72] = {};
+  // Profiling (set_profiling): one query per timed command of the frames since it was turned on.
+  struct Timed {
+    int phase = 0, pass = 0;
+    std::unique_ptr<GpuTimer> timer;
+    double wall = 0, cpu = 0;  // seconds, glFinish before and after: clock, process CPU time
+  };
+  bool profiling = false;
+  mutable std::vector<Timed> timed;
 
   bool omni() const { return faces == kOmniFaces; }
   // Binds face f's ranges of the per-face buffers, and every other buffer whole.
@@ -418,9 +433,35 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
 void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) const {
   const State& s = *state_;
   const GLuint zero = 0, none = 0xFFFFFFFFu;
+  // The phase and pass the next command belongs to (profiling), and the command, timed when
+  // profiling.
+  int phase = 0, current = kClearCommand;
+  const auto timed = [&](const auto& command) {
+    if (!s.profiling) {
+      command();
+      return;
+    }
+    State::Timed t{phase, current, std::make_unique<GpuTimer>(), 0, 0};
+    glFinish();
+    const auto start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
+    t.timer->begin();
+    command();
+    t.timer->end();
+    glFinish();
+    t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    t.cpu = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    s.timed.push_back(std::move(t));
+  };
+  const auto dispatch = [&](std::uint64_t invocations) {
+    timed([&] { dispatch_groups(invocations); });
+  };
   const auto clear = [&](Binding b, const GLuint* value) {
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[b].id());
-    glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, value);
+    current = kClearCommand;
+    timed([&] {
+      glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, value);
+    });
   };
   for (Binding b : {kSplits, kFails, kControlBuf, kBits, kOmni}) clear(b, &zero);
   if (s.omni()) {
@@ -433,6 +474,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   };
   int face = 0;
   const auto use = [&](Pass pass) -> const Program& {
+    current = pass;
     s.programs[pass].use();
     glUniform1i(s.programs[pass].uniform("top_level"), s.top);
     glUniform1i(s.programs[pass].uniform("lv_face"), face);
@@ -440,14 +482,17 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   };
   const auto indirect = [&](Binding b, std::uint64_t uint_offset) {
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, s.buffers[b].id());
-    glDispatchComputeIndirect(static_cast<GLintptr>(
-        (b == kControlBuf ? face * s.stride[kControlBuf] : 0) + 4 * uint_offset));
+    timed([&] {
+      glDispatchComputeIndirect(static_cast<GLintptr>(
+          (b == kControlBuf ? face * s.stride[kControlBuf] : 0) + 4 * uint_offset));
+    });
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
   };
   const std::uint64_t texels =
       static_cast<std::uint64_t>(s.width) * static_cast<std::uint64_t>(s.height);
 
   // Per face: the texels and the pyramid, thresholded at E, level by level from the finest.
+  phase = 1;
   for (face = 0; face < s.faces; ++face) {
     s.bind_face(face);
     bind(use(kTexels));
@@ -464,8 +509,11 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
     if (s.omni()) {
       glBindBuffer(GL_COPY_READ_BUFFER, s.buffers[kSplits].id());
       glBindBuffer(GL_COPY_WRITE_BUFFER, s.buffers[kThreshold].id());
-      glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, face * s.stride[kSplits],
-                          face * s.stride[kThreshold], static_cast<GLsizeiptr>(4 * s.cells));
+      current = kCopyCommand;
+      timed([&] {
+        glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, face * s.stride[kSplits],
+                            face * s.stride[kThreshold], static_cast<GLsizeiptr>(4 * s.cells));
+      });
       glBindBuffer(GL_COPY_READ_BUFFER, 0);
       glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
     }
@@ -495,15 +543,14 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       glUniform1i(test.uniform("round_"), round);
       indirect(kControlBuf, 64);
       barrier();
-      const Program& rebalance = use(kBalance);
-      glUniform1i(rebalance.uniform("round_"), round);
-      for (int level = 2; level <= s.top; ++level) {
-        glUniform1i(rebalance.uniform("level"), level);
-        indirect(kControlBuf, 64 + 3 * static_cast<std::uint64_t>(level - 1));
-        barrier();
-      }
+      // The round's balance in one pass (over the test's cells).
+      const Program& propagate = use(kPropagate);
+      glUniform1i(propagate.uniform("round_"), round);
+      indirect(kControlBuf, 64);
+      barrier();
     }
   };
+  phase = 2;
   if (!s.omni()) {
     face = 0;
     tessellate();
@@ -542,6 +589,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   }
   // Emission, face by face: counts and the vertex bitmap, the two scans, the triangles and
   // vertices; then the closing (omni: the seams and corners) and the draw command.
+  phase = 3;
   const auto scan = [&](Binding in, Binding out, std::uint64_t n, bool popcount, GLuint total) {
     s.bind_range(kScanIn, in, face);
     s.bind_range(kScanOut, out, face);
@@ -603,6 +651,29 @@ void LiveAdaptive::draw() const {
   glDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_INT,
                          reinterpret_cast<const void*>(std::uintptr_t{4 * kDrawCommand}));
   glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+}
+
+void LiveAdaptive::set_profiling(bool on) {
+  state_->profiling = on;
+  state_->timed.clear();
+}
+
+std::vector<LiveAdaptive::PassTime> LiveAdaptive::profile() const {
+  std::vector<PassTime> r;
+  for (const State::Timed& t : state_->timed) {
+    const std::string phase = kPhaseNames[t.phase];
+    const std::string pass = t.pass == kClearCommand  ? "clear"
+                             : t.pass == kCopyCommand ? "copy"
+                                                      : kPassNames[t.pass];
+    auto it = std::find_if(r.begin(), r.end(),
+                           [&](const PassTime& p) { return p.phase == phase && p.pass == pass; });
+    if (it == r.end()) it = r.insert(r.end(), PassTime{phase, pass, 0, 0, 0, 0});
+    ++it->dispatches;
+    it->seconds += t.timer->seconds();
+    it->wall_seconds += t.wall;
+    it->cpu_seconds += t.cpu;
+  }
+  return r;
 }
 
 std::uint64_t LiveAdaptive::max_vertices() const { return state_->max_vertices; }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <lightvol/core/mesh.h>
@@ -48,6 +49,23 @@ class LiveAdaptive {
 
   // The mesh the last generate made, and its statistics.
   Result<LiveMesh> read_back() const;
+
+  // For benchmarks, never in an engine's frame: while on, generate wraps every dispatch, clear
+  // and copy in a GL_TIME_ELAPSED query (allocating them) and in glFinish calls, timed on the
+  // CPU; profile() waits for the results and returns both per phase and pass, summed over the
+  // frames since profiling was turned on. (llvmpipe runs a dispatch on the CPU outside its
+  // queries, which time it near zero: there the wall time is the cost.)
+  struct PassTime {
+    std::string phase, pass;  // phase: "clear", "pyramid", "tessellation" (omni: the seam
+                              // rounds), "emission"; pass: its LV_* name
+    int dispatches = 0;
+    double seconds = 0;       // GL_TIME_ELAPSED
+    double wall_seconds = 0;  // clock from a glFinish before the command to one after
+    double cpu_seconds = 0;   // the process's CPU time (all threads) over the same span
+                              // (llvmpipe: the command's work, less sensitive to other load)
+  };
+  void set_profiling(bool on);
+  std::vector<PassTime> profile() const;
 
  private:
   LiveAdaptive() = default;
