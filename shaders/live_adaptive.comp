@@ -16,13 +16,14 @@
 //                when one of its texels lies farther than E from the cell's two triangles (the
 //                pyramid's value above E).
 //   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1).
-//   LV_CONTROL   one invocation before fix-up round r: the round's dispatch sizes, zero when the
-//                round before split nothing.
+//   LV_CONTROL   one invocation before the fix-up rounds: round 1's dispatch size (zero for an
+//                omni face that sits the seam round out).
 //   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
 //                leaf, later rounds those whose parent or neighbour split in the round before).
 //   LV_PROPAGATE fix-up round r's balance in one pass: each cell the test failed splits, and
 //                every cell that LV_BALANCE's rule then splits, level after level upwards (the
-//                same closure that LV_BALANCE's level-by-level passes reach).
+//                same closure that LV_BALANCE's level-by-level passes reach); round r + 1's
+//                dispatch size, zero when round r split nothing.
 //   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
 //   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
 //   LV_TRIANGLES per emitting cell (listed by LV_COUNT): its triangles, as indices of vertex
@@ -91,9 +92,9 @@ layout(std430, binding = 2) buffer Scales { double scale[]; };
 #endif
 layout(std430, binding = 3) coherent buffer Splits { uint split[]; };
 layout(std430, binding = 4) buffer Fails { uint fail[]; };
-// control[0..63]: fails per round; control[64 + k]: dispatch sizes written by LV_CONTROL
-// (3 per dispatch: the test, then the balance of levels 2..top); stats from control[160] on;
-// control[kDraw..kDraw + 4]: the indirect draw command.
+// control[0..63]: fails per round; stats from control[160] on; control[kDraw..kDraw + 4]: the
+// indirect draw command; control[kRoundArgs + 3 r..+2]: fix-up round r's dispatch size (its test
+// and LV_PROPAGATE), written by LV_CONTROL (round 1) and by the round before (LV_PROPAGATE).
 layout(std430, binding = 5) coherent buffer Control { uint control[]; };
 layout(std430, binding = 6) buffer Bits { uint bits[]; };
 #ifndef LV_SEAM_PASS
@@ -143,7 +144,7 @@ layout(std430, binding = 23) buffer SeamTemplate { uint seam_template[]; };
 // passes on llvmpipe).
 uniform int top_level;
 uniform int level;   // LV_OWN, LV_BALANCE
-uniform int round_;  // LV_BALANCE, LV_TEST, LV_CONTROL, LV_PROPAGATE
+uniform int round_;  // LV_BALANCE, LV_TEST, LV_PROPAGATE
 uniform int rounds;  // LV_CONTROL, LV_CLOSE: the most fix-up rounds a frame runs
 uniform int lv_face;  // the face the per-face passes run on (0: spot, directional)
 uniform int split_stride;  // LV_UNITE: uints between two faces' split[] in all_split[]
@@ -160,6 +161,7 @@ const int kBandRows = 16;
 const uint kStats = 160u;  // control[kStats + ...]: rounds used, converged, grid vertices, grid
                            // triangles, closing triangles
 const uint kDraw = 192u;
+const uint kRoundArgs = 256u;
 const uint kEmitting = kStats + 6u;  // cells that emit triangles (LV_COUNT)
 const uint kTriangleArgs = 100u;     // LV_TRIANGLES' dispatch size (LV_SCAN_SUMS)
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
@@ -334,7 +336,10 @@ void main() {
                  dd = d_at(b.z, b.w);
   double g1x = (db - da) / double(wx), g1y = (dc - da) / double(wy);
   double g2x = (dd - dc) / double(wx), g2y = (dd - db) / double(wy);
-  int y_begin = b.y + band * kBandRows, y_end = min(b.y + (band + 1) * kBandRows, b.w + 1);
+  // The cell's 2^L + 1 rows shared out evenly between its bands (at most kBandRows each), so
+  // that the lanes running a cell's bands side by side loop as often as each other.
+  int per_band = ((1 << L) + bands) / bands;
+  int y_begin = b.y + band * per_band, y_end = min(b.y + (band + 1) * per_band, b.w + 1);
   for (int y = y_begin; y < y_end; ++y) {
     int s = y - b.y;
     int xs = b.x + (wx == wy ? wy - s : idiv(wx * (wy - s), wy));
@@ -377,19 +382,21 @@ void main() {
 #endif
 
 #ifdef LV_CONTROL
+// Once before the fix-up rounds: round 1's dispatch size (the test's and LV_PROPAGATE's: the cells
+// of levels 2..top), every later round's zero until the round before it writes it.
 void main() {
   if (invocation() != 0) return;
   // An omni face that sits the seam round out runs no fix-up round (omni[48 + face]; zero for
   // spot and directional lights).
-  bool run = omni[48 + lv_face] == 0u && (round_ == 1 || control[round_ - 1] != 0u);
+  bool run = omni[48 + lv_face] == 0u;
   int cells2 = cells_total - offset_at(min(2, top_level + 1));
-  for (int L = 1; L <= top_level; ++L) {
-    // L = 1: the test (cells of levels 2..top); L >= 2: the balance of level L.
-    uint k = 64u + 3u * uint(L - 1);
-    uint groups = uint(((L == 1 ? cells2 : nx_at(L) * ny_at(L)) + 63) / 64);
-    uint x = min(groups, kMaxGroupsX);
-    control[k] = run ? x : 0u;
-    control[k + 1u] = run ? (groups + x - 1u) / x : 0u;
+  uint groups = uint((cells2 + 63) / 64);
+  uint x = min(groups, kMaxGroupsX);
+  for (int r = 1; r <= rounds + 1; ++r) {
+    uint k = kRoundArgs + 3u * uint(r);
+    bool first = r == 1 && run;
+    control[k] = first ? x : 0u;
+    control[k + 1u] = first ? (groups + x - 1u) / x : 0u;
     control[k + 2u] = 1u;
   }
 }
@@ -487,6 +494,14 @@ void main() {
 // the result is LV_BALANCE's closure whatever the order. From one cell, the cells it forces at
 // each level lie in a box of at most 3 × 3 cells (widths 1, 2, then at most 3).
 void main() {
+  if (invocation() == 0) {
+    // The next round runs (at this round's size) when this one's test failed a leaf.
+    uint k = kRoundArgs + 3u * uint(round_);
+    bool again = control[round_] != 0u;
+    control[k + 3u] = again ? control[k] : 0u;
+    control[k + 4u] = again ? control[k + 1u] : 0u;
+    control[k + 5u] = 1u;
+  }
   int c = offset_at(min(2, top_level + 1)) + invocation();
   if (c >= cells_total || top_level < 2) return;
   if (fail[c] != uint(round_)) return;

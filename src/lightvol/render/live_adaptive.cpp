@@ -105,7 +105,8 @@ constexpr Binding kPerFace[] = {kParams, kDepths, kScales, kSplits,  kFails,    
 constexpr GLuint kStats = 160;         // control[kStats + ...] (shaders/live_adaptive.comp)
 constexpr GLuint kTriangleArgs = 100;  // LV_TRIANGLES' dispatch size, written by the GPU
 constexpr GLuint kDrawCommand = 192;   // control[kDrawCommand..+4]: the indirect draw command
-constexpr GLuint kControlSize = 256;
+constexpr GLuint kRoundArgs = 256;  // control[kRoundArgs + 3 r..]: fix-up round r's dispatch size
+constexpr GLuint kControlSize = 512;
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
 constexpr GLuint kOmniSize = 512;  // shaders/live_adaptive.comp's omni[]
@@ -534,19 +535,23 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       }
       barrier();
     }
-    for (int round = 1; round <= s.rounds && s.top >= 2; ++round) {
-      const Program& control = use(kControl);
-      glUniform1i(control.uniform("round_"), round);
-      dispatch(1);
-      barrier();
+    if (s.top < 2) return;
+    // The fix-up rounds: round 1's dispatch size from LV_CONTROL, each later one's from the
+    // round before (zero once a round split nothing).
+    const Program& control = use(kControl);
+    glUniform1i(control.uniform("rounds"), s.rounds);
+    dispatch(1);
+    barrier();
+    for (int round = 1; round <= s.rounds; ++round) {
+      const std::uint64_t args = kRoundArgs + 3 * static_cast<std::uint64_t>(round);
       const Program& test = use(kTest);
       glUniform1i(test.uniform("round_"), round);
-      indirect(kControlBuf, 64);
+      indirect(kControlBuf, args);
       barrier();
       // The round's balance in one pass (over the test's cells).
       const Program& propagate = use(kPropagate);
       glUniform1i(propagate.uniform("round_"), round);
-      indirect(kControlBuf, 64);
+      indirect(kControlBuf, args);
       barrier();
     }
   };
