@@ -19,7 +19,9 @@
 //   LV_CONTROL   one invocation before the fix-up rounds: round 1's dispatch size (zero for an
 //                omni face that sits the seam round out).
 //   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
-//                leaf, later rounds those whose parent or neighbour split in the round before).
+//                leaf, later rounds those whose parent or neighbour split in the round before;
+//                omni: round 1 of a seam round after the first reuses the verdict on a leaf
+//                that kept its configuration since the seam round before).
 //   LV_PROPAGATE fix-up round r's balance in one pass: each cell the test failed splits, and
 //                every cell that LV_BALANCE's rule then splits, level after level upwards (the
 //                same closure that LV_BALANCE's level-by-level passes reach); round r + 1's
@@ -455,33 +457,52 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
   return false;
 }
 
+// Omni: per cell of levels 2..top, fix-up round 1's verdict on it as a leaf of its configuration
+// (kVerdict | config << 1 | failed; 0: not a configured leaf), kept from one seam round to the
+// next: a leaf with the configuration it had in the round before has the same triangles over the
+// same texels, so the same verdict (build tests it again: the same result).
+layout(std430, binding = 12) buffer Verdicts { uint verdict[]; };
+uniform int reuse;  // 1: round 1 of an omni seam round after the first (verdicts to reuse)
+const uint kVerdict = 32u;
+
 void main() {
   int first = offset_at(min(2, top_level + 1));
   int c = first + invocation();
   if (c >= cells_total || top_level < 2) return;
+  bool record = type == 2 && round_ == 1;
+  uint previous = record ? verdict[c] : 0u;
+  uint code = 0u;
   ivec3 cl = cell_of(c, 2);
   int L = cl.x, i = cl.y, j = cl.z;
-  if (split[c] != 0u) return;
   uint parent = L == top_level ? 1u : split_at(L + 1, i / 2, j / 2);
-  if (parent == 0u) return;  // not a leaf
-  if (round_ > 1) {
+  bool leaf = split[c] == 0u && parent != 0u;
+  if (leaf && round_ > 1) {
     uint r = uint(round_);
-    if (parent != r && split_at(L, i - 1, j) != r && split_at(L, i + 1, j) != r &&
-        split_at(L, i, j - 1) != r && split_at(L, i, j + 1) != r)
-      return;  // nothing around it changed since it passed
+    // Later rounds test a leaf only when something around it changed since it passed.
+    leaf = parent == r || split_at(L, i - 1, j) == r || split_at(L, i + 1, j) == r ||
+           split_at(L, i, j - 1) == r || split_at(L, i, j + 1) == r;
   }
-  ivec4 b = cell_box(L, i, j);
-  uint config = config_of(L, i, j, b);
-  if (config == 0u) return;
-  ivec2 tri[18];
-  int n = cell_triangles(b, 1 << (L - 1), config, tri);
-  for (int t = 0; t < n; ++t) {
-    if (triangle_fails(tri[3 * t], tri[3 * t + 1], tri[3 * t + 2])) {
-      fail[c] = uint(round_);
-      atomicAdd(control[round_], 1u);
-      return;
+  if (leaf) {
+    ivec4 b = cell_box(L, i, j);
+    uint config = config_of(L, i, j, b);
+    if (config != 0u) {
+      bool fails = false;
+      if (reuse == 1 && (previous & ~1u) == (kVerdict | (config << 1u))) {
+        fails = (previous & 1u) != 0u;
+      } else {
+        ivec2 tri[18];
+        int n = cell_triangles(b, 1 << (L - 1), config, tri);
+        for (int t = 0; t < n && !fails; ++t)
+          fails = triangle_fails(tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]);
+      }
+      code = kVerdict | (config << 1u) | (fails ? 1u : 0u);
+      if (fails) {
+        fail[c] = uint(round_);
+        atomicAdd(control[round_], 1u);
+      }
     }
   }
+  if (record) verdict[c] = code;
 }
 #endif
 

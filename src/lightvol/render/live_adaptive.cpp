@@ -83,7 +83,7 @@ enum Binding {
   kIndices = 9,
   kPositions = 10,
   kTexelIds = 11,
-  kUnused = 12,
+  kVerdicts = 12,  // omni: fix-up round 1's verdicts, kept across seam rounds
   kScanSumsBuf = 13,
   kScanIn = 14,
   kScanOut = 15,
@@ -99,8 +99,8 @@ enum Binding {
 };
 
 // The buffers that hold one range per face (an omni light's six; bound face by face).
-constexpr Binding kPerFace[] = {kParams, kDepths, kScales, kSplits,  kFails,    kControlBuf,
-                                kBits,   kCounts, kRanks,  kOffsets, kThreshold};
+constexpr Binding kPerFace[] = {kParams, kDepths, kScales, kSplits,  kFails,     kControlBuf,
+                                kBits,   kCounts, kRanks,  kOffsets, kThreshold, kVerdicts};
 
 constexpr GLuint kStats = 160;         // control[kStats + ...] (shaders/live_adaptive.comp)
 constexpr GLuint kTriangleArgs = 100;  // LV_TRIANGLES' dispatch size, written by the GPU
@@ -176,7 +176,7 @@ struct LiveAdaptive::State {
   // Binds face f's ranges of the per-face buffers, and every other buffer whole.
   void bind_face(int f) const {
     for (int b = 0; b < kBuffers; ++b) {
-      if (b == kScanIn || b == kScanOut || b == kUnused) continue;
+      if (b == kScanIn || b == kScanOut) continue;
       const GLuint id = buffers[b == kAllSplits ? kSplits : b].id();
       if (stride[b] > 0) {
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id, f * stride[b],
@@ -362,6 +362,7 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
   bytes[kOffsets] = 4 * s.cells;
   bytes[kRanks] = 4 * s.words;
   bytes[kThreshold] = s.omni() ? 4 * s.cells : 16;
+  bytes[kVerdicts] = s.omni() ? 4 * s.cells : 16;
   for (int b = 0; b < kBuffers; ++b) s.stride[b] = 0, s.range[b] = 0;
   for (const Binding b : kPerFace) {
     s.range[b] = static_cast<GLsizeiptr>(std::max<std::uint64_t>(bytes[b], 16));
@@ -379,7 +380,7 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
   bytes[kBorderIndex] = s.omni() ? 4 * sides : 16;
   bytes[kSeamTemplate] = 4 * 3 * kSlots;
   for (int b = 0; b < kBuffers; ++b) {
-    if (b == kScanIn || b == kScanOut || b == kUnused || b == kAllSplits || b == kParams) continue;
+    if (b == kScanIn || b == kScanOut || b == kAllSplits || b == kParams) continue;
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, s.buffers[b].id());
     glBufferData(GL_SHADER_STORAGE_BUFFER,
                  static_cast<GLsizeiptr>(std::max<std::uint64_t>(bytes[b], 16)), nullptr,
@@ -464,7 +465,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       glClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, value);
     });
   };
-  for (Binding b : {kSplits, kFails, kControlBuf, kBits, kOmni}) clear(b, &zero);
+  for (Binding b : {kSplits, kFails, kControlBuf, kBits, kOmni, kVerdicts}) clear(b, &zero);
   if (s.omni()) {
     clear(kForced, &zero);
     clear(kBorderIndex, &none);
@@ -522,6 +523,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
   // The balance and the fix-up rounds (each one's dispatch sizes written by the GPU: zero once a
   // round split nothing). Omni: from each face's threshold with its forced border vertices, in
   // seam rounds until the seams' borders agree (the round's dispatch sizes written by the GPU).
+  int seam_round = 0;  // omni: the seam round being run
   const auto tessellate = [&] {
     const Program& balance = use(kBalance);
     glUniform1i(balance.uniform("round_"), 0);
@@ -546,6 +548,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       const std::uint64_t args = kRoundArgs + 3 * static_cast<std::uint64_t>(round);
       const Program& test = use(kTest);
       glUniform1i(test.uniform("round_"), round);
+      glUniform1i(test.uniform("reuse"), round == 1 && seam_round > 1 ? 1 : 0);
       indirect(kControlBuf, args);
       barrier();
       // The round's balance in one pass (over the test's cells).
@@ -571,6 +574,7 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       barrier();
     };
     for (int round = 1; round <= s.seam_rounds; ++round) {
+      seam_round = round;
       seam_control(round);
       for (face = 0; face < s.faces; ++face) {
         s.bind_face(face);
