@@ -17,14 +17,23 @@
 //   LVA_TEST        fragment, per cell of levels 2..top, fix-up round r: r when the leaf's split
 //                   configuration breaks E (round 1 tests every leaf, later rounds those whose
 //                   parent or a neighbour split in the round before).
-//   LVA_CODE        fragment, per cell of every level: what it emits (0 nothing, 1 + configuration
-//                   for a leaf, 17 for a split level-1 cell: its four quads).
-//   LVA_EMIT_GRID   vertex, drawn as 24 vertices a cell (levels 1..top, level after level, no
-//                   vertex buffer): vertex 3 × triangle + corner of the cell's triangles (at most
-//                   8); unused ones degenerate.
+//   LVA_CODE        fragment, per texel of the count pyramid's base (cell c = lva_first[L] + the
+//                   cell's index in level L at texel c = y · base width + x): what the cell emits
+//                   (code 0 nothing, 1 + configuration for a leaf, 17 for a split level-1 cell: its
+//                   quads) and how many triangles, as code · 16 + count.
+//   LVA_REDUCE      fragment, per texel of pyramid level k >= 1: the sum of its (up to) four
+//                   children's triangle counts in level k − 1 (a histopyramid, Ziegler et al. 2006:
+//                   the top texel holds the volume's grid triangles in all).
+//   LVA_EMIT_GRID   vertex, drawn as 3 vertices a triangle (no vertex buffer): triangle
+//                   gl_VertexID / 3 finds its cell and its index among the cell's triangles by
+//                   descending the count pyramid from the top, then places its corner. Vertices
+//                   past the top's count (a draw sized by a bound, not by the read-back count)
+//                   degenerate.
 //   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
 //                   that edge's closing (spot: a triangle to the apex; directional: two wall
 //                   triangles and one of the cap), others degenerate.
+// The count pyramid's level k is mip level k of lva_counts0 (k even) or lva_counts1 (k odd), so
+// that a pass reads one texture and writes the other; level k is max(1, base >> k) texels a side.
 // The cells' state lives in one R8UI atlas, level L a rectangle of nx(L) × ny(L) texels at
 // (ox(L), oy(L)): 0 unsplit, r + 1 split in fix-up round r (0: pyramid and first balance).
 // Coordinates are build's: texel (col, row), row 0 the top of the light's view.
@@ -36,6 +45,11 @@ uniform int lva_nx[16];
 uniform int lva_ny[16];
 uniform int lva_ox[16];
 uniform int lva_oy[16];
+uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
+uniform ivec2 lva_base;     // the count pyramid's base, in texels (powers of two)
+uniform int lva_levels;     // its top level (1 × 1)
+uniform highp usampler2D lva_counts0;  // its even levels
+uniform highp usampler2D lva_counts1;  // its odd levels
 
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 const uint kQuads = 17u;
@@ -115,7 +129,32 @@ ivec3 atlas_cell(ivec2 p, int first) {
   return ivec3(0);
 }
 
-#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
+// The triangles a cell of code `code` emits (LVA_CODE), its box b.
+int code_triangles(uint code, ivec4 b) {
+  if (code == 0u) return 0;
+  if (code == kQuads) return 2 * (b.z - b.x) * (b.w - b.y);
+  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
+  return 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
+}
+
+// The level and coordinates of cell c (lva_first's numbering).
+ivec3 cell_of(int c) {
+  int L = 1;
+  while (L < lva_top && c >= lva_first[L + 1]) ++L;
+  int k = c - lva_first[L];
+  return ivec3(L, k % lva_nx[L], k / lva_nx[L]);
+}
+
+ivec2 level_size(int k) { return max(lva_base >> k, ivec2(1)); }
+
+// Pyramid level k's texel q (q inside the level); level 0: the count alone.
+uint pyramid_at(int k, ivec2 q) {
+  uint v = (k & 1) == 0 ? texelFetch(lva_counts0, q, k).r : texelFetch(lva_counts1, q, k).r;
+  return k == 0 ? v & 15u : v;
+}
+
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
+    defined(LVA_REDUCE)
 uniform int lva_level;  // LVA_OWN, LVA_BALANCE
 uniform int lva_round;  // LVA_BALANCE, LVA_TEST
 layout(location = 0) out uint lva_out;
@@ -260,15 +299,34 @@ void main() {
 #ifdef LVA_CODE
 void main() {
   lva_out = 0u;
-  ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 1);
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  int c = p.y * lva_base.x + p.x;
+  if (c >= lva_first[lva_top + 1]) return;
+  ivec3 cl = cell_of(c);
   int L = cl.x, i = cl.y, j = cl.z;
-  if (L < 1) return;
   bool split = is_split(L, i, j);
+  ivec4 b = cell_box(L, i, j);
+  uint code = 0u;
   if (L == 1 && split) {
-    lva_out = kQuads;
+    code = kQuads;
   } else if (!split && (L == lva_top || is_split(L + 1, i / 2, j / 2))) {
-    lva_out = 1u + config_of(L, i, j, cell_box(L, i, j));
+    code = 1u + config_of(L, i, j, b);
   }
+  lva_out = code << 4 | uint(code_triangles(code, b));
+}
+#endif
+
+#ifdef LVA_REDUCE
+void main() {
+  int k = lva_level;  // the level written; k − 1 is read
+  ivec2 p = 2 * ivec2(gl_FragCoord.xy), size = level_size(k - 1);
+  uint sum = pyramid_at(k - 1, p);
+  if (p.x + 1 < size.x) sum += pyramid_at(k - 1, p + ivec2(1, 0));
+  if (p.y + 1 < size.y) {
+    sum += pyramid_at(k - 1, p + ivec2(0, 1));
+    if (p.x + 1 < size.x) sum += pyramid_at(k - 1, p + ivec2(1, 1));
+  }
+  lva_out = sum;
 }
 #endif
 
@@ -301,38 +359,52 @@ void emit(int kind, ivec2 t) {
 #endif
 
 #ifdef LVA_EMIT_GRID
-uniform highp usampler2D lva_codes;
-uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
-
 void main() {
-  int c = gl_VertexID / 24, L = 1;
-  while (L < lva_top && c >= lva_first[L + 1]) ++L;
-  int k = c - lva_first[L], i = k % lva_nx[L], j = k / lva_nx[L];
-  uint code = texelFetch(lva_codes, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r;
-  int vertex = gl_VertexID - 24 * c, t = vertex / 3, corner = vertex - 3 * t;
-  // Most of the vertices belong to no triangle: out before any other work.
-  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
-  int n = 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
-  if (code == 0u || (code != kQuads && t >= n)) {
+  int t = gl_VertexID / 3, corner = gl_VertexID - 3 * t;
+  uint rest = uint(t);
+  if (rest >= pyramid_at(lva_levels, ivec2(0))) {
     emit(0, ivec2(0));
     return;
   }
+  // Down the pyramid: at each level the child whose running sum passes `rest`.
+  ivec2 p = ivec2(0);
+  for (int k = lva_levels; k >= 1; --k) {
+    ivec2 size = level_size(k - 1);
+    p *= 2;
+    uint n = pyramid_at(k - 1, p);
+    if (rest < n) continue;
+    rest -= n;
+    if (p.x + 1 < size.x) {
+      n = pyramid_at(k - 1, p + ivec2(1, 0));
+      if (rest < n) {
+        p.x += 1;
+        continue;
+      }
+      rest -= n;
+    }
+    n = pyramid_at(k - 1, p + ivec2(0, 1));
+    if (rest < n) {
+      p.y += 1;
+      continue;
+    }
+    rest -= n;
+    p += 1;
+  }
+  uint code = texelFetch(lva_counts0, p, 0).r >> 4;
+  ivec3 cl = cell_of(p.y * lva_base.x + p.x);
+  int L = cl.x, i = cl.y, j = cl.z, tt = int(rest);
   if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding
   ivec4 b = cell_box(L, i, j);
   ivec2 tri[18];
   if (code == kQuads) {
-    int q = t / 2;
-    ivec2 quad = b.xy + ivec2(q % 2, q / 2);
-    if (quad.x >= b.z || quad.y >= b.w) {
-      emit(0, ivec2(0));
-      return;
-    }
+    int qx = b.z - b.x, q = tt / 2;  // the cell's quads inside the map, row by row
+    ivec2 quad = b.xy + ivec2(q % qx, q / qx);
     cell_triangles(ivec4(quad, quad + 1), 0, 0u, tri);
-    emit(1, tri[3 * (t % 2) + corner]);
+    emit(1, tri[3 * (tt % 2) + corner]);
     return;
   }
-  cell_triangles(b, 1 << (L - 1), config, tri);
-  emit(1, tri[3 * t + corner]);
+  cell_triangles(b, 1 << (L - 1), code - 1u, tri);
+  emit(1, tri[3 * tt + corner]);
 }
 #endif
 

@@ -3,15 +3,18 @@
 // frame in WebGL2 by shaders/live_adaptive_webgl.glsl. WebGL2 has no compute shaders, so the error
 // pyramid, the 2:1 balance and the fix-up rounds are fragment passes into an R8UI atlas of the
 // quadtree's cells (one level a pass, each written to a scratch atlas and blitted back), a last
-// pass writes what each cell emits, and two draws with no vertex buffer emit the triangles: one
-// of 24 vertices a cell (up to 8 triangles each, the others degenerate and culled) and one of 9
-// vertices a border ring edge (the closing). No read-back, no CPU work per frame but the uniforms.
+// pass writes what each cell emits and its triangle count into the base of a count pyramid (a
+// histopyramid: R32UI mip chains, a fragment pass a level), and two draws with no vertex buffer
+// emit the triangles: one of 3 vertices a triangle, each finding its cell by descending the
+// pyramid, and one of 9 vertices a border ring edge (the closing). The grid draw's vertex count is
+// the pyramid's top texel, read back (one integer a frame, count: 'readback', the default), or
+// the static volume's triangle count, an upper bound, its surplus vertices degenerate (count:
+// 'bound': no read-back). docs/web.md says which costs what.
 import * as THREE from 'three';
 
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
 const FULL_SCREEN = '#version 300 es\nvoid main() {\n' +
                     '  gl_Position = vec4(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0, 0.0, 1.0);\n}\n';
-const GRID_VERTICES = 24;   // 8 triangles: a split level-1 cell's four quads
 const CLOSE_VERTICES = 9;   // 3 triangles: a directional ring edge's walls and cap
 const SHADER_URL = new URL('../shaders/live_adaptive_webgl.glsl', import.meta.url).href;
 
@@ -24,6 +27,19 @@ function floatFloor(e) {
     if (f[0] === 0) f[0] = -Number.MIN_VALUE;
   }
   return f[0];
+}
+
+// A W × H R32UI texture with its mip levels 0..levels (raw WebGL: three.js render targets do not
+// render into mip levels of integer textures).
+function countTexture(gl, width, height, levels) {
+  const t = gl.createTexture();
+  gl.bindTexture(gl.TEXTURE_2D, t);
+  gl.texStorage2D(gl.TEXTURE_2D, levels + 1, gl.R32UI, width, height);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST_MIPMAP_NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
+  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAX_LEVEL, levels);
+  gl.bindTexture(gl.TEXTURE_2D, null);
+  return t;
 }
 
 function integerTarget(width, height) {
@@ -69,7 +85,9 @@ function applyUniforms(gl, renderer, program, uniforms) {
         for (let i = 0; i < info.size; ++i) {
           const texture = list[Math.min(i, list.length - 1)];
           gl.activeTexture(gl.TEXTURE0 + unit);
-          gl.bindTexture(gl.TEXTURE_2D, texture.isTexture ? renderer.properties.get(texture).__webglTexture : texture);
+          const handle = texture.isExternalTexture ? texture.sourceTexture
+                         : texture.isTexture ? renderer.properties.get(texture).__webglTexture : texture;
+          gl.bindTexture(gl.TEXTURE_2D, handle);
           units.push(unit++);
         }
         gl.uniform1iv(at, Int32Array.from(units));
@@ -91,13 +109,17 @@ export class AdaptiveVolume {
   // renderer: three's WebGLRenderer; glsl: shaders/airlight.glsl; adaptiveGlsl: this file's
   // shader; maxError: E (world units along the texel rays, as build's --max-error); rounds: the
   // fix-up rounds each frame runs (default 4; build's quadtree needs at most 1 on the demo's maps;
-  // converged() tells).
+  // converged() tells); count: how the grid draw is sized, 'readback' (the pyramid's top texel,
+  // read back each frame: a sync point) or 'bound' (the static volume's triangle count, no
+  // read-back).
   // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
-  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, live, volumeUniforms, volumeState, fragmentShader }) {
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, count = 'readback', live, volumeUniforms, volumeState, fragmentShader }) {
     if (!(Number.isFinite(maxError) && maxError >= 0))
       throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
     if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= 63))
       throw new Error(`LightVolume: rounds: expected an integer from 1 to 63, got ${rounds}`);
+    if (count !== 'readback' && count !== 'bound')
+      throw new Error(`LightVolume: count: expected 'readback' or 'bound', got ${count}`);
     if (!adaptiveGlsl) throw new Error('LightVolume: options.adaptiveGlsl is empty (LightVolume.loadAdaptiveShader() gives it)');
     this.renderer = renderer;
     this.gl = renderer.getContext();
@@ -105,6 +127,7 @@ export class AdaptiveVolume {
     this.adaptiveGlsl = adaptiveGlsl;
     this.maxError = maxError;
     this.rounds = rounds;
+    this.count = count;
     this.live = live;
     this.key = null;
     this.raysKey = null;
@@ -118,11 +141,13 @@ export class AdaptiveVolume {
       lva_level: { value: 1 }, lva_round: { value: 0 },
       lva_uniform: { value: 0 }, lva_scale: { value: 1 },
       lva_bound: { value: floatFloor(maxError) },
-      lva_splits: { value: null }, lva_fails: { value: null }, lva_codes: { value: null },
+      lva_base: { value: new THREE.Vector2(1, 1) }, lva_levels: { value: 0 },
+      lva_splits: { value: null }, lva_fails: { value: null },
+      lva_counts0: { value: new THREE.ExternalTexture() }, lva_counts1: { value: new THREE.ExternalTexture() },
       lva_depth: { value: null }, lva_rays: { value: null },
     };
     this.passes = {};
-    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE'])
+    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE', 'REDUCE'])
       this.passes[stage] = this.program(FULL_SCREEN, `#version 300 es\n${PREFIX}#define LVA_${stage}\n${adaptiveGlsl}`);
     this.vao = this.gl.createVertexArray();
     const material = (stage) => new THREE.RawShaderMaterial({
@@ -143,6 +168,8 @@ export class AdaptiveVolume {
                    new THREE.Mesh(this.closeGeometry, this.closeMaterial)];
     for (const m of this.meshes) m.frustumCulled = false;
     this.targets = [];
+    this.counts = [];
+    this.levelBuffers = [];
   }
 
   emitSource(stage) {
@@ -210,14 +237,40 @@ export class AdaptiveVolume {
     this.splits = integerTarget(aw, ah);
     this.scratch = integerTarget(aw, ah);
     this.fails = integerTarget(aw, ah);
-    this.codes = integerTarget(aw, ah);
-    this.targets = [this.splits, this.scratch, this.fails, this.codes];
+    this.targets = [this.splits, this.scratch, this.fails];
     for (const t of this.targets) this.renderer.initRenderTarget(t);
     u.lva_splits.value = this.splits.texture;
     u.lva_fails.value = this.fails.texture;
-    u.lva_codes.value = this.codes.texture;
+    // The count pyramid: a base of 2^a × 2^b texels (b = a or a − 1) holding every cell, level k
+    // max(1, base >> k), up to the top's 1 × 1; even levels in counts[0], odd ones in counts[1].
+    let bw = 1, bh = 1;
+    while (bw * bh < cells) {
+      if (bw === bh) bw *= 2;
+      else bh *= 2;
+    }
+    let levels = 0;
+    while ((Math.max(bw, bh) >> levels) > 1) ++levels;
+    const gl = this.gl;
+    for (const t of this.counts) gl.deleteTexture(t);
+    for (const f of this.levelBuffers) gl.deleteFramebuffer(f);
+    this.counts = [countTexture(gl, bw, bh, levels), countTexture(gl, bw, bh, Math.max(levels, 1))];
+    this.levelBuffers = [];
+    for (let k = 0; k <= levels; ++k) {
+      const f = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, f);
+      gl.framebufferTexture2D(gl.DRAW_FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, this.counts[k & 1], k);
+      this.levelBuffers.push(f);
+    }
+    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, null);
+    u.lva_counts0.value.sourceTexture = this.counts[0];
+    u.lva_counts1.value.sourceTexture = this.counts[1];
+    u.lva_base.value.set(bw, bh);
+    u.lva_levels.value = levels;
+    this.base = [bw, bh];
+    this.levels = levels;
     this.perimeter = 2 * cw + 2 * ch;
-    this.gridGeometry.setDrawRange(0, GRID_VERTICES * cells);
+    this.bound = 2 * cw * ch;  // the static volume's grid triangles: no quadtree has more
+    this.gridGeometry.setDrawRange(0, 3 * this.bound);
     this.closeGeometry.setDrawRange(0, CLOSE_VERTICES * this.perimeter);
   }
 
@@ -313,7 +366,31 @@ export class AdaptiveVolume {
       run('TEST', this.fails, this.column, null);
       balance(round);
     }
-    run('CODE', this.codes, [0, 0, aw, ah], null);
+    // The count pyramid, from the cells' codes up to its top.
+    const [bw, bh] = this.base;
+    const pyramid = (stage, k) => {
+      const p = this.passes[stage];
+      gl.useProgram(p);
+      u.lva_level.value = k;
+      // The level written is not sampled (a feedback loop even when another of its levels is):
+      // its texture's sampler gets the fails atlas instead, which the pass never reads.
+      const read = (h) => ({ value: h === (k & 1) && stage === 'REDUCE' ? this.fails.texture : this.counts[h] });
+      applyUniforms(gl, renderer, p, { ...u, lva_counts0: read(0), lva_counts1: read(1) });
+      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, this.levelBuffers[k]);
+      gl.viewport(0, 0, Math.max(1, bw >> k), Math.max(1, bh >> k));
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+    };
+    pyramid('CODE', 0);
+    for (let k = 1; k <= this.levels; ++k) pyramid('REDUCE', k);
+    if (this.count === 'readback') {
+      // The grid's triangles: the top texel (level 0 holds code · 16 + count).
+      const out = new Uint32Array(4);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, this.levelBuffers[this.levels]);
+      gl.readPixels(0, 0, 1, 1, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+      this.gridTriangles = this.levels === 0 ? out[0] & 15 : out[0];
+      this.gridGeometry.setDrawRange(0, 3 * this.gridTriangles);
+    }
     gl.bindVertexArray(null);
     renderer.resetState();
   }
@@ -349,17 +426,16 @@ export class AdaptiveVolume {
       };
     const uniforms = { ...this.live, ...this.u, view_projection: { value: new THREE.Matrix4() }, ...extraUniforms };
     const triangles = [];
-    for (const [stage, vertices, instances] of [['GRID', GRID_VERTICES, this.cells],
-                                                ['CLOSE', CLOSE_VERTICES, this.perimeter]]) {
+    for (const [stage, n] of [['GRID', this.gridGeometry.drawRange.count],
+                              ['CLOSE', CLOSE_VERTICES * this.perimeter]]) {
       const program = this.feedback[stage];
-      const n = vertices * instances;
       renderer.resetState();
       gl.useProgram(program);
       applyUniforms(gl, renderer, program, uniforms);
       gl.bindVertexArray(this.vao);
       const buffer = gl.createBuffer(), feedback = gl.createTransformFeedback();
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer);
-      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * n, gl.STREAM_READ);
+      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * Math.max(n, 3), gl.STREAM_READ);
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
       gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, feedback);
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);
@@ -389,6 +465,8 @@ export class AdaptiveVolume {
 
   dispose() {
     for (const t of this.targets) t.dispose();
+    for (const t of this.counts) this.gl.deleteTexture(t);
+    for (const f of this.levelBuffers) this.gl.deleteFramebuffer(f);
     if (this.rays) this.rays.dispose();
     this.gridGeometry.dispose();
     this.closeGeometry.dispose();

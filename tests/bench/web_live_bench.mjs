@@ -29,7 +29,7 @@ writeFileSync(join(work, 'light_directional.json'), JSON.stringify(DEMO_LIGHTS.d
 writeFileSync(join(work, 'light_omni.json'), JSON.stringify(DEMO_LIGHTS.omni));
 const camera = JSON.parse(readFileSync(join(work, 'camera.json'), 'utf8'));
 const rows = [];
-for (const [file, name, size] of [['light', 'spot', 256], ['light', 'spot', 512], ['light', 'spot', 1024],
+for (const [file, name, size] of [['light', 'spot', 256], ['light', 'spot', 512], ['light', 'spot', 1024], ['light', 'spot', 2048],
                                   ['light_directional', 'directional', 512],
                                   ['light_directional', 'directional', 1024]])
   rows.push([file, name, size, null], [file, name, size, bound]);
