@@ -20,23 +20,23 @@
 //   LVA_CODE        fragment, per texel of the count pyramid's base (cell c = lva_first[L] + the
 //                   cell's index in level L at texel c = y · base width + x): what the cell emits
 //                   (code 0 nothing, 1 + configuration for a leaf, 17 for a split level-1 cell: its
-//                   quads) and how many triangles, as code · 16 + count.
-//   LVA_REDUCE      fragment, per texel of pyramid level k >= 1: the sum of its (up to) four
-//                   children's triangle counts in level k − 1 (a histopyramid, Ziegler et al. 2006:
-//                   the top texel holds the volume's grid triangles in all).
+//                   quads) and how many triangles, as code · 16 + count, and bit 31 when the last
+//                   fix-up round split the cell (its mark in lva_fails).
+//   LVA_REDUCE      fragment, per texel of pyramid level k >= 1 (a histopyramid, Ziegler et al.
+//                   2006): the triangle counts of its four children in level k − 1 (x: (0, 0),
+//                   y: (1, 0), z: (0, 1), w: (1, 1); 0 outside the level), each with bit 31 when a
+//                   cell below it carries that bit. The top level's texel sums to the volume's grid
+//                   triangles.
 //   LVA_EMIT_GRID   vertex, drawn as 3 vertices a triangle (no vertex buffer): triangle
 //                   gl_VertexID / 3 finds its cell and its index among the cell's triangles by
-//                   descending the count pyramid from the top, then places its corner. Vertices
-//                   past the top's count (a draw sized by a bound, not by the read-back count)
-//                   degenerate.
+//                   descending the pyramid from the top, one fetch a level, then places its
+//                   corner. Vertices past the top's count (a draw sized by a bound rather than by
+//                   the read-back count) degenerate.
 //   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
 //                   that edge's closing (spot: a triangle to the apex; directional: two wall
 //                   triangles and one of the cap), others degenerate.
-// The count pyramid's level k is mip level k of lva_counts0 (k even) or lva_counts1 (k odd), so
-// that a pass reads one texture and writes the other; level k is max(1, base >> k) texels a side.
-// The cells' state lives in one R8UI atlas, level L a rectangle of nx(L) × ny(L) texels at
-// (ox(L), oy(L)): 0 unsplit, r + 1 split in fix-up round r (0: pyramid and first balance).
-// Coordinates are build's: texel (col, row), row 0 the top of the light's view.
+// The pyramid's base is lva_cells (R32UI, base width × height); levels 1..top lie in one RGBA32UI
+// atlas, lva_pyramid, level k a rectangle of max(1, base >> k) texels at lva_px[k], lva_py[k].
 
 uniform highp usampler2D lva_splits;
 uniform ivec2 lva_map;  // W, H
@@ -48,8 +48,12 @@ uniform int lva_oy[16];
 uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
 uniform ivec2 lva_base;     // the count pyramid's base, in texels (powers of two)
 uniform int lva_levels;     // its top level (1 × 1)
-uniform highp usampler2D lva_counts0;  // its even levels
-uniform highp usampler2D lva_counts1;  // its odd levels
+uniform int lva_px[17];
+uniform int lva_py[17];
+uniform highp usampler2D lva_fails;    // the last fix-up round's marks (levels 2..top)
+uniform highp usampler2D lva_cells;    // the pyramid's base
+uniform highp usampler2D lva_pyramid;  // its levels 1..top
+const uint kFlag = 0x80000000u, kCount = 0x7fffffffu;
 
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 const uint kQuads = 17u;
@@ -147,17 +151,26 @@ ivec3 cell_of(int c) {
 
 ivec2 level_size(int k) { return max(lva_base >> k, ivec2(1)); }
 
-// Pyramid level k's texel q (q inside the level); level 0: the count alone.
+// Pyramid level k's texel q (q inside the level): its triangles, with bit 31 the flag.
 uint pyramid_at(int k, ivec2 q) {
-  uint v = (k & 1) == 0 ? texelFetch(lva_counts0, q, k).r : texelFetch(lva_counts1, q, k).r;
-  return k == 0 ? v & 15u : v;
+  if (k == 0) {
+    uint v = texelFetch(lva_cells, q, 0).r;
+    return (v & kFlag) | (v & 15u);
+  }
+  uvec4 c = texelFetch(lva_pyramid, ivec2(lva_px[k], lva_py[k]) + q, 0);
+  uvec4 n = c & kCount;
+  return (n.x + n.y + n.z + n.w) | ((c.x | c.y | c.z | c.w) & kFlag);
 }
 
 #if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
     defined(LVA_REDUCE)
-uniform int lva_level;  // LVA_OWN, LVA_BALANCE
+uniform int lva_level;  // LVA_OWN, LVA_BALANCE, LVA_REDUCE
 uniform int lva_round;  // LVA_BALANCE, LVA_TEST
+#endif
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
 layout(location = 0) out uint lva_out;
+#elif defined(LVA_REDUCE)
+layout(location = 0) out uvec4 lva_out;
 #endif
 
 #if defined(LVA_OWN) || defined(LVA_TEST)
@@ -249,7 +262,6 @@ void main() {
 #endif
 
 #ifdef LVA_BALANCE
-uniform highp usampler2D lva_fails;
 void main() {
   int L = lva_level;
   ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
@@ -312,21 +324,19 @@ void main() {
   } else if (!split && (L == lva_top || is_split(L + 1, i / 2, j / 2))) {
     code = 1u + config_of(L, i, j, b);
   }
-  lva_out = code << 4 | uint(code_triangles(code, b));
+  uint mark = L >= 2 ? texelFetch(lva_fails, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r : 0u;
+  lva_out = code << 4 | uint(code_triangles(code, b)) | (mark != 0u ? kFlag : 0u);
 }
 #endif
 
 #ifdef LVA_REDUCE
 void main() {
   int k = lva_level;  // the level written; k − 1 is read
-  ivec2 p = 2 * ivec2(gl_FragCoord.xy), size = level_size(k - 1);
-  uint sum = pyramid_at(k - 1, p);
-  if (p.x + 1 < size.x) sum += pyramid_at(k - 1, p + ivec2(1, 0));
-  if (p.y + 1 < size.y) {
-    sum += pyramid_at(k - 1, p + ivec2(0, 1));
-    if (p.x + 1 < size.x) sum += pyramid_at(k - 1, p + ivec2(1, 1));
-  }
-  lva_out = sum;
+  ivec2 p = 2 * (ivec2(gl_FragCoord.xy) - ivec2(lva_px[k], lva_py[k])), size = level_size(k - 1);
+  bool right = p.x + 1 < size.x, down = p.y + 1 < size.y;
+  lva_out = uvec4(pyramid_at(k - 1, p), right ? pyramid_at(k - 1, p + ivec2(1, 0)) : 0u,
+                  down ? pyramid_at(k - 1, p + ivec2(0, 1)) : 0u,
+                  right && down ? pyramid_at(k - 1, p + ivec2(1, 1)) : 0u);
 }
 #endif
 
@@ -362,35 +372,30 @@ void emit(int kind, ivec2 t) {
 void main() {
   int t = gl_VertexID / 3, corner = gl_VertexID - 3 * t;
   uint rest = uint(t);
-  if (rest >= pyramid_at(lva_levels, ivec2(0))) {
-    emit(0, ivec2(0));
-    return;
-  }
-  // Down the pyramid: at each level the child whose running sum passes `rest`.
+  // Down the pyramid: at each level the child whose running count passes `rest`.
   ivec2 p = ivec2(0);
   for (int k = lva_levels; k >= 1; --k) {
-    ivec2 size = level_size(k - 1);
-    p *= 2;
-    uint n = pyramid_at(k - 1, p);
-    if (rest < n) continue;
-    rest -= n;
-    if (p.x + 1 < size.x) {
-      n = pyramid_at(k - 1, p + ivec2(1, 0));
-      if (rest < n) {
-        p.x += 1;
-        continue;
-      }
-      rest -= n;
+    uvec4 n = texelFetch(lva_pyramid, ivec2(lva_px[k], lva_py[k]) + p, 0) & kCount;
+    if (k == lva_levels && rest >= n.x + n.y + n.z + n.w) {
+      emit(0, ivec2(0));
+      return;
     }
-    n = pyramid_at(k - 1, p + ivec2(0, 1));
-    if (rest < n) {
+    p *= 2;
+    if (rest < n.x) continue;
+    rest -= n.x;
+    if (rest < n.y) {
+      p.x += 1;
+      continue;
+    }
+    rest -= n.y;
+    if (rest < n.z) {
       p.y += 1;
       continue;
     }
-    rest -= n;
+    rest -= n.z;
     p += 1;
   }
-  uint code = texelFetch(lva_counts0, p, 0).r >> 4;
+  uint code = (texelFetch(lva_cells, p, 0).r & kCount) >> 4;
   ivec3 cl = cell_of(p.y * lva_base.x + p.x);
   int L = cl.x, i = cl.y, j = cl.z, tt = int(rest);
   if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding

@@ -14,7 +14,8 @@
 // lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
 // first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
 // the last captured frame and renders). lightvolTime(n): milliseconds per frame (adaptive=E: also
-// the quadtree passes alone); lightvolTriangles(), lightvolConverged(): adaptive=E volumes;
+// the quadtree passes alone, and the fix-up rounds the last frame ran); lightvolTriangles(),
+// lightvolConverged(): adaptive=E volumes;
 // lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -319,7 +320,7 @@ async function main() {
       }
       passesMs /= n;
     }
-    return { frame: frameMs, volume: volumeMs / n, passes: passesMs,
+    return { frame: frameMs, volume: volumeMs / n, passes: passesMs, rounds: volume.adaptive ? volume.adaptive.roundsRun : null,
              triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });

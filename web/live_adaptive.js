@@ -4,7 +4,8 @@
 // pyramid, the 2:1 balance and the fix-up rounds are fragment passes into an R8UI atlas of the
 // quadtree's cells (one level a pass, each written to a scratch atlas and blitted back), a last
 // pass writes what each cell emits and its triangle count into the base of a count pyramid (a
-// histopyramid: R32UI mip chains, a fragment pass a level), and two draws with no vertex buffer
+// histopyramid: an R32UI base and an RGBA32UI atlas of its levels, each texel its four children's
+// counts, a fragment pass a level), and two draws with no vertex buffer
 // emit the triangles: one of 3 vertices a triangle, each finding its cell by descending the
 // pyramid, and one of 9 vertices a border ring edge (the closing). The grid draw's vertex count is
 // the pyramid's top texel, read back (one integer a frame, count: 'readback', the default), or
@@ -15,7 +16,8 @@ import * as THREE from 'three';
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
 const FULL_SCREEN = '#version 300 es\nvoid main() {\n' +
                     '  gl_Position = vec4(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0, 0.0, 1.0);\n}\n';
-const CLOSE_VERTICES = 9;   // 3 triangles: a directional ring edge's walls and cap
+const CLOSE_VERTICES = 9;
+const MAX_ROUNDS = 63;      // fix-up rounds a frame, at most   // 3 triangles: a directional ring edge's walls and cap
 const SHADER_URL = new URL('../shaders/live_adaptive_webgl.glsl', import.meta.url).href;
 
 // The largest float <= e.
@@ -29,24 +31,13 @@ function floatFloor(e) {
   return f[0];
 }
 
-// A W × H R32UI texture with its mip levels 0..levels (raw WebGL: three.js render targets do not
-// render into mip levels of integer textures).
-function countTexture(gl, width, height, levels) {
-  const t = gl.createTexture();
-  gl.bindTexture(gl.TEXTURE_2D, t);
-  gl.texStorage2D(gl.TEXTURE_2D, levels + 1, gl.R32UI, width, height);
-  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.NEAREST_MIPMAP_NEAREST);
-  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-  gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAX_LEVEL, levels);
-  gl.bindTexture(gl.TEXTURE_2D, null);
-  return t;
-}
-
-function integerTarget(width, height) {
+// An integer render target: R8UI (the cells' states), R32UI or RGBA32UI (the count pyramid).
+function integerTarget(width, height, internalFormat = 'R8UI') {
   const t = new THREE.WebGLRenderTarget(width, height, {
-    format: THREE.RedIntegerFormat, type: THREE.UnsignedByteType, depthBuffer: false,
+    format: internalFormat === 'RGBA32UI' ? THREE.RGBAIntegerFormat : THREE.RedIntegerFormat,
+    type: internalFormat === 'R8UI' ? THREE.UnsignedByteType : THREE.UnsignedIntType, depthBuffer: false,
     minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false });
-  t.texture.internalFormat = 'R8UI';
+  t.texture.internalFormat = internalFormat;
   return t;
 }
 
@@ -85,9 +76,7 @@ function applyUniforms(gl, renderer, program, uniforms) {
         for (let i = 0; i < info.size; ++i) {
           const texture = list[Math.min(i, list.length - 1)];
           gl.activeTexture(gl.TEXTURE0 + unit);
-          const handle = texture.isExternalTexture ? texture.sourceTexture
-                         : texture.isTexture ? renderer.properties.get(texture).__webglTexture : texture;
-          gl.bindTexture(gl.TEXTURE_2D, handle);
+          gl.bindTexture(gl.TEXTURE_2D, texture.isTexture ? renderer.properties.get(texture).__webglTexture : texture);
           units.push(unit++);
         }
         gl.uniform1iv(at, Int32Array.from(units));
@@ -107,16 +96,18 @@ export class AdaptiveVolume {
   }
 
   // renderer: three's WebGLRenderer; glsl: shaders/airlight.glsl; adaptiveGlsl: this file's
-  // shader; maxError: E (world units along the texel rays, as build's --max-error); rounds: the
-  // fix-up rounds each frame runs (default 4; build's quadtree needs at most 1 on the demo's maps;
-  // converged() tells); count: how the grid draw is sized, 'readback' (the pyramid's top texel,
-  // read back each frame: a sync point) or 'bound' (the static volume's triangle count, no
-  // read-back).
+  // shader; maxError: E (world units along the texel rays, as build's --max-error); count: how the
+  // grid draw is sized, 'readback' (the pyramid's top texel, read back each frame: a sync point) or
+  // 'bound' (the static volume's triangle count, no read-back); rounds: the fix-up rounds a frame
+  // runs before it looks (readback: default 1, then one more round at a time while the last one
+  // split a cell, so every frame converges; bound: default 4 and no more, build's quadtree needs
+  // at most 1 on the demo's maps; converged() tells).
   // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
-  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, count = 'readback', live, volumeUniforms, volumeState, fragmentShader }) {
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds, count = 'readback', live, volumeUniforms, volumeState, fragmentShader }) {
     if (!(Number.isFinite(maxError) && maxError >= 0))
       throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
-    if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= 63))
+    rounds ??= count === 'readback' ? 1 : 4;
+    if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= MAX_ROUNDS))
       throw new Error(`LightVolume: rounds: expected an integer from 1 to 63, got ${rounds}`);
     if (count !== 'readback' && count !== 'bound')
       throw new Error(`LightVolume: count: expected 'readback' or 'bound', got ${count}`);
@@ -143,7 +134,8 @@ export class AdaptiveVolume {
       lva_bound: { value: floatFloor(maxError) },
       lva_base: { value: new THREE.Vector2(1, 1) }, lva_levels: { value: 0 },
       lva_splits: { value: null }, lva_fails: { value: null },
-      lva_counts0: { value: new THREE.ExternalTexture() }, lva_counts1: { value: new THREE.ExternalTexture() },
+      lva_px: { value: new Array(17).fill(0) }, lva_py: { value: new Array(17).fill(0) },
+      lva_cells: { value: null }, lva_pyramid: { value: null },
       lva_depth: { value: null }, lva_rays: { value: null },
     };
     this.passes = {};
@@ -168,8 +160,6 @@ export class AdaptiveVolume {
                    new THREE.Mesh(this.closeGeometry, this.closeMaterial)];
     for (const m of this.meshes) m.frustumCulled = false;
     this.targets = [];
-    this.counts = [];
-    this.levelBuffers = [];
   }
 
   emitSource(stage) {
@@ -237,33 +227,33 @@ export class AdaptiveVolume {
     this.splits = integerTarget(aw, ah);
     this.scratch = integerTarget(aw, ah);
     this.fails = integerTarget(aw, ah);
-    this.targets = [this.splits, this.scratch, this.fails];
-    for (const t of this.targets) this.renderer.initRenderTarget(t);
-    u.lva_splits.value = this.splits.texture;
-    u.lva_fails.value = this.fails.texture;
-    // The count pyramid: a base of 2^a × 2^b texels (b = a or a − 1) holding every cell, level k
-    // max(1, base >> k), up to the top's 1 × 1; even levels in counts[0], odd ones in counts[1].
-    let bw = 1, bh = 1;
+    // The count pyramid: a base of 2^a × 2^b texels (b = a or a − 1, at least 2 × 1) holding every
+    // cell, level k max(1, base >> k) texels a side, up to the top's 1 × 1; levels 1..top in one
+    // atlas (level 1 at (0, 0), the others stacked to its right), drawn through a scratch atlas.
+    let bw = 2, bh = 1;
     while (bw * bh < cells) {
       if (bw === bh) bw *= 2;
       else bh *= 2;
     }
     let levels = 0;
     while ((Math.max(bw, bh) >> levels) > 1) ++levels;
-    const gl = this.gl;
-    for (const t of this.counts) gl.deleteTexture(t);
-    for (const f of this.levelBuffers) gl.deleteFramebuffer(f);
-    this.counts = [countTexture(gl, bw, bh, levels), countTexture(gl, bw, bh, Math.max(levels, 1))];
-    this.levelBuffers = [];
-    for (let k = 0; k <= levels; ++k) {
-      const f = gl.createFramebuffer();
-      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, f);
-      gl.framebufferTexture2D(gl.DRAW_FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, this.counts[k & 1], k);
-      this.levelBuffers.push(f);
+    const size = (k) => [Math.max(1, bw >> k), Math.max(1, bh >> k)];
+    let py = 0;
+    for (let k = 1; k <= levels; ++k) {
+      u.lva_px.value[k] = k === 1 ? 0 : size(1)[0];
+      u.lva_py.value[k] = k === 1 ? 0 : py;
+      if (k > 1) py += size(k)[1];
     }
-    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, null);
-    u.lva_counts0.value.sourceTexture = this.counts[0];
-    u.lva_counts1.value.sourceTexture = this.counts[1];
+    this.pyramidAtlas = [size(1)[0] + (levels >= 2 ? size(2)[0] : 0), Math.max(size(1)[1], py)];
+    this.cellsTarget = integerTarget(bw, bh, 'R32UI');
+    this.pyramid = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
+    this.pyramidScratch = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
+    this.targets = [this.splits, this.scratch, this.fails, this.cellsTarget, this.pyramid, this.pyramidScratch];
+    for (const t of this.targets) this.renderer.initRenderTarget(t);
+    u.lva_splits.value = this.splits.texture;
+    u.lva_fails.value = this.fails.texture;
+    u.lva_cells.value = this.cellsTarget.texture;
+    u.lva_pyramid.value = this.pyramid.texture;
     u.lva_base.value.set(bw, bh);
     u.lva_levels.value = levels;
     this.base = [bw, bh];
@@ -361,36 +351,52 @@ export class AdaptiveVolume {
     balance(0);
     gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.fails));
     gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
-    for (let round = 1; round <= this.rounds && this.top >= 2; ++round) {
+    const fixup = (round) => {
       u.lva_round.value = round;
       run('TEST', this.fails, this.column, null);
       balance(round);
-    }
-    // The count pyramid, from the cells' codes up to its top.
-    const [bw, bh] = this.base;
-    const pyramid = (stage, k) => {
-      const p = this.passes[stage];
-      gl.useProgram(p);
-      u.lva_level.value = k;
-      // The level written is not sampled (a feedback loop even when another of its levels is):
-      // its texture's sampler gets the fails atlas instead, which the pass never reads.
-      const read = (h) => ({ value: h === (k & 1) && stage === 'REDUCE' ? this.fails.texture : this.counts[h] });
-      applyUniforms(gl, renderer, p, { ...u, lva_counts0: read(0), lva_counts1: read(1) });
-      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, this.levelBuffers[k]);
-      gl.viewport(0, 0, Math.max(1, bw >> k), Math.max(1, bh >> k));
-      gl.drawArrays(gl.TRIANGLES, 0, 3);
     };
-    pyramid('CODE', 0);
-    for (let k = 1; k <= this.levels; ++k) pyramid('REDUCE', k);
-    if (this.count === 'readback') {
-      // The grid's triangles: the top texel (level 0 holds code · 16 + count).
+    let round = 0;
+    while (round < this.rounds && this.top >= 2) fixup(++round);
+    // The count pyramid, from the cells' codes up to its top.
+    const pyramidLevel = (k) => [u.lva_px.value[k], u.lva_py.value[k], Math.max(1, this.base[0] >> k),
+                                 Math.max(1, this.base[1] >> k)];
+    const pyramid = (k) => {
+      u.lva_level.value = k;
+      if (k === 0) run('CODE', this.cellsTarget, [0, 0, ...this.base], null);
+      else run('REDUCE', this.pyramidScratch, pyramidLevel(k), this.pyramid);
+    };
+    const build = () => {
+      for (let k = 0; k <= this.levels; ++k) pyramid(k);
+    };
+    // The top texel: its children's triangles (bit 31: the last fix-up round split a cell below).
+    const top = () => {
       const out = new Uint32Array(4);
-      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, this.levelBuffers[this.levels]);
-      gl.readPixels(0, 0, 1, 1, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+      const [x, y] = pyramidLevel(this.levels);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(this.pyramid));
+      gl.readPixels(x, y, 1, 1, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
       gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
-      this.gridTriangles = this.levels === 0 ? out[0] & 15 : out[0];
-      this.gridGeometry.setDrawRange(0, 3 * this.gridTriangles);
+      let triangles = 0, mark = 0;
+      for (const v of out) {
+        triangles += v & 0x7fffffff;
+        mark |= v >>> 31;
+      }
+      return [triangles, mark];
+    };
+    build();
+    if (this.count === 'readback') {
+      let [triangles, mark] = top();
+      // The last round split cells whose new leaves no round has tested: one more round, until a
+      // round splits nothing.
+      while (mark !== 0 && round < MAX_ROUNDS) {
+        fixup(++round);
+        build();
+        [triangles, mark] = top();
+      }
+      this.gridTriangles = triangles;
+      this.gridGeometry.setDrawRange(0, 3 * triangles);
     }
+    this.roundsRun = round;
     gl.bindVertexArray(null);
     renderer.resetState();
   }
@@ -465,8 +471,6 @@ export class AdaptiveVolume {
 
   dispose() {
     for (const t of this.targets) t.dispose();
-    for (const t of this.counts) this.gl.deleteTexture(t);
-    for (const f of this.levelBuffers) this.gl.deleteFramebuffer(f);
     if (this.rays) this.rays.dispose();
     this.gridGeometry.dispose();
     this.closeGeometry.dispose();

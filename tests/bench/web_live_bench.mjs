@@ -54,7 +54,8 @@ try {
     const kind = e === null ? 'static' : `adaptive, E = ${e}${countArg ? `, count=${countArg}` : ''}`;
     console.log(`| ${name}, ${map} | ${kind} | ` +
                 `${t.triangles.toLocaleString('en')} | ${(t.frame / 1000).toFixed(2)} s | ` +
-                `${(t.volume / 1000).toFixed(2)} s | ${t.passes === null ? '' : `${(t.passes / 1000).toFixed(2)} s`} |`);
+                `${(t.volume / 1000).toFixed(2)} s | ${t.passes === null ? '' : `${(t.passes / 1000).toFixed(2)} s` +
+                `${t.rounds === null || t.rounds === undefined ? '' : ` (${t.rounds} fix-up rounds)`}`} |`);
     await page.close();
   }
 } finally {
