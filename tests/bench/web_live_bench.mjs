@@ -6,7 +6,8 @@
 // alone (for adaptive rows with the quadtree's passes), each frame waited for
 // (window.lightvolTime). On SwiftShader (no GPU) these are a CPU rasterizer's times.
 //   node tests/bench/web_live_bench.mjs PATH/TO/lightvol [FRAMES] [E] [ONLY] [COUNT]
-// (ONLY: rows whose light and size, e.g. "spot 512", start with it; COUNT: the adaptive rows'
+// (ONLY: rows whose light, size and kind, e.g. "spot 512" or "spot 512 adaptive", start with it;
+// COUNT: the adaptive rows'
 // count=, readback (the default) or bound.)
 import { execFileSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
@@ -42,7 +43,7 @@ try {
   console.log(`camera ${camera.width}x${camera.height}, ${frames} frames a row`);
   console.log('| light, map | volume | triangles | whole frame | volume + airlight | of which quadtree passes |\n|---|---|---|---|---|---|');
   for (const [file, name, size, e] of rows) {
-    if (onlyArg && !`${name} ${size}`.startsWith(onlyArg)) continue;
+    if (onlyArg && !`${name} ${size} ${e === null ? 'static' : 'adaptive'}`.startsWith(onlyArg)) continue;
     const page = await browser.newPage();
     await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/${file}.json&medium=/data/medium.json` +
                         `&camera=/data/camera.json&animate=1&size=${size}${e === null ? '' : `&adaptive=${e}`}` +
