@@ -319,7 +319,6 @@ export class AdaptiveVolume {
     const fbo = (t) => props.get(t).__webglFramebuffer;
     renderer.resetState();
     gl.bindVertexArray(this.vao);
-    const [aw, ah] = this.atlas;
     gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.splits));
     gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
     const run = (stage, target, [x, y, w, h], back) => {
