@@ -17,17 +17,26 @@
 //   LVA_TEST        fragment, per cell of levels 2..top, fix-up round r: r when the leaf's split
 //                   configuration breaks E (round 1 tests every leaf, later rounds those whose
 //                   parent or a neighbour split in the round before).
-//   LVA_CODE        fragment, per cell of every level: what it emits (0 nothing, 1 + configuration
-//                   for a leaf, 17 for a split level-1 cell: its four quads).
-//   LVA_EMIT_GRID   vertex, drawn as 24 vertices a cell (levels 1..top, level after level, no
-//                   vertex buffer): vertex 3 × triangle + corner of the cell's triangles (at most
-//                   8); unused ones degenerate.
+//   LVA_CODE        fragment, per texel of the count pyramid's base (cell c = lva_first[L] + the
+//                   cell's index in level L at texel c = y · base width + x): what the cell emits
+//                   (code 0 nothing, 1 + configuration for a leaf, 17 for a split level-1 cell: its
+//                   quads) and how many triangles, as code · 16 + count, and bit 31 when the last
+//                   fix-up round split the cell (its mark in lva_fails).
+//   LVA_REDUCE      fragment, per texel of pyramid level k >= 1 (a histopyramid, Ziegler et al.
+//                   2006): the triangle counts of its four children in level k − 1 (x: (0, 0),
+//                   y: (1, 0), z: (0, 1), w: (1, 1); 0 outside the level), each with bit 31 when a
+//                   cell below it carries that bit. The top level's texel sums to the volume's grid
+//                   triangles.
+//   LVA_EMIT_GRID   vertex, drawn as 3 vertices a triangle (no vertex buffer): triangle
+//                   gl_VertexID / 3 finds its cell and its index among the cell's triangles by
+//                   descending the pyramid from the top, one fetch a level, then places its
+//                   corner. Vertices past the top's count (a draw sized by a bound rather than by
+//                   the read-back count) degenerate.
 //   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
 //                   that edge's closing (spot: a triangle to the apex; directional: two wall
 //                   triangles and one of the cap), others degenerate.
-// The cells' state lives in one R8UI atlas, level L a rectangle of nx(L) × ny(L) texels at
-// (ox(L), oy(L)): 0 unsplit, r + 1 split in fix-up round r (0: pyramid and first balance).
-// Coordinates are build's: texel (col, row), row 0 the top of the light's view.
+// The pyramid's base is lva_cells (R32UI, base width × height); levels 1..top lie in one RGBA32UI
+// atlas, lva_pyramid, level k a rectangle of max(1, base >> k) texels at lva_px[k], lva_py[k].
 
 uniform highp usampler2D lva_splits;
 uniform ivec2 lva_map;  // W, H
@@ -36,6 +45,15 @@ uniform int lva_nx[16];
 uniform int lva_ny[16];
 uniform int lva_ox[16];
 uniform int lva_oy[16];
+uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
+uniform ivec2 lva_base;     // the count pyramid's base, in texels (powers of two)
+uniform int lva_levels;     // its top level (1 × 1)
+uniform int lva_px[17];
+uniform int lva_py[17];
+uniform highp usampler2D lva_fails;    // the last fix-up round's marks (levels 2..top)
+uniform highp usampler2D lva_cells;    // the pyramid's base
+uniform highp usampler2D lva_pyramid;  // its levels 1..top
+const uint kFlag = 0x80000000u, kCount = 0x7fffffffu;
 
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 const uint kQuads = 17u;
@@ -115,10 +133,44 @@ ivec3 atlas_cell(ivec2 p, int first) {
   return ivec3(0);
 }
 
-#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
-uniform int lva_level;  // LVA_OWN, LVA_BALANCE
+// The triangles a cell of code `code` emits (LVA_CODE), its box b.
+int code_triangles(uint code, ivec4 b) {
+  if (code == 0u) return 0;
+  if (code == kQuads) return 2 * (b.z - b.x) * (b.w - b.y);
+  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
+  return 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
+}
+
+// The level and coordinates of cell c (lva_first's numbering).
+ivec3 cell_of(int c) {
+  int L = 1;
+  while (L < lva_top && c >= lva_first[L + 1]) ++L;
+  int k = c - lva_first[L];
+  return ivec3(L, k % lva_nx[L], k / lva_nx[L]);
+}
+
+ivec2 level_size(int k) { return max(lva_base >> k, ivec2(1)); }
+
+// Pyramid level k's texel q (q inside the level): its triangles, with bit 31 the flag.
+uint pyramid_at(int k, ivec2 q) {
+  if (k == 0) {
+    uint v = texelFetch(lva_cells, q, 0).r;
+    return (v & kFlag) | (v & 15u);
+  }
+  uvec4 c = texelFetch(lva_pyramid, ivec2(lva_px[k], lva_py[k]) + q, 0);
+  uvec4 n = c & kCount;
+  return (n.x + n.y + n.z + n.w) | ((c.x | c.y | c.z | c.w) & kFlag);
+}
+
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
+    defined(LVA_REDUCE)
+uniform int lva_level;  // LVA_OWN, LVA_BALANCE, LVA_REDUCE
 uniform int lva_round;  // LVA_BALANCE, LVA_TEST
+#endif
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
 layout(location = 0) out uint lva_out;
+#elif defined(LVA_REDUCE)
+layout(location = 0) out uvec4 lva_out;
 #endif
 
 #if defined(LVA_OWN) || defined(LVA_TEST)
@@ -210,7 +262,6 @@ void main() {
 #endif
 
 #ifdef LVA_BALANCE
-uniform highp usampler2D lva_fails;
 void main() {
   int L = lva_level;
   ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
@@ -260,15 +311,32 @@ void main() {
 #ifdef LVA_CODE
 void main() {
   lva_out = 0u;
-  ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 1);
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  int c = p.y * lva_base.x + p.x;
+  if (c >= lva_first[lva_top + 1]) return;
+  ivec3 cl = cell_of(c);
   int L = cl.x, i = cl.y, j = cl.z;
-  if (L < 1) return;
   bool split = is_split(L, i, j);
+  ivec4 b = cell_box(L, i, j);
+  uint code = 0u;
   if (L == 1 && split) {
-    lva_out = kQuads;
+    code = kQuads;
   } else if (!split && (L == lva_top || is_split(L + 1, i / 2, j / 2))) {
-    lva_out = 1u + config_of(L, i, j, cell_box(L, i, j));
+    code = 1u + config_of(L, i, j, b);
   }
+  uint mark = L >= 2 ? texelFetch(lva_fails, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r : 0u;
+  lva_out = code << 4 | uint(code_triangles(code, b)) | (mark != 0u ? kFlag : 0u);
+}
+#endif
+
+#ifdef LVA_REDUCE
+void main() {
+  int k = lva_level;  // the level written; k − 1 is read
+  ivec2 p = 2 * (ivec2(gl_FragCoord.xy) - ivec2(lva_px[k], lva_py[k])), size = level_size(k - 1);
+  bool right = p.x + 1 < size.x, down = p.y + 1 < size.y;
+  lva_out = uvec4(pyramid_at(k - 1, p), right ? pyramid_at(k - 1, p + ivec2(1, 0)) : 0u,
+                  down ? pyramid_at(k - 1, p + ivec2(0, 1)) : 0u,
+                  right && down ? pyramid_at(k - 1, p + ivec2(1, 1)) : 0u);
 }
 #endif
 
@@ -301,38 +369,47 @@ void emit(int kind, ivec2 t) {
 #endif
 
 #ifdef LVA_EMIT_GRID
-uniform highp usampler2D lva_codes;
-uniform int lva_first[17];  // the first cell of level L; [top + 1]: cells in all
-
 void main() {
-  int c = gl_VertexID / 24, L = 1;
-  while (L < lva_top && c >= lva_first[L + 1]) ++L;
-  int k = c - lva_first[L], i = k % lva_nx[L], j = k / lva_nx[L];
-  uint code = texelFetch(lva_codes, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r;
-  int vertex = gl_VertexID - 24 * c, t = vertex / 3, corner = vertex - 3 * t;
-  // Most of the vertices belong to no triangle: out before any other work.
-  uint config = code - 1u;  // (GLSL ES 3.00 has no bitCount)
-  int n = 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
-  if (code == 0u || (code != kQuads && t >= n)) {
-    emit(0, ivec2(0));
-    return;
+  int t = gl_VertexID / 3, corner = gl_VertexID - 3 * t;
+  uint rest = uint(t);
+  // Down the pyramid: at each level the child whose running count passes `rest`.
+  ivec2 p = ivec2(0);
+  for (int k = lva_levels; k >= 1; --k) {
+    uvec4 n = texelFetch(lva_pyramid, ivec2(lva_px[k], lva_py[k]) + p, 0) & kCount;
+    if (k == lva_levels && rest >= n.x + n.y + n.z + n.w) {
+      emit(0, ivec2(0));
+      return;
+    }
+    p *= 2;
+    if (rest < n.x) continue;
+    rest -= n.x;
+    if (rest < n.y) {
+      p.x += 1;
+      continue;
+    }
+    rest -= n.y;
+    if (rest < n.z) {
+      p.y += 1;
+      continue;
+    }
+    rest -= n.z;
+    p += 1;
   }
+  uint code = (texelFetch(lva_cells, p, 0).r & kCount) >> 4;
+  ivec3 cl = cell_of(p.y * lva_base.x + p.x);
+  int L = cl.x, i = cl.y, j = cl.z, tt = int(rest);
   if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding
   ivec4 b = cell_box(L, i, j);
   ivec2 tri[18];
   if (code == kQuads) {
-    int q = t / 2;
-    ivec2 quad = b.xy + ivec2(q % 2, q / 2);
-    if (quad.x >= b.z || quad.y >= b.w) {
-      emit(0, ivec2(0));
-      return;
-    }
+    int qx = b.z - b.x, q = tt / 2;  // the cell's quads inside the map, row by row
+    ivec2 quad = b.xy + ivec2(q % qx, q / qx);
     cell_triangles(ivec4(quad, quad + 1), 0, 0u, tri);
-    emit(1, tri[3 * (t % 2) + corner]);
+    emit(1, tri[3 * (tt % 2) + corner]);
     return;
   }
-  cell_triangles(b, 1 << (L - 1), config, tri);
-  emit(1, tri[3 * t + corner]);
+  cell_triangles(b, 1 << (L - 1), code - 1u, tri);
+  emit(1, tri[3 * tt + corner]);
 }
 #endif
 

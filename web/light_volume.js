@@ -279,8 +279,9 @@ export class LightVolume {
   // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true),
   // maxError (spot and directional lights: build's adaptive volume at that bound, `--adaptive
   // --max-error E --tessellation quadtree`, made on the GPU each frame: live_adaptive.js; with
-  // adaptiveGlsl, loadAdaptiveShader()'s text) and rounds (its fix-up rounds a frame, default 4).
-  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds }) {
+  // adaptiveGlsl, loadAdaptiveShader()'s text), rounds (its fix-up rounds a frame, default 4) and
+  // count ('readback', the default, or 'bound': how its grid draw is sized, live_adaptive.js).
+  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds, count }) {
     const name = light && (light.name ? `'${light.name}'` : light.type);
     if (!light || !(light.isSpotLight || light.isDirectionalLight || light.isPointLight))
       throw new Error(`LightVolume: ${name ?? 'no light'} is not a SpotLight, DirectionalLight or PointLight`);
@@ -351,7 +352,7 @@ export class LightVolume {
     this.adaptive = null;
     if (maxError !== undefined) {
       this.adaptive = new AdaptiveVolume(renderer, glsl, adaptiveGlsl, {
-        maxError, rounds, live: this.live, volumeState: a.volumeState,
+        maxError, rounds, count, live: this.live, volumeState: a.volumeState,
         volumeUniforms: { ...a.common, surface: vu.surface, baseline: vu.baseline, panels: vu.panels,
                           facing_sign: vu.facing_sign },
         fragmentShader: stageSource(glsl, 'LIGHTVOL_VOLUME_FRAGMENT') });

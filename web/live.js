@@ -1,5 +1,5 @@
 // lightvol's live page: live.html?scene=URL&light=URL&medium=URL&camera=URL[&animate=1][&size=N]
-// [&shadow=0][&adaptive=E[&rounds=N]]. The scene (GLB, glTF, PLY or OBJ) lit by the light of a
+// [&shadow=0][&adaptive=E[&rounds=N][&count=bound]]. The scene (GLB, glTF, PLY or OBJ) lit by the light of a
 // lightvol light JSON (spot, directional or omni: a three.js SpotLight, DirectionalLight or
 // PointLight with a size × size shadow map, 512 by default), seen from a lightvol camera JSON, with
 // the light's shafts from LightVolume (light_volume.js): the static light volume of that frame's
@@ -14,7 +14,8 @@
 // lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
 // first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
 // the last captured frame and renders). lightvolTime(n): milliseconds per frame (adaptive=E: also
-// the quadtree passes alone); lightvolTriangles(), lightvolConverged(): adaptive=E volumes;
+// the quadtree passes alone, and the fix-up rounds the last frame ran); lightvolTriangles(),
+// lightvolConverged(): adaptive=E volumes;
 // lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -99,11 +100,13 @@ async function main() {
   if (!(size >= 2 && size <= 4096)) throw new Error(`size=${params.get('size')}: a shadow map size from 2 to 4096`);
   const animate = params.get('animate') === '1';
   // adaptive=E: build's adaptive volume at bound E (--adaptive --max-error E --tessellation
-  // quadtree), made on the GPU every frame; rounds=N its fix-up rounds a frame.
+  // quadtree), made on the GPU every frame; rounds=N its fix-up rounds a frame; count=bound its
+  // grid draw sized by a bound rather than by the read-back count (live_adaptive.js).
   const maxError = params.has('adaptive') ? Number(params.get('adaptive')) : undefined;
   if (maxError !== undefined && !(Number.isFinite(maxError) && maxError >= 0))
     throw new Error(`adaptive=${params.get('adaptive')}: a bound E >= 0 (world units along the texel rays)`);
   const rounds = params.has('rounds') ? Number(params.get('rounds')) : undefined;
+  const count = params.get('count') ?? undefined;
   say('loading…');
   const [glsl, adaptiveGlsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
     LightVolume.loadShader(), maxError !== undefined ? LightVolume.loadAdaptiveShader() : Promise.resolve(null),
@@ -181,7 +184,7 @@ async function main() {
   orbit.target.copy(target);
   orbit.update();
 
-  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds });
+  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds, count });
 
   // The lit scene into a float target; the composite as the viewer's (airlight.js's Composite):
   // the scene through the medium plus the airlight in the light's colour, × exposure, x/(1+x), sRGB.
@@ -317,7 +320,7 @@ async function main() {
       }
       passesMs /= n;
     }
-    return { frame: frameMs, volume: volumeMs / n, passes: passesMs,
+    return { frame: frameMs, volume: volumeMs / n, passes: passesMs, rounds: volume.adaptive ? volume.adaptive.roundsRun : null,
              triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });

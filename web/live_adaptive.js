@@ -3,16 +3,21 @@
 // frame in WebGL2 by shaders/live_adaptive_webgl.glsl. WebGL2 has no compute shaders, so the error
 // pyramid, the 2:1 balance and the fix-up rounds are fragment passes into an R8UI atlas of the
 // quadtree's cells (one level a pass, each written to a scratch atlas and blitted back), a last
-// pass writes what each cell emits, and two draws with no vertex buffer emit the triangles: one
-// of 24 vertices a cell (up to 8 triangles each, the others degenerate and culled) and one of 9
-// vertices a border ring edge (the closing). No read-back, no CPU work per frame but the uniforms.
+// pass writes what each cell emits and its triangle count into the base of a count pyramid (a
+// histopyramid: an R32UI base and an RGBA32UI atlas of its levels, each texel its four children's
+// counts, a fragment pass a level), and two draws with no vertex buffer
+// emit the triangles: one of 3 vertices a triangle, each finding its cell by descending the
+// pyramid, and one of 9 vertices a border ring edge (the closing). The grid draw's vertex count is
+// the pyramid's top texel, read back (one integer a frame, count: 'readback', the default), or
+// the static volume's triangle count, an upper bound, its surplus vertices degenerate (count:
+// 'bound': no read-back). docs/web.md says which costs what.
 import * as THREE from 'three';
 
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
 const FULL_SCREEN = '#version 300 es\nvoid main() {\n' +
                     '  gl_Position = vec4(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0, 0.0, 1.0);\n}\n';
-const GRID_VERTICES = 24;   // 8 triangles: a split level-1 cell's four quads
-const CLOSE_VERTICES = 9;   // 3 triangles: a directional ring edge's walls and cap
+const CLOSE_VERTICES = 9;
+const MAX_ROUNDS = 63;      // fix-up rounds a frame, at most   // 3 triangles: a directional ring edge's walls and cap
 const SHADER_URL = new URL('../shaders/live_adaptive_webgl.glsl', import.meta.url).href;
 
 // The largest float <= e.
@@ -26,11 +31,13 @@ function floatFloor(e) {
   return f[0];
 }
 
-function integerTarget(width, height) {
+// An integer render target: R8UI (the cells' states), R32UI or RGBA32UI (the count pyramid).
+function integerTarget(width, height, internalFormat = 'R8UI') {
   const t = new THREE.WebGLRenderTarget(width, height, {
-    format: THREE.RedIntegerFormat, type: THREE.UnsignedByteType, depthBuffer: false,
+    format: internalFormat === 'RGBA32UI' ? THREE.RGBAIntegerFormat : THREE.RedIntegerFormat,
+    type: internalFormat === 'R8UI' ? THREE.UnsignedByteType : THREE.UnsignedIntType, depthBuffer: false,
     minFilter: THREE.NearestFilter, magFilter: THREE.NearestFilter, generateMipmaps: false });
-  t.texture.internalFormat = 'R8UI';
+  t.texture.internalFormat = internalFormat;
   return t;
 }
 
@@ -89,15 +96,21 @@ export class AdaptiveVolume {
   }
 
   // renderer: three's WebGLRenderer; glsl: shaders/airlight.glsl; adaptiveGlsl: this file's
-  // shader; maxError: E (world units along the texel rays, as build's --max-error); rounds: the
-  // fix-up rounds each frame runs (default 4; build's quadtree needs at most 1 on the demo's maps;
-  // converged() tells).
+  // shader; maxError: E (world units along the texel rays, as build's --max-error); count: how the
+  // grid draw is sized, 'readback' (the pyramid's top texel, read back each frame: a sync point) or
+  // 'bound' (the static volume's triangle count, no read-back); rounds: the fix-up rounds a frame
+  // runs before it looks (readback: default 1, then one more round at a time while the last one
+  // split a cell, so every frame converges; bound: default 4 and no more, build's quadtree needs
+  // at most 1 on the demo's maps; converged() tells).
   // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
-  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds = 4, live, volumeUniforms, volumeState, fragmentShader }) {
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds, count = 'readback', live, volumeUniforms, volumeState, fragmentShader }) {
     if (!(Number.isFinite(maxError) && maxError >= 0))
       throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
-    if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= 63))
+    rounds ??= count === 'readback' ? 1 : 4;
+    if (!(Number.isInteger(rounds) && rounds >= 1 && rounds <= MAX_ROUNDS))
       throw new Error(`LightVolume: rounds: expected an integer from 1 to 63, got ${rounds}`);
+    if (count !== 'readback' && count !== 'bound')
+      throw new Error(`LightVolume: count: expected 'readback' or 'bound', got ${count}`);
     if (!adaptiveGlsl) throw new Error('LightVolume: options.adaptiveGlsl is empty (LightVolume.loadAdaptiveShader() gives it)');
     this.renderer = renderer;
     this.gl = renderer.getContext();
@@ -105,6 +118,7 @@ export class AdaptiveVolume {
     this.adaptiveGlsl = adaptiveGlsl;
     this.maxError = maxError;
     this.rounds = rounds;
+    this.count = count;
     this.live = live;
     this.key = null;
     this.raysKey = null;
@@ -118,11 +132,14 @@ export class AdaptiveVolume {
       lva_level: { value: 1 }, lva_round: { value: 0 },
       lva_uniform: { value: 0 }, lva_scale: { value: 1 },
       lva_bound: { value: floatFloor(maxError) },
-      lva_splits: { value: null }, lva_fails: { value: null }, lva_codes: { value: null },
+      lva_base: { value: new THREE.Vector2(1, 1) }, lva_levels: { value: 0 },
+      lva_splits: { value: null }, lva_fails: { value: null },
+      lva_px: { value: new Array(17).fill(0) }, lva_py: { value: new Array(17).fill(0) },
+      lva_cells: { value: null }, lva_pyramid: { value: null },
       lva_depth: { value: null }, lva_rays: { value: null },
     };
     this.passes = {};
-    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE'])
+    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE', 'REDUCE'])
       this.passes[stage] = this.program(FULL_SCREEN, `#version 300 es\n${PREFIX}#define LVA_${stage}\n${adaptiveGlsl}`);
     this.vao = this.gl.createVertexArray();
     const material = (stage) => new THREE.RawShaderMaterial({
@@ -210,14 +227,40 @@ export class AdaptiveVolume {
     this.splits = integerTarget(aw, ah);
     this.scratch = integerTarget(aw, ah);
     this.fails = integerTarget(aw, ah);
-    this.codes = integerTarget(aw, ah);
-    this.targets = [this.splits, this.scratch, this.fails, this.codes];
+    // The count pyramid: a base of 2^a × 2^b texels (b = a or a − 1, at least 2 × 1) holding every
+    // cell, level k max(1, base >> k) texels a side, up to the top's 1 × 1; levels 1..top in one
+    // atlas (level 1 at (0, 0), the others stacked to its right), drawn through a scratch atlas.
+    let bw = 2, bh = 1;
+    while (bw * bh < cells) {
+      if (bw === bh) bw *= 2;
+      else bh *= 2;
+    }
+    let levels = 0;
+    while ((Math.max(bw, bh) >> levels) > 1) ++levels;
+    const size = (k) => [Math.max(1, bw >> k), Math.max(1, bh >> k)];
+    let py = 0;
+    for (let k = 1; k <= levels; ++k) {
+      u.lva_px.value[k] = k === 1 ? 0 : size(1)[0];
+      u.lva_py.value[k] = k === 1 ? 0 : py;
+      if (k > 1) py += size(k)[1];
+    }
+    this.pyramidAtlas = [size(1)[0] + (levels >= 2 ? size(2)[0] : 0), Math.max(size(1)[1], py)];
+    this.cellsTarget = integerTarget(bw, bh, 'R32UI');
+    this.pyramid = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
+    this.pyramidScratch = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
+    this.targets = [this.splits, this.scratch, this.fails, this.cellsTarget, this.pyramid, this.pyramidScratch];
     for (const t of this.targets) this.renderer.initRenderTarget(t);
     u.lva_splits.value = this.splits.texture;
     u.lva_fails.value = this.fails.texture;
-    u.lva_codes.value = this.codes.texture;
+    u.lva_cells.value = this.cellsTarget.texture;
+    u.lva_pyramid.value = this.pyramid.texture;
+    u.lva_base.value.set(bw, bh);
+    u.lva_levels.value = levels;
+    this.base = [bw, bh];
+    this.levels = levels;
     this.perimeter = 2 * cw + 2 * ch;
-    this.gridGeometry.setDrawRange(0, GRID_VERTICES * cells);
+    this.bound = 2 * cw * ch;  // the static volume's grid triangles: no quadtree has more
+    this.gridGeometry.setDrawRange(0, 3 * this.bound);
     this.closeGeometry.setDrawRange(0, CLOSE_VERTICES * this.perimeter);
   }
 
@@ -276,7 +319,6 @@ export class AdaptiveVolume {
     const fbo = (t) => props.get(t).__webglFramebuffer;
     renderer.resetState();
     gl.bindVertexArray(this.vao);
-    const [aw, ah] = this.atlas;
     gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.splits));
     gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
     const run = (stage, target, [x, y, w, h], back) => {
@@ -308,12 +350,52 @@ export class AdaptiveVolume {
     balance(0);
     gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.fails));
     gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
-    for (let round = 1; round <= this.rounds && this.top >= 2; ++round) {
+    const fixup = (round) => {
       u.lva_round.value = round;
       run('TEST', this.fails, this.column, null);
       balance(round);
+    };
+    let round = 0;
+    while (round < this.rounds && this.top >= 2) fixup(++round);
+    // The count pyramid, from the cells' codes up to its top.
+    const pyramidLevel = (k) => [u.lva_px.value[k], u.lva_py.value[k], Math.max(1, this.base[0] >> k),
+                                 Math.max(1, this.base[1] >> k)];
+    const pyramid = (k) => {
+      u.lva_level.value = k;
+      if (k === 0) run('CODE', this.cellsTarget, [0, 0, ...this.base], null);
+      else run('REDUCE', this.pyramidScratch, pyramidLevel(k), this.pyramid);
+    };
+    const build = () => {
+      for (let k = 0; k <= this.levels; ++k) pyramid(k);
+    };
+    // The top texel: its children's triangles (bit 31: the last fix-up round split a cell below).
+    const top = () => {
+      const out = new Uint32Array(4);
+      const [x, y] = pyramidLevel(this.levels);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(this.pyramid));
+      gl.readPixels(x, y, 1, 1, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+      let triangles = 0, mark = 0;
+      for (const v of out) {
+        triangles += v & 0x7fffffff;
+        mark |= v >>> 31;
+      }
+      return [triangles, mark];
+    };
+    build();
+    if (this.count === 'readback') {
+      let [triangles, mark] = top();
+      // The last round split cells whose new leaves no round has tested: one more round, until a
+      // round splits nothing.
+      while (mark !== 0 && round < MAX_ROUNDS) {
+        fixup(++round);
+        build();
+        [triangles, mark] = top();
+      }
+      this.gridTriangles = triangles;
+      this.gridGeometry.setDrawRange(0, 3 * triangles);
     }
-    run('CODE', this.codes, [0, 0, aw, ah], null);
+    this.roundsRun = round;
     gl.bindVertexArray(null);
     renderer.resetState();
   }
@@ -349,17 +431,16 @@ export class AdaptiveVolume {
       };
     const uniforms = { ...this.live, ...this.u, view_projection: { value: new THREE.Matrix4() }, ...extraUniforms };
     const triangles = [];
-    for (const [stage, vertices, instances] of [['GRID', GRID_VERTICES, this.cells],
-                                                ['CLOSE', CLOSE_VERTICES, this.perimeter]]) {
+    for (const [stage, n] of [['GRID', this.gridGeometry.drawRange.count],
+                              ['CLOSE', CLOSE_VERTICES * this.perimeter]]) {
       const program = this.feedback[stage];
-      const n = vertices * instances;
       renderer.resetState();
       gl.useProgram(program);
       applyUniforms(gl, renderer, program, uniforms);
       gl.bindVertexArray(this.vao);
       const buffer = gl.createBuffer(), feedback = gl.createTransformFeedback();
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, buffer);
-      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * n, gl.STREAM_READ);
+      gl.bufferData(gl.TRANSFORM_FEEDBACK_BUFFER, 4 * Math.max(n, 3), gl.STREAM_READ);
       gl.bindBuffer(gl.TRANSFORM_FEEDBACK_BUFFER, null);
       gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, feedback);
       gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, buffer);

@@ -37,8 +37,10 @@ const TOLERANCE = 0.01;
 // bound at which build's quadtree needs a fix-up round on these 96² maps (asserted: the rounds are
 // exercised); a fine one; a very coarse one whose airlight differs from the static volume's by more
 // than 2 % (asserted: the test sees the adaptive volume in the picture, not only in the triangles).
+// count: 'bound' draws the grid sized by the static volume's count, no read-back (the others: the
+// count pyramid's total, read back).
 const CASES = [{ name: 'spot', e: 0.5, fixup: true }, { name: 'spot', e: 5, distinct: true },
-               { name: 'directional', e: 0.5, fixup: true }, { name: 'directional', e: 0.01 }];
+               { name: 'directional', e: 0.5, fixup: true }, { name: 'directional', e: 0.01, count: 'bound' }];
 if (option('--max-error', null) !== null)
   for (const c of CASES) Object.assign(c, { e: Number(option('--max-error', null)), fixup: false });
 
@@ -138,7 +140,7 @@ const grab = (page, hook) => page.evaluate((h) => {
   return ArrayBuffer.isView(v) ? Array.from(v) : v;
 }, hook);
 
-async function checkFrame(page, { name, e, fixup, distinct }, frame) {
+async function checkFrame(page, { name, e, fixup, distinct, count }, frame) {
   const airlight = Float32Array.from(await grab(page, 'lightvolAirlight'));
   const map = Float32Array.from(await grab(page, 'lightvolShadowMap'));
   const light = await grab(page, 'lightvolLight');
@@ -179,7 +181,7 @@ async function checkFrame(page, { name, e, fixup, distinct }, frame) {
   const lit = reference.values.filter((x) => x > 0).length;
   const ok = (!fixup || rounds >= 1) && (!distinct || fromStatic > 0.02) && closed && uncovered === 0 && worst <= e && within && converged && l2 <= TOLERANCE &&
              cracks <= 0.01 * mask.length && lit > 0.05 * mask.length && triangles.length < 0.5 * 2 * size * height;
-  console.log(`${name} frame ${frame}, E = ${e}: ${triangles.length} triangles (${grid} grid), build's quadtree ${built} ` +
+  console.log(`${name} frame ${frame}, E = ${e}${count ? ` (count=${count})` : ''}: ${triangles.length} triangles (${grid} grid), build's quadtree ${built} ` +
               `(${(100 * (triangles.length - built) / built).toFixed(2)} %, ${rounds} fix-up rounds); ${closed ? 'closed' : 'NOT closed'}, ` +
               `${uncovered} texels uncovered, largest texel error ${worst.toPrecision(6)} ` +
               `(${(worst / e).toFixed(6)} E), fix-up ${converged ? 'converged' : 'NOT converged'}; airlight ` +
@@ -193,7 +195,7 @@ async function checkFrame(page, { name, e, fixup, distinct }, frame) {
 let failed = false;
 try {
   for (const c of CASES) {
-    const { name, e } = c;
+    const { name, e, count } = c;
     if (only && only !== name) continue;
     const started = Date.now();
     const page = await browser.newPage();
@@ -202,7 +204,8 @@ try {
     page.on('console', (m) => messages.push(m.text()));
     page.on('pageerror', (err) => messages.push(err.message));
     await page.goto(url(`/web/live.html?scene=/data/scene.glb&light=/data/light_${name}.json` +
-                        `&medium=/data/medium.json&camera=/data/camera.json&animate=1&size=${size}&adaptive=${e}`));
+                        `&medium=/data/medium.json&camera=/data/camera.json&animate=1&size=${size}&adaptive=${e}` +
+                        (count ? `&count=${count}` : '')));
     await page.waitForFunction(() => document.title.startsWith('lightvol:'), { timeout: 300000 });
     const title = await page.title();
     if (title !== 'lightvol:done') {
@@ -231,7 +234,8 @@ try {
   }
   if (!only || only === 'errors') {
     for (const [light, e, pattern] of [['omni', '0.1', /takes spot and directional lights/],
-                                       ['spot', '-1', /adaptive=-1: a bound E >= 0/]]) {
+                                       ['spot', '-1', /adaptive=-1: a bound E >= 0/],
+                                       ['spot', '0.1&count=all', /count: expected 'readback' or 'bound', got all/]]) {
       const page = await browser.newPage();
       const messages = [];
       page.on('console', (m) => messages.push(m.text()));
