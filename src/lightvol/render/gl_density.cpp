@@ -197,8 +197,8 @@ const char* const kGlslOpacityLookup = kOpacityLookupSource.c_str();
 namespace {
 
 // One column per pixel while the grid stays within 2^25 samples (256 MB); coarser beyond. (Columns
-// wider than a pixel interpolate D across rays, which is poor where D is steep across them: rays
-// passing close to a point light, docs/design.md §6.)
+// wider than a pixel interpolate D across rays: a point light's by angle from the light,
+// docs/design.md §6; the density's own finest features across columns are then what they miss.)
 int automatic_tile(const RenderScene& scene, int slices) {
   const Camera& cam = scene.camera;
   int tile = 1;
@@ -412,7 +412,8 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
       for (int x = 0; x < s.cols_x; ++x) {
         const double nx = 2.0 * (x + 0.5) * tile / w - 1;
         const double ny = (cam.view.flip_y ? -1 : 1) * (2.0 * (y + 0.5) * tile / h - 1);
-        const Vec3d near = inv.transform_point({nx, ny, -1}), far = inv.transform_point({nx, ny, 1});
+        const Vec3d near = inv.transform_point({nx, ny, -1}),
+                    far = inv.transform_point({nx, ny, 1});
         column_rays.push_back(
             {cam.view.is_perspective() ? cam.view.position : near, normalize(far - near)});
       }
