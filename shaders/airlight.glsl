@@ -310,11 +310,16 @@ uniform float facing_sign;
 // Media of varying density (docs/design.md 6): a per-frame grid of columns, one per grid_tile x
 // grid_tile pixels, each holding D(t) = F(t) - F_hom(t) and its derivative at grid_slices
 // distances uniform on [0, t1 of the column]: the heterogeneous cumulative in-scattering along the
-// column's ray minus the homogeneous one that this fragment computes exactly. Each fragment adds
-// its signed D(t) (bilinear across columns, cubic Hermite across slices) to a second target.
-// OpenGL 4.5 (lightvol's GlDensityGrid) keeps the grid in shader storage buffers; WebGL2 (the web
-// viewer's web/density.js, GL_ES) in textures: grid_texture RG32F (D, D') at (column x, column y,
-// slice), grid_reach R32F t1 at (column x, column y).
+// column's ray minus the homogeneous one that this fragment computes exactly; for a point light
+// times h, the column ray's distance to the light (density_grid.glsl's grid_ray_scale). Each
+// fragment adds its signed D(t) (bilinear across columns, cubic Hermite across slices) to a second
+// target. Across columns a point light's D is matched by angle, not by distance: each column is
+// read at its point seen from the light at the same angle psi from the ray's origin as the
+// fragment's point (half of which is xi - xi0 of the closed form), and the sum divided by the
+// fragment's own h, so that what is interpolated varies slowly even for rays passing close to the
+// light. OpenGL 4.5 (lightvol's GlDensityGrid) keeps the grid in shader storage buffers; WebGL2
+// (the web viewer's web/density.js, GL_ES) in textures: grid_texture RG32F (D, D') at (column x,
+// column y, slice), grid_reach R32F t1 at (column x, column y).
 uniform ivec2 grid_columns;
 uniform int grid_tile;
 uniform int grid_slices;
@@ -342,18 +347,46 @@ float grid_column(ivec2 c, float t) {
   return (2.0 * u3 - 3.0 * u2 + 1.0) * a.x + (u3 - 2.0 * u2 + u) * h * a.y +
          (3.0 * u2 - 2.0 * u3) * b.x + (u3 - u2) * h * b.y;
 }
-float grid_lookup(float t) {
+// A ray's distance to the light, as density_grid.glsl's grid_ray_scale.
+float grid_light_h(vec3 a, vec3 dir) { return max(length(cross(dir, a)), 1e-6 * max(1.0, length(a))); }
+// Column c's value at its point seen from the light at angle psi (sin, cos) from its ray's origin:
+// by the law of sines, t = |a|^2 sin psi / (h cos psi + s0 sin psi), a the origin-to-light vector,
+// s0 = a . dir; beyond the ray's last angle (the denominator <= 0) its end.
+float grid_column_at_angle(ivec2 c, float sin_psi, float cos_psi) {
+  vec2 ndc = 2.0 * (vec2(c) + 0.5) * float(grid_tile) / viewport - 1.0;
+  if (flip_y == 1) ndc.y = -ndc.y;
+  vec4 n = inv_projection * vec4(ndc, -1.0, 1.0);
+  vec3 near_eye = n.xyz / n.w;
+  vec3 origin = perspective == 1 ? camera_position : camera_position + eye_to_world * near_eye;
+  vec3 dir = normalize(eye_to_world * (perspective == 1 ? near_eye : vec3(0.0, 0.0, -1.0)));
+  vec3 a = light_position - origin;
+  float den = grid_light_h(a, dir) * cos_psi + dot(a, dir) * sin_psi;
+  return grid_column(c, den > 0.0 ? dot(a, a) * sin_psi / den : 3e38);
+}
+float grid_lookup(float t, vec3 origin, vec3 dir) {
   vec2 q = clamp(gl_FragCoord.xy / float(grid_tile) - 0.5, vec2(0.0), vec2(grid_columns - 1));
   ivec2 i = ivec2(q);
   ivec2 j = min(i + 1, grid_columns - 1);
   vec2 f = q - vec2(i);
-  float d00 = grid_column(i, t);
-  float d10 = grid_column(ivec2(j.x, i.y), t);
-  float d01 = grid_column(ivec2(i.x, j.y), t);
-  float d11 = grid_column(j, t);
+  float d00, d10, d01, d11, scale = 1.0;
+  if (light_type == 1 || grid_tile == 1) {  // directional, or the pixel's own column
+    d00 = grid_column(i, t);
+    d10 = grid_column(ivec2(j.x, i.y), t);
+    d01 = grid_column(ivec2(i.x, j.y), t);
+    d11 = grid_column(j, t);
+  } else {
+    vec3 a = light_position - origin;
+    float psi = atan(t * grid_light_h(a, dir), dot(a, a) - t * dot(a, dir));
+    float sp = sin(psi), cp = cos(psi);
+    d00 = grid_column_at_angle(i, sp, cp);
+    d10 = grid_column_at_angle(ivec2(j.x, i.y), sp, cp);
+    d01 = grid_column_at_angle(ivec2(i.x, j.y), sp, cp);
+    d11 = grid_column_at_angle(j, sp, cp);
+  }
+  if (light_type != 1) scale = 1.0 / grid_light_h(light_position - origin, dir);
   float y0 = d00 + f.x * (d10 - d00);
   float y1 = d01 + f.x * (d11 - d01);
-  return y0 + f.y * (y1 - y0);
+  return (y0 + f.y * (y1 - y0)) * scale;
 }
 #endif
 void main() {
@@ -363,7 +396,7 @@ void main() {
   float t = clamp(dot(world - origin, dir), 0.0, t_surface);
   float s = (gl_FrontFacing ? -1.0 : 1.0) * facing_sign;
 #ifdef LIGHTVOL_DENSITY
-  varying_part = s * grid_lookup(t);
+  varying_part = s * grid_lookup(t, origin, dir);
 #endif
   if (light_type == 1) {
     float rate = sigma_t * (1.0 + dot(dir, light_direction));

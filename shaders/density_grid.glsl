@@ -7,7 +7,8 @@
 // medium uniforms). The host defines, before this file:
 //   LIGHTVOL_OPACITY_LOOKUP      light_optical_depth(x); the host also defines the macro
 //                                om_fetch(face, c, r, k): tau at column (c, r) of `face`, layer k
-//   LIGHTVOL_DENSITY_INTEGRAND   d_integrand(t, rho, tau_e) along the ray g_ray_origin + t g_ray_dir
+//   LIGHTVOL_DENSITY_INTEGRAND   d_integrand(t, rho, tau_e) along the ray g_ray_origin + t g_ray_dir,
+//                                scaled by grid_ray_scale() (what the in-scattering grid stores)
 // Without either, only the opacity map's uniforms (for the pass that makes the map).
 
 uniform int om_size;            // columns per face side
@@ -55,8 +56,17 @@ float light_optical_depth(vec3 x) {
 #ifdef LIGHTVOL_DENSITY_INTEGRAND
 vec3 g_ray_origin;
 vec3 g_ray_dir;
-// The integrand of D at distance t: (heterogeneous - homogeneous) in-scattering, given the density
-// there and the eye-side optical depth up to it.
+// What the grid stores is D times this factor of the column's ray: for a point light h, the ray's
+// distance to the light (so that the 1/h of F's angular form, steep across rays passing near the
+// light, is not interpolated across columns: airlight.glsl's grid_lookup divides each fragment's
+// look-up by its own h); 1 for a directional light. The same expression as grid_lookup's.
+float grid_ray_scale() {
+  if (light_type == 1) return 1.0;
+  vec3 a = light_position - g_ray_origin;
+  return max(length(cross(g_ray_dir, a)), 1e-6 * max(1.0, length(a)));
+}
+// The integrand of D at distance t, times grid_ray_scale(): (heterogeneous - homogeneous)
+// in-scattering, given the density there and the eye-side optical depth up to it.
 float d_integrand(float t, float rho, float tau_e) {
   vec3 x = g_ray_origin + t * g_ray_dir;
   float light_part, hom_depth;
@@ -73,6 +83,6 @@ float d_integrand(float t, float rho, float tau_e) {
   }
   float het = rho * exp(-light_optical_depth(x) - tau_e);
   float hom = exp(-sigma_t * (hom_depth + t));
-  return light_part * (het - hom);
+  return light_part * (het - hom) * grid_ray_scale();
 }
 #endif

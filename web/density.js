@@ -6,8 +6,10 @@
 //     (directional: the depth below its near plane), cumulative: one pass per layer carries the
 //     running sum in a 2D target and copies it into that layer of an R32F 3D texture;
 //   - the in-scattering grid: per column of `tile`×`tile` pixels, D(t) = F(t) − F_hom(t) and its
-//     derivative at `slices` distances uniform on [0, t1], t1 the farthest any pixel interpolated
-//     from the column needs (its surface, or where its ray leaves the light's bounds): one pass per
+//     derivative (for a point light times the column ray's distance to the light) at `slices`
+//     distances uniform on [0, t1], t1 the farthest any pixel interpolated from the column needs
+//     (its surface, or where its ray leaves the light's bounds; for a point light the column's
+//     point at the pixel's angle from the light): one pass per
 //     slice carries (D, eye-side optical depth) and writes (D, D') into an RG32F 3D texture, which
 //     shaders/airlight.glsl's LIGHTVOL_DENSITY stage reads (its GL_ES branch).
 // The density ρ(x) is shaders/density.glsl and the opacity map's look-up and the integrand of D
@@ -351,6 +353,13 @@ export class DensityGrid {
       ? Math.hypot(x[0] - lp[0], x[1] - lp[1], x[2] - lp[2])
       : (x[0] - lp[0]) * ld[0] + (x[1] - lp[1]) * ld[1] + (x[2] - lp[2]) * ld[2] - light.near);
     const need = new Float64Array(w * h);
+    // A point light's columns are read by angle (airlight.glsl's grid_column_at_angle): the sine
+    // and cosine of each pixel's angle ψ at the light from its ray's origin to its needed point.
+    const sinPsi = new Float64Array(w * h), cosPsi = new Float64Array(w * h).fill(1);
+    const lightH = (a, d) => Math.max(Math.hypot(d[1] * a[2] - d[2] * a[1], d[2] * a[0] - d[0] * a[2],
+                                                 d[0] * a[1] - d[1] * a[0]),
+                                      1e-6 * Math.max(1, Math.hypot(...a)));
+    const dot3 = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let reach = 0;
     const near = new THREE.Vector3(), far = new THREE.Vector3();
     for (let row = 0; row < h; ++row)
@@ -388,6 +397,12 @@ export class DensityGrid {
         const n = Math.min(s >= 1e38 ? Infinity : s, exit);
         need[row * w + col] = n;
         if (!(n > 0)) continue;
+        if (light.perspective) {
+          const a = [lp[0] - o[0], lp[1] - o[1], lp[2] - o[2]];
+          const psi = Math.atan2(n * lightH(a, d), dot3(a, a) - n * dot3(a, d));
+          sinPsi[row * w + col] = Math.sin(psi);
+          cosPsi[row * w + col] = Math.cos(psi);
+        }
         reach = Math.max(reach, lightDistance(o),
                          lightDistance([o[0] + n * d[0], o[1] + n * d[1], o[2] + n * d[2]]));
       }
@@ -395,6 +410,23 @@ export class DensityGrid {
     const tile = this.tileFor(w, h);
     const cx = Math.ceil(w / tile), cy = Math.ceil(h / tile);
     const t1 = new Float32Array(cx * cy);
+    // Each column's ray (GL coordinates: row 0 at the bottom) when read by angle.
+    const byAngle = light.perspective && tile > 1;
+    const columnRays = [];
+    if (byAngle)
+      for (let y = 0; y < cy; ++y)
+        for (let x = 0; x < cx; ++x) {
+          const nx = 2 * (x + 0.5) * tile / w - 1;
+          const ny = (camera.flipY ? -1 : 1) * (2 * (y + 0.5) * tile / h - 1);
+          near.set(nx, ny, -1).applyMatrix4(inv);
+          far.set(nx, ny, 1).applyMatrix4(inv);
+          const dir = far.clone().sub(near).normalize();
+          const origin = perspectiveCamera ? eye : near;
+          columnRays.push({ a: [lp[0] - origin.x, lp[1] - origin.y, lp[2] - origin.z],
+                            d: [dir.x, dir.y, dir.z] });
+        }
+    // Each column reaches the farthest point any pixel interpolated from it needs (by angle: the
+    // column's point at the pixel's ψ, at most twice the pixel's distance), as gl_density.cpp.
     for (let row = 0; row < h; ++row) {
       const glRow = camera.flipY ? row : h - 1 - row;
       for (let col = 0; col < w; ++col) {
@@ -403,11 +435,17 @@ export class DensityGrid {
         const qx = (col + 0.5) / tile - 0.5, qy = (glRow + 0.5) / tile - 0.5;
         const x0 = Math.min(Math.max(Math.floor(qx), 0), cx - 1);
         const y0 = Math.min(Math.max(Math.floor(qy), 0), cy - 1);
-        const v = Math.fround(n * (1 + 1e-6));
+        const sp = sinPsi[row * w + col], cp = cosPsi[row * w + col];
         for (let dy = 0; dy < 2; ++dy)
           for (let dx = 0; dx < 2; ++dx) {
             const i = Math.min(y0 + dy, cy - 1) * cx + Math.min(x0 + dx, cx - 1);
-            t1[i] = Math.max(t1[i], v);
+            let r = n;
+            if (byAngle) {
+              const { a, d } = columnRays[i];
+              const den = lightH(a, d) * cp + dot3(a, d) * sp;
+              r = den > 0 ? Math.min(2 * n, dot3(a, a) * sp / den) : 2 * n;
+            }
+            t1[i] = Math.max(t1[i], Math.fround(r * (1 + 1e-6)));
           }
       }
     }

@@ -197,8 +197,8 @@ const char* const kGlslOpacityLookup = kOpacityLookupSource.c_str();
 namespace {
 
 // One column per pixel while the grid stays within 2^25 samples (256 MB); coarser beyond. (Columns
-// wider than a pixel interpolate D across rays, which is poor where D is steep across them: rays
-// passing close to a point light, docs/design.md §6.)
+// wider than a pixel interpolate D across rays: a point light's by angle from the light,
+// docs/design.md §6; the density's own finest features across columns are then what they miss.)
 int automatic_tile(const RenderScene& scene, int slices) {
   const Camera& cam = scene.camera;
   int tile = 1;
@@ -400,20 +400,61 @@ Result<std::unique_ptr<GlDensityGrid>> GlDensityGrid::create(const RenderScene& 
   s.cols_x = (w + tile - 1) / tile;
   s.cols_y = (h + tile - 1) / tile;
   std::vector<float> t1(static_cast<std::size_t>(s.cols_x) * s.cols_y, 0.0f);
-  // Each column reaches the farthest point any pixel it is interpolated into needs.
+  // A point light's columns are read at the point seen from the light at the pixel's angle ψ from
+  // the ray's origin (airlight.glsl's grid_column_at_angle): each column's ray, in GL coordinates.
+  const bool by_angle = light.is_perspective() && tile > 1;
+  std::vector<Ray> column_rays;
+  if (by_angle) {
+    bool ok = false;
+    const Mat4d inv = inverse(cam.view.projection * cam.view.view, &ok);
+    LV_CHECK(ok);
+    for (int y = 0; y < s.cols_y; ++y)
+      for (int x = 0; x < s.cols_x; ++x) {
+        const double nx = 2.0 * (x + 0.5) * tile / w - 1;
+        const double ny = (cam.view.flip_y ? -1 : 1) * (2.0 * (y + 0.5) * tile / h - 1);
+        const Vec3d near = inv.transform_point({nx, ny, -1}),
+                    far = inv.transform_point({nx, ny, 1});
+        column_rays.push_back(
+            {cam.view.is_perspective() ? cam.view.position : near, normalize(far - near)});
+      }
+  }
+  const auto light_h = [&](const Vec3d& a, const Vec3d& dir) {
+    return std::max(length(cross(dir, a)), 1e-6 * std::max(1.0, length(a)));
+  };
+  // Each column reaches the farthest point any pixel it is interpolated into needs (by angle: the
+  // column's point at the pixel's ψ, at most twice the pixel's distance: beyond the column's last
+  // angle its end).
   for (int row = 0; row < h; ++row) {
     const int gl_row = cam.view.flip_y ? row : h - 1 - row;  // GL row 0 is NDC y = −1
     for (int col = 0; col < w; ++col) {
       const double need_here = need[static_cast<std::size_t>(row) * w + col];
       if (!(need_here > 0)) continue;
+      double sin_psi = 0, cos_psi = 1;
+      if (by_angle) {
+        const Ray ray = pixel_ray(cam, col, row);
+        const Vec3d a = light.position - ray.origin;
+        const double psi = std::atan2(need_here * light_h(a, ray.direction),
+                                      dot(a, a) - need_here * dot(a, ray.direction));
+        sin_psi = std::sin(psi);
+        cos_psi = std::cos(psi);
+      }
       const double qx = (col + 0.5) / tile - 0.5, qy = (gl_row + 0.5) / tile - 0.5;
       const int x0 = std::clamp(static_cast<int>(std::floor(qx)), 0, s.cols_x - 1);
       const int y0 = std::clamp(static_cast<int>(std::floor(qy)), 0, s.cols_y - 1);
       for (int dy = 0; dy < 2; ++dy)
         for (int dx = 0; dx < 2; ++dx) {
           const int x = std::min(x0 + dx, s.cols_x - 1), y = std::min(y0 + dy, s.cols_y - 1);
-          float& t = t1[static_cast<std::size_t>(y) * s.cols_x + x];
-          t = std::max(t, static_cast<float>(need_here * (1 + 1e-6)));
+          const std::size_t c = static_cast<std::size_t>(y) * s.cols_x + x;
+          double reach = need_here;
+          if (by_angle) {
+            const Ray& cr = column_rays[c];
+            const Vec3d a = light.position - cr.origin;
+            const double den = light_h(a, cr.direction) * cos_psi + dot(a, cr.direction) * sin_psi;
+            const double far = 2 * need_here;
+            reach = den > 0 ? std::min(far, dot(a, a) * sin_psi / den) : far;
+          }
+          float& t = t1[c];
+          t = std::max(t, static_cast<float>(reach * (1 + 1e-6)));
         }
     }
   }

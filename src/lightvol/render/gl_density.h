@@ -90,10 +90,12 @@ class GlOpacityMap {
 // the distance from the eye up to the farthest surface (or light bound) the column's pixels see.
 // A column stores D(t) = F(t) − F_hom(t) and its derivative: the heterogeneous cumulative integral
 // minus the homogeneous one the volume fragments already compute exactly, so that a constant
-// density gives the homogeneous image. Fragments read D bilinearly across columns and by cubic
-// Hermite interpolation across slices. The automatic tile (tile = 0) makes the columns at most a
-// quarter of the density's finest wavelength apart at the median distance the pixels need, between
-// 1 and 16 pixels, and large enough for the grid to stay within 2^25 samples.
+// density gives the homogeneous image; for a point light times the column ray's distance h to the
+// light. Fragments read D bilinearly across columns and by cubic Hermite interpolation across
+// slices; a point light's columns at their points seen from the light at the fragment's angle
+// from its ray's origin, the sum divided by the fragment's h (docs/design.md §6, "Columns wider
+// than a pixel"). The automatic tile (tile = 0) is one pixel while the grid stays within 2^25
+// samples, larger beyond.
 struct DensityGridOptions {
   int tile = 0;
   int slices = 128;

@@ -99,8 +99,27 @@ Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_wi
 
 void add_constant_surfaces(const RenderScene& scene, double radiance, Image* image) {
   const double st = scene.medium.extinction();
-  for (std::size_t i = 0; i < image->values.size(); ++i)
-    image->values[i] += radiance * std::exp(-st * scene.surface[i]);
+  if (!scene.medium.density.varying()) {
+    for (std::size_t i = 0; i < image->values.size(); ++i)
+      image->values[i] += radiance * std::exp(-st * scene.surface[i]);
+    return;
+  }
+  // A varying density: the eye-side optical depth σt ∫ρ along each pixel's ray to its surface,
+  // with lit_surfaces' panels.
+  const Camera& cam = scene.camera;
+  const int w = cam.width;
+  const double step = 2 * scene.medium.density.finest_wavelength();
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, image->values.size()),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+          if (!std::isfinite(scene.surface[i])) continue;  // e^(−∞): nothing
+          const Ray ray = pixel_ray(cam, static_cast<int>(i % w), static_cast<int>(i / w));
+          const double tau = segment_optical_depth(
+              scene.medium, ray.origin, ray.origin + scene.surface[i] * ray.direction, step);
+          image->values[i] += radiance * std::exp(-tau);
+        }
+      });
 }
 
 double percentile_exposure(const Image& image, double target) {

@@ -28,7 +28,9 @@ Image lit_surfaces(const RenderScene& scene, const std::vector<float>& shadow_wi
                    int height, const Image& airlight, const SurfaceShading& shading = {});
 
 // Adds to `image` (the camera's size) surfaces of constant radiance `radiance` at the scene's
-// surface distances, seen through its medium.
+// surface distances, seen through its medium: times e^(−σt·s), or in a medium of varying density
+// e^(−σt ∫ρ) along the pixel's ray to the surface (lit_surfaces' panels), each pixel on its own
+// (TBB).
 void add_constant_surfaces(const RenderScene& scene, double radiance, Image* image);
 
 // A tone-mapping exposure (write_image's `exposure`) that maps the 99.5th percentile of the
