@@ -26,6 +26,7 @@
 # stops. It runs unchanged where a GPU is present (EGL's device platform; the first line names the
 # renderer): the same command gives the absolute table there.
 set -euo pipefail
+source "$(dirname "$0")/sponza_setup.sh"
 build=$(realpath "${1:?usage: live_table1.sh BUILD_DIR [SCENE] [SIZES] [OMNI_SIZES]}")
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 scene=${2:-$repo/../shared/scenes/sponza/sponza.obj}
@@ -48,21 +49,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 # The lights and medium of sponza_bench.sh; its camera at CAMERA's size.
-cat > "$work/spot.json" <<'JSON'
-{ "type": "spot", "position": [0, 14, -1], "direction": [0, -14, 4], "up": [1, 0, 0],
-  "fov_y_deg": 60, "near": 0.5, "far": 40, "depth": "window" }
-JSON
-cat > "$work/omni.json" <<'JSON'
-{ "type": "omni", "position": [0, 6, 0], "near": 0.1, "far": 40, "depth": "window" }
-JSON
-cat > "$work/camera.json" <<JSON
-{ "type": "spot", "position": [-12, 2.5, 0.3], "direction": [1, 0.2, 0], "up": [0, 1, 0],
-  "fov_y_deg": 60, "aspect": $(python3 -c "print($cam_w / $cam_h)"), "near": 0.1, "far": 60,
-  "depth": "window", "width": $cam_w, "height": $cam_h }
-JSON
-cat > "$work/medium.json" <<'JSON'
-{ "scattering": 0.04, "absorption": 0.01, "intensity": 200, "phase": { "type": "hg", "g": 0.3 } }
-JSON
+sponza_setup "$work" "$cam_w" "$cam_h"
 
 # Runs a command with its output in $work/out and $work/err; on failure prints its error.
 run() { "$@" > "$work/out" 2> "$work/err" || { echo "live_table1: failed: $*" >&2; cat "$work/err" >&2; return 1; }; }

@@ -17,6 +17,7 @@
 # ../shared/scenes/sponza/sponza.obj next to the repository; without it the script says so and
 # stops.
 set -euo pipefail
+source "$(dirname "$0")/sponza_setup.sh"
 before=$(realpath "${1:?usage: live_versus.sh BUILD_BEFORE BUILD_AFTER [SCENE] [SIZES] [OMNI_SIZES]}")
 after=$(realpath "${2:?usage: live_versus.sh BUILD_BEFORE BUILD_AFTER [SCENE] [SIZES] [OMNI_SIZES]}")
 repo=$(cd "$(dirname "$0")/../.." && pwd)
@@ -37,21 +38,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 # live_table1.sh's lights, camera and medium.
-cat > "$work/spot.json" <<'JSON'
-{ "type": "spot", "position": [0, 14, -1], "direction": [0, -14, 4], "up": [1, 0, 0],
-  "fov_y_deg": 60, "near": 0.5, "far": 40, "depth": "window" }
-JSON
-cat > "$work/omni.json" <<'JSON'
-{ "type": "omni", "position": [0, 6, 0], "near": 0.1, "far": 40, "depth": "window" }
-JSON
-cat > "$work/camera.json" <<JSON
-{ "type": "spot", "position": [-12, 2.5, 0.3], "direction": [1, 0.2, 0], "up": [0, 1, 0],
-  "fov_y_deg": 60, "aspect": $(python3 -c "print($cam_w / $cam_h)"), "near": 0.1, "far": 60,
-  "depth": "window", "width": $cam_w, "height": $cam_h }
-JSON
-cat > "$work/medium.json" <<'JSON'
-{ "scattering": 0.04, "absorption": 0.01, "intensity": 200, "phase": { "type": "hg", "g": 0.3 } }
-JSON
+sponza_setup "$work" "$cam_w" "$cam_h"
 
 run() { "$@" > "$work/out" 2> "$work/err" || { echo "live_versus: failed: $*" >&2; cat "$work/err" >&2; return 1; }; }
 after_text() { sed -n "s/.*$1\([0-9.e+-]*\).*/\1/p" "$work/out" | head -1; }

@@ -18,6 +18,7 @@
 # defaults to ../shared/scenes/sponza/sponza.obj next to the repository. Needs about 2.5 GB of
 # free space in $TMPDIR for the 4096² PLY files.
 set -euo pipefail
+source "$(dirname "$0")/sponza_setup.sh"
 build=$(realpath "${1:?usage: sponza_bench.sh BUILD_DIR [SCENE] [MAX_ERROR] [SIZES] [OMNI_SIZES]}")
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 scene=${2:-$repo/../shared/scenes/sponza/sponza.obj}
@@ -35,21 +36,7 @@ lv=$build/lightvol
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-cat > "$work/spot.json" <<'JSON'
-{ "type": "spot", "position": [0, 14, -1], "direction": [0, -14, 4], "up": [1, 0, 0],
-  "fov_y_deg": 60, "near": 0.5, "far": 40, "depth": "window" }
-JSON
-cat > "$work/omni.json" <<'JSON'
-{ "type": "omni", "position": [0, 6, 0], "near": 0.1, "far": 40, "depth": "window" }
-JSON
-cat > "$work/camera.json" <<'JSON'
-{ "type": "spot", "position": [-12, 2.5, 0.3], "direction": [1, 0.2, 0], "up": [0, 1, 0],
-  "fov_y_deg": 60, "aspect": 1.7777777777777777, "near": 0.1, "far": 60, "depth": "window",
-  "width": 1280, "height": 720 }
-JSON
-cat > "$work/medium.json" <<'JSON'
-{ "scattering": 0.04, "absorption": 0.01, "intensity": 200, "phase": { "type": "hg", "g": 0.3 } }
-JSON
+sponza_setup "$work" 1280 720
 
 wall() { /usr/bin/time -f '%e' -o "$work/t" "$@" > "$work/out" 2> "$work/err" || { cat "$work/err" >&2; return 1; }; cat "$work/t"; }
 stage() { python3 -c "import json,sys; r=json.load(open(sys.argv[1])); print(sum(s['seconds'] for s in r['stages'] if s['name'].startswith(sys.argv[2])))" "$1" "$2"; }
