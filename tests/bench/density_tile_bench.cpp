@@ -63,12 +63,7 @@ Medium fog() {
 Mesh volume_of(const Light& light) {
   Result<Mesh> v = Error{""};
   if (light.type == LightType::omni) {
-    CubeFaces cube;
-    for (int f = 0; f < kOmniFaces; ++f) {
-      cube.faces[f] = test::scene_shadow_map(light, 256, 256, {}, f);
-      cube.sources[f] = omni_face_name(f);
-    }
-    v = build_omni_volume(light, cube, {});
+    v = build_omni_volume(light, test::scene_cube_faces(light, 256), {});
   } else {
     v = build_static_volume(light, test::scene_shadow_map(light, 512, 512), {}, "shadow");
   }
@@ -93,34 +88,6 @@ Image render_volume(const RenderScene& scene, const Mesh& volume, int tile, int*
     *tile_used = grid ? (*grid)->tile() : -1;
   }
   return (*r)->render();
-}
-
-// The reference (render_reference's varying-density branch) on every stride-th pixel of every
-// stride-th row; the rest 0.
-Image sampled_reference(const Mesh& volume, const RenderScene& scene, int stride) {
-  const Camera& cam = scene.camera;
-  Image image;
-  image.width = cam.width;
-  image.height = cam.height;
-  image.values.assign(scene.surface.size(), 0.0);
-  const Bvh bvh(volume);
-  const double step = reference_step(scene.medium);
-  std::vector<RayHit> hits;
-  for (int row = stride / 2; row < cam.height; row += stride)
-    for (int col = stride / 2; col < cam.width; col += stride) {
-      const std::size_t i = static_cast<std::size_t>(row) * cam.width + col;
-      const Ray ray = pixel_ray(cam, col, row);
-      hits.clear();
-      bvh.intersect_all(ray.origin, ray.direction, 0.0, &hits);
-      dedupe_hits(&hits);
-      if (hits.empty()) continue;
-      std::vector<std::pair<double, double>> crossings;
-      for (const RayHit& h : hits)
-        crossings.emplace_back(std::min(h.t, scene.surface[i]), h.facing > 0 ? 1.0 : -1.0);
-      image.values[i] =
-          heterogeneous_airlight(scene.light, scene.medium, ray, lit_intervals(crossings), step);
-    }
-  return image;
 }
 
 }  // namespace
@@ -154,7 +121,7 @@ int main(int argc, char** argv) {
     const Mesh volume = volume_of(light);
     const RenderScene scene = test::make_render_scene(
         test::make_camera(v.eye, v.target, width, height, 50), light, fog());
-    const Image ref = sampled_reference(volume, scene, stride);
+    const Image ref = render_reference(volume, scene, stride);
     std::printf("| %s |", v.name);
     for (int tile : {1, 2, 4, 8})
       std::printf(
@@ -170,7 +137,7 @@ int main(int argc, char** argv) {
     const Mesh volume = volume_of(light);
     const RenderScene scene =
         test::make_render_scene(test::make_camera(v.eye, v.target, big, big, 50), light, fog());
-    const Image ref = sampled_reference(volume, scene, stride);
+    const Image ref = render_reference(volume, scene, stride);
     int tile = 0;
     const Image gpu = sampled(render_volume(scene, volume, 0, &tile));
     std::printf("| %s | %d | %.2e |\n", v.name, tile, compare_images(gpu, ref).relative_l2);

@@ -146,12 +146,7 @@ TEST(GlVolume, OmniMatchesTheReferenceInsideAndOutside) {
   REQUIRE_GL_CONTEXT();
   const Light light = test::light_from_json(
       R"({"type": "omni", "position": [0.3, 2.5, 0.2], "near": 0.1, "far": 30, "depth": "linear"})");
-  CubeFaces cube;
-  for (int f = 0; f < kOmniFaces; ++f) {
-    cube.faces[f] = test::scene_shadow_map(light, 48, 48, {}, f);
-    cube.sources[f] = omni_face_name(f);
-  }
-  Result<Mesh> volume = build_omni_volume(light, cube, {});
+  Result<Mesh> volume = build_omni_volume(light, test::scene_cube_faces(light, 48), {});
   ASSERT_TRUE(volume) << volume.error().message;
   Medium m;
   m.scattering = 0.05;

@@ -56,6 +56,15 @@ DepthImage scene_shadow_map(const Light& light, int width, int height, const Box
   return image;
 }
 
+CubeFaces scene_cube_faces(const Light& light, int size, const Box& box) {
+  CubeFaces cube;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    cube.faces[f] = scene_shadow_map(light, size, size, box, f);
+    cube.sources[f] = omni_face_name(f);
+  }
+  return cube;
+}
+
 bool scene_lit(const Light& light, int width, int height, Vec3d x, const Box& box) {
   const Vec3d eye = light.view.transform_point(x);
   if (-eye.z < light.near || -eye.z > light.far) return false;

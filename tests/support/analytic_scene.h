@@ -7,6 +7,7 @@
 
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
 #include <lightvol/light/light.h>
 #include <lightvol/render/scene.h>
@@ -26,6 +27,9 @@ double cast_scene(Vec3d origin, Vec3d direction, const Box& box = {});
 // Omni lights: face `face` (+X −X +Y −Y +Z −Z), its depth the face eye space's −z.
 DepthImage scene_shadow_map(const Light& light, int width, int height, const Box& box = {},
                             int face = 0);
+
+// An omni light's six size × size faces of the scene (scene_shadow_map), named as build names them.
+CubeFaces scene_cube_faces(const Light& light, int size, const Box& box = {});
 
 // True when x is lit: inside the part of the light's frustum spanned by the texel-centre rays of a
 // W×H map, between near and far, and the light reaches it without meeting floor or box.

@@ -12,6 +12,8 @@ namespace lightvol {
 // t ≤ 0 (behind the eye) are ignored, as they contribute La(0, 0) = 0. Rows run in parallel (TBB).
 // A medium of varying density integrates the same lit intervals by quadrature instead
 // (airlight/heterogeneous.h), with panels of a quarter of the density's finest wavelength.
-Image render_reference(const Mesh& volume, const RenderScene& scene);
+// With `stride` > 1 only the pixel at the centre of each stride × stride block is computed (the
+// others stay 0): a sampled reference for slow media at large sizes.
+Image render_reference(const Mesh& volume, const RenderScene& scene, int stride = 1);
 
 }  // namespace lightvol
