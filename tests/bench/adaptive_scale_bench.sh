@@ -5,7 +5,8 @@
 # SCENES_DIR has them. Whole process under /usr/bin/time (user+sys CPU, wall, peak memory) and the
 # build report's stages (reading the image; "pyramid": texel depths and the error pyramid;
 # collapse). With a second build folder, both versions run alternately, and each row of the
-# second table is this version over the other: ratios from one run of both. The output's md5
+# second table is this version over the other (CPU, wall, memory, read, pyramid, collapse): ratios
+# from one run of both. The output's md5
 # (first 12 digits) says whether both wrote the same bytes.
 # Usage: tests/bench/adaptive_scale_bench.sh BUILD_DIR [OTHER_BUILD_DIR] [RUNS] [SIZES] [SCENES_DIR]
 #   (BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON: make_depth, heightfield_tool), e.g.
@@ -81,16 +82,17 @@ for m in "${maps[@]}"; do
       "$(col "$work/v$j" 3)" "$(col "$work/v$j" 4)" "$(col "$work/v$j" 5)" "$(col "$work/v$j" 6)"
   done
   if [ -n "$other" ]; then
-    ratios+=("$(printf '| %s | %.2f | %.2f | %.2f | %.2f | %.2f |' "$label" \
+    ratios+=("$(printf '| %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |' "$label" \
       "$(echo "$(col "$work/v0" 1) / $(col "$work/v1" 1)" | bc -l)" \
       "$(echo "$(col "$work/v0" 2) / $(col "$work/v1" 2)" | bc -l)" \
       "$(echo "$(col "$work/v0" 3) / $(col "$work/v1" 3)" | bc -l)" \
       "$(echo "$(col "$work/v0" 4) / $(col "$work/v1" 4)" | bc -l)" \
-      "$(echo "$(col "$work/v0" 5) / $(col "$work/v1" 5)" | bc -l)")")
+      "$(echo "$(col "$work/v0" 5) / $(col "$work/v1" 5)" | bc -l)" \
+      "$(echo "$(col "$work/v0" 6) / $(col "$work/v1" 6)" | bc -l)")")
   fi
 done
 if [ -n "$other" ]; then
   printf '\nThis version over the other (medians of %d):\n\n' "$runs"
-  printf '| map | CPU | wall | peak memory | read | pyramid |\n|---|---:|---:|---:|---:|---:|\n'
+  printf '| map | CPU | wall | peak memory | read | pyramid | collapse |\n|---|---:|---:|---:|---:|---:|---:|\n'
   printf '%s\n' "${ratios[@]}"
 fi

@@ -48,6 +48,10 @@ struct CollapseOptions {
   // under both new triangles stay within the bound (and none is thinner than min_height). The
   // count and the vertices stay; only slivers that the bound allows to turn go.
   int flip_sweeps = 8;
+  // The flips made the plain way (for tests): every triangle tried in every sweep, every angle
+  // comparison on atan2 values. The default skips the tries that cannot succeed and compares the
+  // angles exactly first (collapse_grid.cpp); the result is the same.
+  bool reference_flips = false;
 };
 
 struct CollapseReport {
