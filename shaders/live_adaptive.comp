@@ -16,16 +16,18 @@
 //                when one of its texels lies farther than E from the cell's two triangles (the
 //                pyramid's value above E).
 //   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1).
-//   LV_CONTROL   one invocation before the fix-up rounds: round 1's dispatch size (zero for an
-//                omni face that sits the seam round out).
+//   LV_CONTROL   one invocation before the fix-up rounds: round 1's face list and dispatch size
+//                (without an omni face that sits the seam round out).
 //   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
 //                leaf, later rounds those whose parent or neighbour split in the round before;
 //                omni: round 1 of a seam round after the first reuses the verdict on a leaf
-//                that kept its configuration since the seam round before).
-//   LV_PROPAGATE fix-up round r's balance in one pass: each cell the test failed splits, and
-//                every cell that LV_BALANCE's rule then splits, level after level upwards (the
-//                same closure that LV_BALANCE's level-by-level passes reach); round r + 1's
-//                dispatch size, zero when round r split nothing.
+//                that kept its configuration since the seam round before); a face's first
+//                failure lists it for round r + 1 (no face listed: round r + 1's dispatches,
+//                its LV_PROPAGATE's included, have zero work groups).
+//   LV_PROPAGATE fix-up round r's balance in one pass, on the faces whose test failed a leaf:
+//                each cell the test failed splits, and every cell that LV_BALANCE's rule then
+//                splits, level after level upwards (the same closure that LV_BALANCE's
+//                level-by-level passes reach).
 //   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
 //   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
 //   LV_TRIANGLES per emitting cell (listed by LV_COUNT): its triangles, as indices of vertex
@@ -33,8 +35,9 @@
 //   LV_VERTICES  per bitmap word: its vertices' world positions and texel ids.
 //   LV_CLOSE     one invocation: the border ring's closing (spot fan, directional walls and cap),
 //                the draw command and the statistics.
-// An omni light's six faces run the per-face passes one face after the other (the host binds each
-// face's ranges of the per-face buffers and sets lv_face), in seam rounds as
+// LV_RESET, LV_BALANCE, LV_CONTROL, LV_TEST and LV_PROPAGATE run on all of an omni light's faces
+// in one dispatch (LV_FACES_PASS below); the other per-face passes run one face after the other
+// (the host binds each face's ranges of the per-face buffers and sets lv_face). In seam rounds as
 // build_adaptive_omni_volume runs them (volume/omni_adaptive.cpp): each round tessellates every
 // face from its threshold with its forced border vertices, then the seams' two borders are united
 // and a side that lacks some of its seam's vertices takes the union as its forced vertices; the
