@@ -16,16 +16,18 @@
 //                when one of its texels lies farther than E from the cell's two triangles (the
 //                pyramid's value above E).
 //   LV_BALANCE   per level 2..top: a cell splits when a child or a child's neighbour did (2:1).
-//   LV_CONTROL   one invocation before the fix-up rounds: round 1's dispatch size (zero for an
-//                omni face that sits the seam round out).
+//   LV_CONTROL   one invocation before the fix-up rounds: round 1's face list and dispatch size
+//                (without an omni face that sits the seam round out).
 //   LV_TEST      fix-up round r: leaves whose split configuration breaks E (round 1 tests every
 //                leaf, later rounds those whose parent or neighbour split in the round before;
 //                omni: round 1 of a seam round after the first reuses the verdict on a leaf
-//                that kept its configuration since the seam round before).
-//   LV_PROPAGATE fix-up round r's balance in one pass: each cell the test failed splits, and
-//                every cell that LV_BALANCE's rule then splits, level after level upwards (the
-//                same closure that LV_BALANCE's level-by-level passes reach); round r + 1's
-//                dispatch size, zero when round r split nothing.
+//                that kept its configuration since the seam round before); a face's first
+//                failure lists it for round r + 1 (no face listed: round r + 1's dispatches,
+//                its LV_PROPAGATE's included, have zero work groups).
+//   LV_PROPAGATE fix-up round r's balance in one pass, on the faces whose test failed a leaf:
+//                each cell the test failed splits, and every cell that LV_BALANCE's rule then
+//                splits, level after level upwards (the same closure that LV_BALANCE's
+//                level-by-level passes reach).
 //   LV_COUNT     per cell: triangles it emits, and its vertices marked in a bitmap.
 //   LV_SCAN_*    exclusive prefix sums (triangle offsets; vertex ranks from the bitmap).
 //   LV_TRIANGLES per emitting cell (listed by LV_COUNT): its triangles, as indices of vertex
@@ -33,8 +35,9 @@
 //   LV_VERTICES  per bitmap word: its vertices' world positions and texel ids.
 //   LV_CLOSE     one invocation: the border ring's closing (spot fan, directional walls and cap),
 //                the draw command and the statistics.
-// An omni light's six faces run the per-face passes one face after the other (the host binds each
-// face's ranges of the per-face buffers and sets lv_face), in seam rounds as
+// LV_RESET, LV_BALANCE, LV_CONTROL, LV_TEST and LV_PROPAGATE run on all of an omni light's faces
+// in one dispatch (LV_FACES_PASS below); the other per-face passes run one face after the other
+// (the host binds each face's ranges of the per-face buffers and sets lv_face). In seam rounds as
 // build_adaptive_omni_volume runs them (volume/omni_adaptive.cpp): each round tessellates every
 // face from its threshold with its forced border vertices, then the seams' two borders are united
 // and a side that lacks some of its seam's vertices takes the union as its forced vertices; the
@@ -59,6 +62,46 @@ layout(local_size_x = 64) in;
 #define LV_SEAM_PASS
 #endif
 
+// The passes that work on several faces in one dispatch (every face of a seam round, or a group
+// of them: render/live_adaptive.cpp's faces_per_dispatch), each work group on one face: the face
+// from the list control[group control + face_list + gl_WorkGroupID.z], its ranges of the per-face
+// buffers at face stride offsets (the group's first face's ranges bound first), its Params read
+// from the block as doubles (offsets of the members below; static_asserts in live_adaptive.cpp).
+// The other passes run face by face with that face's ranges bound (lv_face a uniform).
+#if defined(LV_RESET) || defined(LV_BALANCE) || defined(LV_CONTROL) || defined(LV_TEST) || \
+    defined(LV_PROPAGATE)
+#define LV_FACES_PASS
+#endif
+
+#ifdef LV_FACES_PASS
+layout(std430, binding = 0) readonly buffer Params { double params_[]; };
+#define w0_c params_[fp + 20]
+#define w0_dc params_[fp + 21]
+#define w0_dr params_[fp + 22]
+#define w1 params_[fp + 23]
+#define uniform_scale params_[fp + 24]
+#define bound params_[fp + 31]
+#define pyramid_bound params_[fp + 32]
+#define p_width params_[fp + 33]
+#define p_height params_[fp + 34]
+#define p_flip_y params_[fp + 35]
+#define p_encoding params_[fp + 36]
+#define p_uniform_flag params_[fp + 37]
+#define p_standard params_[fp + 38]
+#define p_type params_[fp + 39]
+#define p_cells_total params_[fp + 40]
+#define nx_at(L) int(params_[fp + 41 + (L)])
+#define ny_at(L) int(params_[fp + 57 + (L)])
+#define offset_at(L) int(params_[fp + 73 + (L)])
+uniform int lv_first_face;  // the first face of the dispatch's group (its ranges bound first)
+uniform int face_list;      // the group's face list: control[group_control + face_list + ...]
+// Elements between two faces' ranges: Params (doubles), depth[], scale[], the per-cell buffers
+// (split[], fail[], verdict[], threshold_split[]), control[].
+uniform int stride_params, stride_texels, stride_scales, stride_cells, stride_control;
+int lv_face = 0;                               // the face this work group works on
+int fp = 0, ft = 0, fs = 0, fc = 0, fk = 0;    // its Params, depth, scale, cell and control bases
+int group_control = 0;  // control[] of the group (its first face's): round sizes, face lists
+#else
 layout(std430, binding = 0) readonly buffer Params {
   double m[16];  // clip to world, row-major (inverse(view) · inverse(projection))
   double h1[4];
@@ -75,6 +118,12 @@ layout(std430, binding = 0) readonly buffer Params {
   double p_ny[16];
   double p_offset[17];  // first cell of level L (1..top) in split[]; [top + 1]: cells_total
 };
+#define nx_at(L) int(p_nx[L])
+#define ny_at(L) int(p_ny[L])
+#define offset_at(L) int(p_offset[L])
+uniform int lv_face;  // the face the per-face passes run on (0: spot, directional)
+const int fp = 0, ft = 0, fs = 0, fc = 0, fk = 0;
+#endif
 
 #define width int(p_width)
 #define height int(p_height)
@@ -84,9 +133,6 @@ layout(std430, binding = 0) readonly buffer Params {
 #define standard int(p_standard)
 #define type int(p_type)
 #define cells_total int(p_cells_total)
-#define nx_at(L) int(p_nx[L])
-#define ny_at(L) int(p_ny[L])
-#define offset_at(L) int(p_offset[L])
 
 #ifndef LV_SEAM_PASS
 layout(std430, binding = 1) buffer Depths { double depth[]; };
@@ -148,7 +194,6 @@ uniform int top_level;
 uniform int level;   // LV_OWN, LV_BALANCE
 uniform int round_;  // LV_BALANCE, LV_TEST, LV_PROPAGATE
 uniform int rounds;  // LV_CONTROL, LV_CLOSE: the most fix-up rounds a frame runs
-uniform int lv_face;  // the face the per-face passes run on (0: spot, directional)
 uniform int split_stride;  // LV_UNITE: uints between two faces' split[] in all_split[]
 // Omni: the cube's twelve seams (face a, its GridSide, face b, its side, reversed, flip) and eight
 // corners (face, last_col, last_row, three times), as omni_adjacency lists them.
@@ -167,6 +212,24 @@ const uint kRoundArgs = 256u;
 const uint kEmitting = kStats + 6u;  // cells that emit triangles (LV_COUNT)
 const uint kTriangleArgs = 100u;     // LV_TRIANGLES' dispatch size (LV_SCAN_SUMS)
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
+// control[kFaceLists + 8 r + k] (the group's control[]): the k-th face of fix-up round r's
+// dispatch (r = 0: the balance's and LV_RESET's, the faces tessellated in this seam round).
+const uint kFaceLists = 512u;
+
+#ifdef LV_FACES_PASS
+void select_face(int f) {
+  lv_face = f;
+  int k = f - lv_first_face;
+  fp = k * stride_params, ft = k * stride_texels, fs = k * stride_scales, fc = k * stride_cells;
+  fk = f * stride_control;  // control[] is bound whole
+  group_control = lv_first_face * stride_control;
+}
+// This work group's face, from the dispatch's face list.
+void select_listed_face() {
+  group_control = lv_first_face * stride_control;
+  select_face(int(control[group_control + face_list + int(gl_WorkGroupID.z)]));
+}
+#endif
 
 // This invocation's index: dispatches of more than kMaxGroupsX groups run as rows of that many
 // (a dimension holds at most 65535 groups).
@@ -188,7 +251,9 @@ bool in_level(int L, int i, int j) {
   return L >= 1 && L <= top_level && i >= 0 && j >= 0 && i < nx_at(L) && j < ny_at(L);
 }
 
-uint split_at(int L, int i, int j) { return in_level(L, i, j) ? split[cell_index(L, i, j)] : 0u; }
+uint split_at(int L, int i, int j) {
+  return in_level(L, i, j) ? split[fc + cell_index(L, i, j)] : 0u;
+}
 bool is_split(int L, int i, int j) { return split_at(L, i, j) != 0u; }
 
 // Cell box: texels x0..x1, y0..y1 (build's rows: row 0 the top of the light's view).
@@ -198,7 +263,7 @@ ivec4 cell_box(int L, int i, int j) {
 }
 
 #ifndef LV_SEAM_PASS
-double d_at(int x, int y) { return depth[y * width + x]; }
+double d_at(int x, int y) { return depth[ft + y * width + x]; }
 #endif
 
 // The level and coordinates of flattened cell c (levels from `first` on).
@@ -366,11 +431,12 @@ void main() {
 
 #ifdef LV_BALANCE
 void main() {
+  select_listed_face();
   int L = level;
   int cell = invocation();
   if (cell >= nx_at(L) * ny_at(L)) return;
   int j = idiv(cell, nx_at(L)), i = cell - j * nx_at(L);
-  int c = cell_index(L, i, j);
+  int c = fc + cell_index(L, i, j);
   uint mark = uint(round_) + 1u;
   if (split[c] != 0u) return;
   int l = L - 1, ci = 2 * i, cj = 2 * j;
@@ -384,22 +450,26 @@ void main() {
 #endif
 
 #ifdef LV_CONTROL
-// Once before the fix-up rounds: round 1's dispatch size (the test's and LV_PROPAGATE's: the cells
-// of levels 2..top), every later round's zero until the round before it writes it.
+// Once per group of faces before the fix-up rounds: round 1's face list and dispatch size (the
+// test's: the cells of levels 2..top of each listed face), every later round's with no face
+// until the test of the round before lists one (a face whose test failed a leaf).
+uniform int faces_per_group;
 void main() {
   if (invocation() != 0) return;
+  select_face(lv_first_face);
   // An omni face that sits the seam round out runs no fix-up round (omni[48 + face]; zero for
   // spot and directional lights).
-  bool run = omni[48 + lv_face] == 0u;
+  uint n = 0u;
+  for (int f = lv_first_face; f < lv_first_face + faces_per_group; ++f)
+    if (omni[48 + f] == 0u) control[group_control + int(kFaceLists) + 8 + int(n++)] = uint(f);
   int cells2 = cells_total - offset_at(min(2, top_level + 1));
   uint groups = uint((cells2 + 63) / 64);
   uint x = min(groups, kMaxGroupsX);
   for (int r = 1; r <= rounds + 1; ++r) {
-    uint k = kRoundArgs + 3u * uint(r);
-    bool first = r == 1 && run;
-    control[k] = first ? x : 0u;
-    control[k + 1u] = first ? (groups + x - 1u) / x : 0u;
-    control[k + 2u] = 1u;
+    int k = group_control + int(kRoundArgs) + 3 * r;
+    control[k] = x;
+    control[k + 1] = (groups + x - 1u) / x;
+    control[k + 2] = r == 1 ? n : 0u;  // the faces listed
   }
 }
 #endif
@@ -448,7 +518,7 @@ bool triangle_fails(ivec2 a, ivec2 b, ivec2 c) {
       double dp = base + gx * double(x - lo);
       double e = abs(dp - d_at(x, y));
       if (uniform_flag == 0)
-        e = e * scale[y * width + x] / abs(w0 + w0_dc * double(x - lo) + dp * w1);
+        e = e * scale[fs + y * width + x] / abs(w0 + w0_dc * double(x - lo) + dp * w1);
       worst = max(worst, e);
     }
     double scaled = uniform_flag == 1 ? worst * uniform_scale : worst;
@@ -466,16 +536,17 @@ uniform int reuse;  // 1: round 1 of an omni seam round after the first (verdict
 const uint kVerdict = 32u;
 
 void main() {
+  select_listed_face();
   int first = offset_at(min(2, top_level + 1));
   int c = first + invocation();
   if (c >= cells_total || top_level < 2) return;
   bool record = type == 2 && round_ == 1;
-  uint previous = record ? verdict[c] : 0u;
+  uint previous = record ? verdict[fc + c] : 0u;
   uint code = 0u;
   ivec3 cl = cell_of(c, 2);
   int L = cl.x, i = cl.y, j = cl.z;
   uint parent = L == top_level ? 1u : split_at(L + 1, i / 2, j / 2);
-  bool leaf = split[c] == 0u && parent != 0u;
+  bool leaf = split[fc + c] == 0u && parent != 0u;
   if (leaf && round_ > 1) {
     uint r = uint(round_);
     // Later rounds test a leaf only when something around it changed since it passed.
@@ -497,12 +568,17 @@ void main() {
       }
       code = kVerdict | (config << 1u) | (fails ? 1u : 0u);
       if (fails) {
-        fail[c] = uint(round_);
-        atomicAdd(control[round_], 1u);
+        fail[fc + c] = uint(round_);
+        // The face's first failure lists it for round + 1 (its LV_PROPAGATE and its test).
+        if (atomicAdd(control[fk + round_], 1u) == 0u) {
+          int next = group_control + int(kRoundArgs) + 3 * (round_ + 1);
+          uint k = atomicAdd(control[next + 2], 1u);
+          control[group_control + int(kFaceLists) + 8 * (round_ + 1) + int(k)] = uint(lv_face);
+        }
       }
     }
   }
-  if (record) verdict[c] = code;
+  if (record) verdict[fc + c] = code;
 }
 #endif
 
@@ -513,21 +589,15 @@ void main() {
 // balanced (LV_BALANCE's closure), so only this round's splits force more; each is followed by
 // the invocation whose atomic compare-and-swap split it, so every forced cell is reached once and
 // the result is LV_BALANCE's closure whatever the order. From one cell, the cells it forces at
-// each level lie in a box of at most 3 × 3 cells (widths 1, 2, then at most 3).
+// each level lie in a box of at most 3 × 3 cells (widths 1, 2, then at most 3). It runs on the
+// faces whose test failed a leaf (round + 1's face list and dispatch size).
 void main() {
-  if (invocation() == 0) {
-    // The next round runs (at this round's size) when this one's test failed a leaf.
-    uint k = kRoundArgs + 3u * uint(round_);
-    bool again = control[round_] != 0u;
-    control[k + 3u] = again ? control[k] : 0u;
-    control[k + 4u] = again ? control[k + 1u] : 0u;
-    control[k + 5u] = 1u;
-  }
+  select_listed_face();
   int c = offset_at(min(2, top_level + 1)) + invocation();
   if (c >= cells_total || top_level < 2) return;
-  if (fail[c] != uint(round_)) return;
+  if (fail[fc + c] != uint(round_)) return;
   uint mark = uint(round_) + 1u;
-  if (atomicCompSwap(split[c], 0u, mark) != 0u) return;
+  if (atomicCompSwap(split[fc + c], 0u, mark) != 0u) return;
   ivec3 cl = cell_of(c, 2);
   ivec2 cur[9];
   cur[0] = cl.yz;
@@ -546,7 +616,7 @@ void main() {
         bool seen = false;
         for (int t = 0; t < m; ++t) seen = seen || next[t] == q;
         if (seen || m == 9) continue;
-        if (atomicCompSwap(split[cell_index(L + 1, q.x, q.y)], 0u, mark) != 0u) continue;
+        if (atomicCompSwap(split[fc + cell_index(L + 1, q.x, q.y)], 0u, mark) != 0u) continue;
         next[m] = q;
         ++m;
       }
@@ -818,8 +888,12 @@ void main() {
 #ifdef LV_SEAM_CONTROL
 // Seam round round_ (1-based; the host's rounds + 1 after the last, to conclude): the round before
 // changed no side → the borders agree and no more rounds run; else the faces with a changed side
-// tessellate again (all six in round 1).
-uniform int seam_slots;  // dispatch slots of a round (3 uints each)
+// tessellate again (all six in round 1): per group of faces_per_group faces, their list
+// (control[kFaceLists..] of the group's first face) and the dispatch sizes of LV_RESET and
+// LV_BALANCE over them (none when the group has no such face).
+uniform int seam_slots;  // dispatch slots of a group (3 uints each)
+uniform int faces_per_group;
+uniform int stride_control;  // uints between two faces' control[] (bound whole)
 void main() {
   if (invocation() != 0) return;
   bool dirty[6] = bool[6](true, true, true, true, true, true);
@@ -834,13 +908,17 @@ void main() {
   }
   bool run = omni[0] == 0u && round_ <= rounds;
   if (run) omni[1] = uint(round_);
-  for (int f = 0; f < 6; ++f) {
-    bool face_runs = run && dirty[f];
-    omni[48 + f] = face_runs ? 0u : 1u;
+  for (int f = 0; f < 6; ++f) omni[48 + f] = run && dirty[f] ? 0u : 1u;
+  for (int g = 0; g * faces_per_group < 6; ++g) {
+    int first = g * faces_per_group;
+    uint n = 0u;
+    for (int f = first; f < first + faces_per_group; ++f)
+      if (run && dirty[f]) control[first * stride_control + int(kFaceLists) + int(n++)] = uint(f);
     for (int k = 0; k < 3 * seam_slots; ++k) {
-      // LV_UNITE's and LV_APPLY's slots (face 0's) run whenever the round does.
-      bool runs = k / 3 >= 16 ? run : face_runs;
-      omni[kOmniArgs + uint(3 * seam_slots * f + k)] = runs ? seam_template[k] : 0u;
+      // LV_UNITE's and LV_APPLY's slots (group 0's) run whenever the round does.
+      uint v = k / 3 >= 16 ? (run ? seam_template[k] : 0u)
+                           : (n == 0u ? 0u : k % 3 == 2 ? n : seam_template[k]);
+      omni[kOmniArgs + uint(3 * seam_slots * g + k)] = v;
     }
   }
 }
@@ -857,12 +935,13 @@ bool forced_inside(int side, int from, int to) {
 }
 
 void main() {
+  select_listed_face();
   int c = invocation();
   if (c >= cells_total) return;
   if (c == 0)
-    for (int k = 0; k < 64; ++k) control[k] = 0u;  // the fix-up rounds' counts
-  fail[c] = 0u;
-  uint s = threshold_split[c];
+    for (int k = 0; k < 64; ++k) control[fk + k] = 0u;  // the fix-up rounds' counts
+  fail[fc + c] = 0u;
+  uint s = threshold_split[fc + c];
   if (s == 0u) {
     ivec3 cl = cell_of(c, 1);
     int L = cl.x, i = cl.y, j = cl.z;
@@ -873,7 +952,7 @@ void main() {
         (i == nx_at(L) - 1 && forced_inside(kSideRight, b.y, b.w)))
       s = 1u;
   }
-  split[c] = s;
+  split[fc + c] = s;
 }
 #endif
 

@@ -218,7 +218,7 @@ TEST(RenderCommand, LiveAdaptiveDrawsTheAirlightOfBuildsQuadtreeVolume) {
   EXPECT_EQ(r.err, "lightvol: --max-error: applies with --adaptive only\n");
 }
 
-TEST(RenderCommand, LiveAdaptiveOmniDrawsTheAirlightOfBuildsQuadtreeVolume) {
+TEST(RenderCommand, LiveOmniDrawsTheAirlightOfBuildsStaticAndQuadtreeVolumes) {
   REQUIRE_GL_CONTEXT();
   test::TempDir tmp;
   const std::string dir = tmp.path();
@@ -245,6 +245,19 @@ TEST(RenderCommand, LiveAdaptiveOmniDrawsTheAirlightOfBuildsQuadtreeVolume) {
       " --out '" + dir + "/live.exr' --compare '" + dir + "/volume.exr'");
   ASSERT_EQ(live.exit_code, 0) << live.err;
   // The same triangles (tests/render/live_adaptive_test), drawn by the same passes.
+  EXPECT_LT(number_after(live.out, "relative L2 "), 1e-4) << live.out;
+  EXPECT_GT(number_after(live.out, "mean "), 0) << live.out;
+  // The static omni volume the same way: build's vertices to float rounding (12W² − 4
+  // triangles), drawn by the same passes.
+  built = test::run_lightvol("build " + faces + " --light '" + dir + "/omni.json' --out '" + dir +
+                             "/omni_static.ply'");
+  ASSERT_EQ(built.exit_code, 0) << built.err;
+  vol = test::run_lightvol("render '" + dir + "/omni_static.ply' " + args + " --out '" + dir +
+                           "/volume_static.exr'");
+  ASSERT_EQ(vol.exit_code, 0) << vol.err;
+  live = test::run_lightvol("render " + args + " --method live --shadow-map " + faces + " --out '" +
+                            dir + "/live_static.exr' --compare '" + dir + "/volume_static.exr'");
+  ASSERT_EQ(live.exit_code, 0) << live.err;
   EXPECT_LT(number_after(live.out, "relative L2 "), 1e-4) << live.out;
   EXPECT_GT(number_after(live.out, "mean "), 0) << live.out;
 }

@@ -14,6 +14,7 @@
 
 #include <lightvol/check/check.h>
 #include <lightvol/render/gl_volume.h>
+#include <lightvol/render/live_adaptive.h>
 #include <lightvol/render/live_volume.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
@@ -438,6 +439,62 @@ TEST(LiveAdaptive, OmniIsBuildsAdaptiveOmniVolumeTriangleForTriangle) {
                          static_cast<double>(std::abs(gpu->mesh.positions[i] - cpu.positions[i])));
       }
       EXPECT_LE(worst, 2e-6 * scale);
+    }
+  }
+}
+
+// The tessellation's passes run on all six faces in one dispatch where the faces' buffers fit
+// one storage block (these maps), else on groups of 3, 2 or 1: the same volume, bit for bit.
+TEST(LiveAdaptive, OmniMakesTheSameVolumeWhateverTheFacesPerDispatch) {
+  REQUIRE_GL_CONTEXT();
+  const std::vector<OmniCase> all = omni_cases();
+  // The cascading plateaus on every other face, mirrored on the others: faces that need
+  // different numbers of fix-up rounds in one dispatch.
+  OmniCase mixed{"omni linear steps 96 mixed", all[5].light, {}};
+  for (int f = 0; f < kOmniFaces; ++f) {
+    DepthImage map = cascading_steps(96);
+    if (f % 2 == 1)
+      for (int r = 0; r < 96; ++r)
+        std::reverse(map.values.begin() + r * 96, map.values.begin() + (r + 1) * 96);
+    mixed.cube.faces[f] = map;
+    mixed.cube.sources[f] = omni_face_name(f);
+  }
+  for (const auto& [c, e] : {std::pair<const OmniCase&, double>{all[2], 0.0005},
+                             std::pair<const OmniCase&, double>{all[5], 0.001},
+                             std::pair<const OmniCase&, double>{mixed, 0.001}}) {
+    SCOPED_TRACE(c.name + " E = " + std::to_string(e));
+    AdaptiveReport report;
+    OmniAdaptiveDetail detail;
+    const Mesh cpu = cpu_omni_volume(c, e, &report, &detail);
+    LiveOmni live = make_live_omni(c, e);
+    ASSERT_TRUE(live.volume);
+    Result<LiveMesh> expected = live.volume->read_mesh();
+    ASSERT_TRUE(expected) << expected.error().message;
+    std::printf("  %-26s E %-6g triangles %zu, seam rounds %d, fix-up rounds %d\n", c.name.c_str(),
+                e, expected->mesh.num_triangles(), expected->seam_rounds, expected->fixup_rounds);
+    EXPECT_GE(expected->seam_rounds, 2);
+    EXPECT_EQ(expected->seam_rounds, detail.seam_rounds);
+    EXPECT_EQ(expected->fixup_rounds, report.fixup_rounds);
+    EXPECT_EQ(expected->mesh.num_triangles(), cpu.num_triangles());
+    EXPECT_TRUE(triangle_set(expected->mesh.indices, expected->mesh.num_triangles()) ==
+                triangle_set(cpu.indices, cpu.num_triangles()));
+    const int w = c.cube.faces[0].width;
+    for (const int n : {0, 1, 2, 3, 6}) {
+      SCOPED_TRACE("faces per dispatch " + std::to_string(n));
+      Result<std::unique_ptr<detail::LiveAdaptive>> passes =
+          detail::LiveAdaptive::create(e, LiveOptions{}.max_rounds, LiveOptions{}.max_seam_rounds);
+      ASSERT_TRUE(passes) << passes.error().message;
+      if (n != 0) (*passes)->set_faces_per_dispatch(n);
+      ASSERT_TRUE((*passes)->resize(c.light, w, w));
+      EXPECT_EQ((*passes)->faces_per_dispatch(), n == 0 ? 6 : n);
+      (*passes)->generate([&](const Program& program) { live.volume->bind(program, 2); });
+      Result<LiveMesh> gpu = (*passes)->read_back();
+      ASSERT_TRUE(gpu) << gpu.error().message;
+      EXPECT_EQ(gpu->seam_rounds, expected->seam_rounds);
+      EXPECT_EQ(gpu->fixup_rounds, expected->fixup_rounds);
+      EXPECT_EQ(gpu->converged, expected->converged);
+      EXPECT_TRUE(gpu->mesh.indices == expected->mesh.indices);
+      EXPECT_TRUE(gpu->mesh.positions == expected->mesh.positions);
     }
   }
 }

@@ -1,9 +1,10 @@
 // A live volume in a scene that moves (issue 23, "dynamic"): Sponza (the bundled crop, data/) with
 // a box moving through the light across frames. Each frame the GPU renders the shadow map into a
 // depth texture (ShadowMapRenderer::draw: the atrium, then the box moved by its model matrix),
-// the live volume is made from that texture and drawn; the test alone reads the map back, builds
-// its volume on the CPU and draws that: the live airlight must be within 0.5 % relative L2 of it,
-// and between frames the map changes only where the box was or is, and the airlight changes.
+// the live volumes (static, and adaptive at E = 0.01) are made from that texture and drawn; the
+// test alone reads the map back, builds its volumes on the CPU (static; the quadtree at the same
+// E) and draws them: each live airlight must be within 0.5 % relative L2 of its CPU volume's, and
+// between frames the map changes only where the box was or is, and the airlight changes.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <lightvol/render/reference.h>
 #include <lightvol/scene/scene.h>
 #include <lightvol/scene/shadowmap.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
 #include "support/gl_test_context.h"
@@ -83,6 +85,12 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
   Result<std::unique_ptr<LiveVolume>> live =
       LiveVolume::create(*light, {shadow->depth_texture(), kMap, kMap});
   ASSERT_TRUE(live) << live.error().message;
+  constexpr double kMaxError = 0.01;  // the Sponza table's adaptive bound
+  LiveOptions adaptive_options;
+  adaptive_options.max_error = kMaxError;
+  Result<std::unique_ptr<LiveVolume>> live_adaptive =
+      LiveVolume::create(*light, {shadow->depth_texture(), kMap, kMap}, adaptive_options);
+  ASSERT_TRUE(live_adaptive) << live_adaptive.error().message;
   RenderScene scene{*camera, std::vector<double>(static_cast<std::size_t>(w) * h, INFINITY), *light,
                     *medium};
   Result<std::unique_ptr<GlVolumeRenderer>> renderer = GlVolumeRenderer::create(scene);
@@ -91,7 +99,7 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
   // The box 5 units down the light's axis, moving across it along x.
   const Vec3d on_axis = light->position + 5.0 * normalize(light->direction);
   std::vector<float> previous_map, previous_box;
-  Image previous;
+  Image previous, previous_adaptive;
   for (int frame = 0; frame < 3; ++frame) {
     const Mat4d model = translation(on_axis + Vec3d{-1.2 + 1.2 * frame, 0, 0});
     // The frame, on the GPU: the shadow map with the box, the camera's depth with the box.
@@ -112,6 +120,8 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
     ASSERT_TRUE((*renderer)->set_surface(surface_texture.id()));
     ASSERT_TRUE((*renderer)->set_volume(**live));
     const Image airlight = (*renderer)->render();
+    ASSERT_TRUE((*renderer)->set_volume(**live_adaptive));
+    const Image airlight_adaptive = (*renderer)->render();
 
     // The check: the map read back, its volume built on the CPU and drawn the same way.
     DepthImage map{kMap, kMap, shadow->read(-1, 1)};  // first row = top, as files store it
@@ -120,6 +130,14 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
     (*renderer)->set_volume(*built);
     const Image expected = (*renderer)->render();
     const ImageDifference d = compare_images(airlight, expected);
+    AdaptiveOptions quadtree;
+    quadtree.tessellation = Tessellation::quadtree;
+    quadtree.max_error = kMaxError;
+    Result<Mesh> built_adaptive =
+        build_adaptive_volume(*light, map, {}, quadtree, "frame " + std::to_string(frame), nullptr);
+    ASSERT_TRUE(built_adaptive) << built_adaptive.error().message;
+    (*renderer)->set_volume(*built_adaptive);
+    const ImageDifference d_adaptive = compare_images(airlight_adaptive, (*renderer)->render());
     double total = 0;
     for (double v : expected.values) total += v;
     box_only->bind();
@@ -128,11 +146,15 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
     const std::vector<float> box = box_only->read(-1, 1);
     const std::size_t box_texels = static_cast<std::size_t>(
         std::count_if(box.begin(), box.end(), [](float z) { return z < 1; }));
-    std::printf("  frame %d: box on %zu texels; live against the CPU's volume: relative L2 %.2e\n",
-                frame, box_texels, d.relative_l2);
+    std::printf(
+        "  frame %d: box on %zu texels; live against the CPU's volume: relative L2 %.2e; "
+        "adaptive (%zu triangles) %.2e\n",
+        frame, box_texels, d.relative_l2, built_adaptive->num_triangles(), d_adaptive.relative_l2);
     EXPECT_GT(total, 0) << frame;
     EXPECT_GT(box_texels, 500u) << frame;  // the box is in the light
     EXPECT_LE(d.relative_l2, kFrameTolerance) << frame;
+    EXPECT_LE(d_adaptive.relative_l2, kFrameTolerance) << frame;
+    EXPECT_LT(built_adaptive->num_triangles(), built->num_triangles() / 4) << frame;
 
     if (frame > 0) {
       // The map changed, and only where the box was or is; so did the airlight.
@@ -143,6 +165,8 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
         if (box[i] == 1 && previous_box[i] == 1) ++elsewhere;
       }
       const double moved = compare_images(airlight, previous).relative_l2;
+      const double moved_adaptive =
+          compare_images(airlight_adaptive, previous_adaptive).relative_l2;
       std::printf(
           "  frame %d against %d: %zu texels changed (%zu away from the box), airlight "
           "%.2e\n",
@@ -150,10 +174,12 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
       EXPECT_GT(changed, 500u);
       EXPECT_EQ(elsewhere, 0u);
       EXPECT_GT(moved, 0.01);
+      EXPECT_GT(moved_adaptive, 0.01);
     }
     previous_map = map.values;
     previous_box = box;
     previous = airlight;
+    previous_adaptive = airlight_adaptive;
   }
   EXPECT_EQ(pending_error(), "");
 }

@@ -2,6 +2,7 @@
 // texture is build's, vertex for vertex, and draws build's airlight; a map that changes between
 // frames changes it; bad textures are refused with a message.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -13,6 +14,7 @@
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/render/gl_volume.h>
 #include <lightvol/render/live_volume.h>
+#include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/omni_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -422,10 +424,24 @@ TEST(LiveVolume, ReadsTheSurfaceFromAnEnginesTexture) {
   EXPECT_EQ((*renderer)->render().values, own.values);
 }
 
+// A mesh's triangles as a sorted list, each rotated to start at its smallest index.
+std::vector<std::array<std::uint32_t, 3>> sorted_triangles(const Mesh& mesh) {
+  std::vector<std::array<std::uint32_t, 3>> out;
+  for (std::size_t t = 0; t < mesh.num_triangles(); ++t) {
+    std::array<std::uint32_t, 3> a = {mesh.indices[3 * t], mesh.indices[3 * t + 1],
+                                      mesh.indices[3 * t + 2]};
+    std::rotate(a.begin(), std::min_element(a.begin(), a.end()), a.end());
+    out.push_back(a);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 // NaN texels (which build refuses): the frame goes on, the texel's vertex on its near plane
 // (build's vertex of that texel at the near depth), no GL error; validate() names the texture and
 // the pixel, and passes again once the map is good. A texture reallocated at another size since
-// create is named too.
+// create is named too. The adaptive live volume (window and linear depth) reads the NaN texel as
+// its near depth too: build's quadtree of that map.
 TEST(LiveVolume, ANanTexelGoesToTheNearPlaneAndValidateNamesIt) {
   REQUIRE_GL_CONTEXT();
   for (DepthEncoding e : {DepthEncoding::window, DepthEncoding::linear, DepthEncoding::radial}) {
@@ -457,6 +473,23 @@ TEST(LiveVolume, ANanTexelGoesToTheNearPlaneAndValidateNamesIt) {
     ASSERT_TRUE(built) << built.error().message;
     EXPECT_LE(largest_difference(*gpu, *built, light), kPositionTolerance) << to_string(e);
     EXPECT_EQ(pending_error(), "");
+    if (e != DepthEncoding::radial) {
+      LiveOptions options;
+      options.max_error = 0.01;
+      Result<std::unique_ptr<LiveVolume>> adaptive =
+          LiveVolume::create(light, {texture.id(), 32, 24}, options);
+      ASSERT_TRUE(adaptive) << adaptive.error().message;
+      Result<LiveMesh> mesh = (*adaptive)->read_mesh();
+      ASSERT_TRUE(mesh) << mesh.error().message;
+      AdaptiveOptions quadtree;
+      quadtree.tessellation = Tessellation::quadtree;
+      quadtree.max_error = 0.01;
+      Result<Mesh> cpu = build_adaptive_volume(light, near_map, {}, quadtree, "map");
+      ASSERT_TRUE(cpu) << cpu.error().message;
+      EXPECT_TRUE(mesh->converged) << to_string(e);
+      EXPECT_TRUE(sorted_triangles(mesh->mesh) == sorted_triangles(*cpu)) << to_string(e);
+      EXPECT_EQ(pending_error(), "");
+    }
 
     // The next frame's map is good again.
     glBindTexture(GL_TEXTURE_2D, texture.id());

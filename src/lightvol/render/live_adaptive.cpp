@@ -35,6 +35,14 @@ struct Params {
   double nx[16] = {}, ny[16] = {}, offset[17] = {};
 };
 static_assert(offsetof(Params, width) == 33 * sizeof(double));
+// The passes that run on several faces read Params as doubles at these offsets
+// (shaders/live_adaptive.comp, LV_FACES_PASS).
+static_assert(offsetof(Params, w0_c) == 20 * sizeof(double));
+static_assert(offsetof(Params, bound) == 31 * sizeof(double));
+static_assert(offsetof(Params, cells_total) == 40 * sizeof(double));
+static_assert(offsetof(Params, nx) == 41 * sizeof(double));
+static_assert(offsetof(Params, ny) == 57 * sizeof(double));
+static_assert(offsetof(Params, offset) == 73 * sizeof(double));
 static_assert(sizeof(Params) == (33 + 8 + 16 + 16 + 17) * sizeof(double));
 
 // The passes, in shaders/live_adaptive.comp's order.
@@ -106,13 +114,18 @@ constexpr GLuint kStats = 160;         // control[kStats + ...] (shaders/live_ad
 constexpr GLuint kTriangleArgs = 100;  // LV_TRIANGLES' dispatch size, written by the GPU
 constexpr GLuint kDrawCommand = 192;   // control[kDrawCommand..+4]: the indirect draw command
 constexpr GLuint kRoundArgs = 256;  // control[kRoundArgs + 3 r..]: fix-up round r's dispatch size
-constexpr GLuint kControlSize = 512;
+// control[kFaceLists + 8 r..]: the faces of fix-up round r's dispatch (r = 0: the balance's).
+// Both in the control[] of a group's first face (the group's).
+constexpr GLuint kFaceLists = 512;
+constexpr GLuint kControlSize = 1088;
+static_assert(kRoundArgs + 3 * 64 + 3 <= kFaceLists);  // rounds + 1 <= 64
+static_assert(kFaceLists + 8 * 64 + 8 <= kControlSize);
 constexpr int kBandRows = 16;
 constexpr int kChunk = 256;
 constexpr GLuint kOmniSize = 512;  // shaders/live_adaptive.comp's omni[]
 constexpr GLuint kOmniArgs = 128;
-// The seam round's dispatch slots, per face from kOmniArgs on: 0 LV_RESET, 2..top LV_BALANCE of
-// that level, 16 LV_UNITE, 17 LV_APPLY (face 0's).
+// The seam round's dispatch slots, per group of faces from kOmniArgs on: 0 LV_RESET, 2..top
+// LV_BALANCE of that level, 16 LV_UNITE, 17 LV_APPLY (group 0's).
 constexpr int kSlotReset = 0, kSlotUnite = 16, kSlotApply = 17, kSlots = 18;
 static_assert(kOmniArgs + 3 * kSlots * kOmniFaces <= kOmniSize);
 
@@ -155,7 +168,12 @@ struct LiveAdaptive::State {
   Program programs[kPasses];
   BufferHandle buffers[kBuffers];
   VertexArrayHandle vao;
-  int faces = 1;                    // 6: an omni light
+  int faces = 1;  // 6: an omni light
+  // Faces per dispatch of the tessellation's passes (LV_FACES_PASS): all six when their ranges
+  // fit one storage block, else 3, 2 or 1 (spot, directional: 1); `requested`: a test's choice
+  // (set_faces_per_dispatch), 0 for that.
+  int per_dispatch = 1, requested_per_dispatch = 0;
+  std::uint64_t max_block = 0;      // GL_MAX_SHADER_STORAGE_BLOCK_SIZE
   GLintptr stride[kBuffers] = {};   // bytes between two faces' ranges (per-face buffers)
   GLsizeiptr range[kBuffers] = {};  // bytes of one face's range
   int width = 0, height = 0, top = 0;
@@ -173,6 +191,46 @@ struct LiveAdaptive::State {
   mutable std::vector<Timed> timed;
 
   bool omni() const { return faces == kOmniFaces; }
+  // per_dispatch: the requested count, else the most faces (6, 3, 2) whose ranges of every
+  // per-face buffer fit one storage block together, else 1.
+  void choose_per_dispatch() {
+    per_dispatch = 1;
+    if (requested_per_dispatch != 0) {
+      LV_CHECK_EQ(faces % requested_per_dispatch, 0);
+      per_dispatch = requested_per_dispatch;
+      return;
+    }
+    for (const int n : {6, 3, 2}) {
+      if (n > faces) continue;
+      bool fits = true;
+      for (const Binding b : kPerFace)
+        if (b != kControlBuf &&
+            static_cast<std::uint64_t>((n - 1) * stride[b] + range[b]) > max_block)
+          fits = false;
+      if (fits) {
+        per_dispatch = n;
+        return;
+      }
+    }
+  }
+  // The uniforms of the passes that run on several faces: the elements between two faces'
+  // ranges.
+  void set_strides() const {
+    for (const Pass pass : {kReset, kBalance, kControl, kTest, kPropagate, kSeamControl}) {
+      const Program& program = programs[pass];
+      program.use();
+      const auto set = [&](const char* name, Binding b, int bytes) {
+        LV_CHECK_LE(stride[b] / bytes, std::numeric_limits<GLint>::max());
+        glUniform1i(program.uniform(name), static_cast<GLint>(stride[b] / bytes));
+      };
+      set("stride_params", kParams, 8);
+      set("stride_texels", kDepths, 8);
+      set("stride_scales", kScales, 8);
+      set("stride_cells", kSplits, 4);
+      set("stride_control", kControlBuf, 4);
+    }
+    glUseProgram(0);
+  }
   // Binds face f's ranges of the per-face buffers, and every other buffer whole.
   void bind_face(int f) const {
     for (int b = 0; b < kBuffers; ++b) {
@@ -181,6 +239,20 @@ struct LiveAdaptive::State {
       if (stride[b] > 0) {
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id, f * stride[b],
                           range[b]);
+      } else {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id);
+      }
+    }
+  }
+  // Binds the ranges of faces first .. first + n − 1 of the per-face buffers (control[] whole),
+  // and every other buffer whole: the tessellation's passes over a group of faces.
+  void bind_group(int first, int n) const {
+    for (int b = 0; b < kBuffers; ++b) {
+      if (b == kScanIn || b == kScanOut) continue;
+      const GLuint id = buffers[b == kAllSplits ? kSplits : b].id();
+      if (stride[b] > 0 && b != kControlBuf) {
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id, first * stride[b],
+                          (n - 1) * stride[b] + range[b]);
       } else {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, static_cast<GLuint>(b), id);
       }
@@ -369,6 +441,15 @@ Status LiveAdaptive::resize(const Light& light, int width, int height) {
     s.stride[b] = round_up(bytes[b], alignment);
     bytes[b] = static_cast<std::uint64_t>(s.stride[b]) * faces;
   }
+  // The cell buffers share one stride in the shader (stride_cells).
+  LV_CHECK(!s.omni() ||
+           (s.stride[kThreshold] == s.stride[kSplits] && s.stride[kVerdicts] == s.stride[kSplits]));
+  LV_CHECK(s.stride[kFails] == s.stride[kSplits]);
+  GLint block = 0;  // (a size over 2^31 − 1 reads as that: enough)
+  glGetIntegerv(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+  s.max_block = static_cast<std::uint64_t>(std::max(block, 0));
+  s.choose_per_dispatch();
+  s.set_strides();
   const std::uint64_t sides = 4 * static_cast<std::uint64_t>(width) * faces;
   bytes[kIndices] = 4 * s.max_indices;
   bytes[kPositions] = 12 * s.max_vertices;
@@ -520,69 +601,93 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
       glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
     }
   }
-  // The balance and the fix-up rounds (each one's dispatch sizes written by the GPU: zero once a
-  // round split nothing). Omni: from each face's threshold with its forced border vertices, in
-  // seam rounds until the seams' borders agree (the round's dispatch sizes written by the GPU).
+  // The balance and the fix-up rounds, each pass one dispatch per group of faces (all six faces
+  // of an omni light in one, as a rule; each work group finds its face in the group's face list).
+  // The fix-up rounds' face lists and dispatch sizes are written by the GPU: round 1's by
+  // LV_CONTROL, each later one's by the round before's test (the faces it failed a leaf of: none
+  // once a round split nothing, a dispatch of zero groups). Omni: from each face's threshold with
+  // its forced border vertices, in seam rounds until the seams' borders agree (the seam round's
+  // face lists and dispatch sizes written by the GPU too).
   int seam_round = 0;  // omni: the seam round being run
+  const int groups = s.faces / s.per_dispatch;
+  // Binds group g's ranges and uses `pass` on them with face list `list` (control[] offset).
+  const auto use_group = [&](Pass pass, int g, GLuint list) -> const Program& {
+    face = g * s.per_dispatch;
+    s.bind_group(face, s.per_dispatch);
+    const Program& program = use(pass);
+    glUniform1i(program.uniform("lv_first_face"), face);
+    glUniform1i(program.uniform("face_list"), static_cast<GLint>(list));
+    return program;
+  };
+  const auto seam_args = [&](int g, int slot) {
+    return kOmniArgs +
+           3 * (kSlots * static_cast<std::uint64_t>(g) + static_cast<std::uint64_t>(slot));
+  };
   const auto tessellate = [&] {
-    const Program& balance = use(kBalance);
-    glUniform1i(balance.uniform("round_"), 0);
     for (int level = 2; level <= s.top; ++level) {
-      glUniform1i(balance.uniform("level"), level);
-      if (s.omni()) {
-        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) +
-                                         static_cast<std::uint64_t>(level)));
-      } else {
-        dispatch(s.nx[level] * s.ny[level]);
+      for (int g = 0; g < groups; ++g) {
+        const Program& balance = use_group(kBalance, g, kFaceLists);
+        glUniform1i(balance.uniform("round_"), 0);
+        glUniform1i(balance.uniform("level"), level);
+        if (s.omni()) {
+          indirect(kOmni, seam_args(g, level));
+        } else {
+          dispatch(s.nx[level] * s.ny[level]);
+        }
       }
       barrier();
     }
     if (s.top < 2) return;
-    // The fix-up rounds: round 1's dispatch size from LV_CONTROL, each later one's from the
-    // round before (zero once a round split nothing).
-    const Program& control = use(kControl);
-    glUniform1i(control.uniform("rounds"), s.rounds);
-    dispatch(1);
+    // The fix-up rounds: round 1's faces and dispatch size from LV_CONTROL, each later one's from
+    // the round before.
+    for (int g = 0; g < groups; ++g) {
+      const Program& control = use_group(kControl, g, 0);
+      glUniform1i(control.uniform("rounds"), s.rounds);
+      glUniform1i(control.uniform("faces_per_group"), s.per_dispatch);
+      dispatch(1);
+    }
     barrier();
     for (int round = 1; round <= s.rounds; ++round) {
-      const std::uint64_t args = kRoundArgs + 3 * static_cast<std::uint64_t>(round);
-      const Program& test = use(kTest);
-      glUniform1i(test.uniform("round_"), round);
-      glUniform1i(test.uniform("reuse"), round == 1 && seam_round > 1 ? 1 : 0);
-      indirect(kControlBuf, args);
+      const auto args = [&](int r) { return kRoundArgs + 3 * static_cast<std::uint64_t>(r); };
+      for (int g = 0; g < groups; ++g) {
+        const Program& test = use_group(kTest, g, kFaceLists + 8 * static_cast<GLuint>(round));
+        glUniform1i(test.uniform("round_"), round);
+        glUniform1i(test.uniform("reuse"), round == 1 && seam_round > 1 ? 1 : 0);
+        indirect(kControlBuf, args(round));
+      }
       barrier();
-      // The round's balance in one pass (over the test's cells).
-      const Program& propagate = use(kPropagate);
-      glUniform1i(propagate.uniform("round_"), round);
-      indirect(kControlBuf, args);
+      // The round's balance in one pass, on the faces whose test failed a leaf (round + 1's).
+      for (int g = 0; g < groups; ++g) {
+        const Program& propagate =
+            use_group(kPropagate, g, kFaceLists + 8 * static_cast<GLuint>(round + 1));
+        glUniform1i(propagate.uniform("round_"), round);
+        indirect(kControlBuf, args(round + 1));
+      }
       barrier();
     }
   };
   phase = 2;
   if (!s.omni()) {
-    face = 0;
     tessellate();
   } else {
     const auto seam_control = [&](int round) {
-      face = 0;
-      s.bind_face(0);
-      const Program& control = use(kSeamControl);
+      const Program& control = use_group(kSeamControl, 0, 0);
       glUniform1i(control.uniform("round_"), round);
       glUniform1i(control.uniform("rounds"), s.seam_rounds);
       glUniform1i(control.uniform("seam_slots"), kSlots);
+      glUniform1i(control.uniform("faces_per_group"), s.per_dispatch);
       dispatch(1);
       barrier();
     };
     for (int round = 1; round <= s.seam_rounds; ++round) {
       seam_round = round;
       seam_control(round);
-      for (face = 0; face < s.faces; ++face) {
-        s.bind_face(face);
-        use(kReset);
-        indirect(kOmni, kOmniArgs + 3 * (kSlots * static_cast<std::uint64_t>(face) + kSlotReset));
-        barrier();
-        tessellate();
+      for (int g = 0; g < groups; ++g) {
+        use_group(kReset, g, kFaceLists);
+        indirect(kOmni, seam_args(g, kSlotReset));
       }
+      barrier();
+      tessellate();
       face = 0;
       s.bind_face(0);
       const Program& unite = use(kUnite);
@@ -652,6 +757,14 @@ void LiveAdaptive::generate(const std::function<void(const Program&)>& bind) con
 }
 
 GLuint LiveAdaptive::vertex_array() const { return state_->vao.id(); }
+
+void LiveAdaptive::set_faces_per_dispatch(int n) {
+  LV_CHECK(n == 0 || n == 1 || n == 2 || n == 3 || n == 6);
+  state_->requested_per_dispatch = n;
+  if (state_->width > 0) state_->choose_per_dispatch();
+}
+
+int LiveAdaptive::faces_per_dispatch() const { return state_->per_dispatch; }
 
 void LiveAdaptive::draw() const {
   const State& s = *state_;

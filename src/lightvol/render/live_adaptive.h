@@ -50,6 +50,13 @@ class LiveAdaptive {
   // The mesh the last generate made, and its statistics.
   Result<LiveMesh> read_back() const;
 
+  // The faces each dispatch of the tessellation's passes works on: an omni light's six at once
+  // when their ranges of the per-face buffers fit one storage block (GL_MAX_SHADER_STORAGE_BLOCK_
+  // SIZE), else 3, 2 or 1 (spot, directional: 1). For tests: `n` (1, 2, 3 or 6 for an omni
+  // light; 0: that default), from the next resize (or now, when sized); the volume is the same.
+  void set_faces_per_dispatch(int n);
+  int faces_per_dispatch() const;
+
   // For benchmarks, never in an engine's frame: while on, generate wraps every dispatch, clear
   // and copy in a GL_TIME_ELAPSED query (allocating them) and in glFinish calls, timed on the
   // CPU; profile() waits for the results and returns both per phase and pass, summed over the
