@@ -333,6 +333,9 @@ void main() {
   int row = idiv(v, width), col = v - row * width;
   int texture_row = flip_y == 1 ? row : height - 1 - row;
   double stored = double(live_fetch(lv_face, ivec2(col, texture_row)));
+  // A NaN texel is the near plane's, as the static live volume places it (GLSL leaves clamp of a
+  // NaN undefined: GPUs differ).
+  if (isnan(stored)) stored = encoding == 0 ? 0.0LF : near_d;
   double d;
   if (encoding == 0) {
     d = clamp(stored, 0.0LF, 1.0LF);
