@@ -50,10 +50,18 @@ void main() {
 // Spot and directional lights use shadow_maps[0]; omni lights the six faces +X -X +Y -Y +Z -Z.
 uniform sampler2D shadow_maps[6];
 uniform ivec2 live_size;       // W, H (of each face)
+#ifdef LIGHTVOL_LIVE_TYPE
+// The web addon: its maps are window depth, not flipped, and one program draws one light type,
+// so these are constants (branches a SIMD rasterizer need not run for every vertex).
+const int live_flip_y = 0;
+const int live_depth = 0;
+const int live_type = LIGHTVOL_LIVE_TYPE;
+#else
 uniform int live_flip_y;       // the light's flip_y: image row 0 is NDC y = -1
 uniform int live_depth;        // 0 window depth, 1 linear (eye -z), 2 radial (distance to the eye)
 uniform int live_type;         // 0 spot (closed by a fan to the apex), 1 directional (walls and a
                                // cap), 2 omni (six faces joined by seams and corners)
+#endif
 uniform int live_standard;     // 1 when the border ring runs top, right, bottom, left; 0 reversed
 uniform float live_min_t;      // the smallest parameter along a texel's near-far segment
 // A texel's near and far points in the light's eye space, homogeneous and affine in its NDC

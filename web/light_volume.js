@@ -416,10 +416,12 @@ export class LightVolume {
     this.lastLight = null;
   }
 
-  // The live stage's defines (shaders/airlight.glsl): ids a row by live_pitch; one map for spot
-  // and directional lights.
+  // The live stage's defines (shaders/airlight.glsl): ids a row by live_pitch; the light type, the
+  // depth encoding (window) and flip (none) as constants; one map for spot and directional lights.
   liveDefines() {
-    return `#define LIGHTVOL_LIVE_PITCH\n${this.type === 'omni' ? '' : '#define LIGHTVOL_LIVE_ONE_MAP\n'}`;
+    const type = { spot: 0, directional: 1, omni: 2 }[this.type];
+    return `#define LIGHTVOL_LIVE_PITCH\n#define LIGHTVOL_LIVE_TYPE ${type}\n` +
+           `${this.type === 'omni' ? '' : '#define LIGHTVOL_LIVE_ONE_MAP\n'}`;
   }
 
   get airlightTexture() { return this.airlight.airlightTarget.texture; }
