@@ -247,6 +247,39 @@ export function buildVertexId(id, width, height, pitch, faces) {
   return f * width * height + Math.floor(i / pitch) * width + col;
 }
 
+// build's triangles in the order the draw sends them: each grid row's quads in groups of three,
+// first the three quads' second triangles, each turned so that its new vertex (the quad's lower
+// right) comes first (the group's first quad: its lower left first), then their first triangles;
+// the closing, seams and corners after, as build orders them. A miss in SwiftShader's vertex
+// cache runs the shader on the next 4 indices: this way they hold 2–3 vertices not yet made (a
+// simulation of that cache: 0.70 runs a quad against 1.0 in build's order). Returns the indices
+// and, for each drawn triangle, build's triangle and how far its corners were turned.
+export function cacheOrder(indices, width, height, faces) {
+  const triangles = indices.length / 3, grid = 2 * (width - 1) * (height - 1);
+  const order = new Uint32Array(triangles), turn = new Uint8Array(triangles), out = new Uint32Array(indices.length);
+  let at = 0;
+  const put = (t, first) => {
+    const k = [0, 1, 2].find((j) => indices[3 * t + j] === first);
+    if (k === undefined) throw new Error('LightVolume: internal error: a grid triangle without its corner');
+    for (let j = 0; j < 3; ++j) out[3 * at + j] = indices[3 * t + (k + j) % 3];
+    order[at] = t;
+    turn[at++] = k;
+  };
+  for (let f = 0; f < faces; ++f)
+    for (let r = 0; r + 1 < height; ++r)
+      for (let c0 = 0; c0 + 1 < width; c0 += 3) {
+        const quads = [];
+        for (let c = c0; c < Math.min(c0 + 3, width - 1); ++c) quads.push(f * grid + 2 * (r * (width - 1) + c));
+        const below = (c) => f * width * height + (r + 1) * width + c;
+        quads.forEach((t, j) => put(t + 1, j === 0 ? below(c0) : below(c0 + j + 1)));
+        quads.forEach((t, j) => put(t, indices[3 * t]));
+      }
+  for (let t = faces * grid; t < triangles; ++t) put(t, indices[3 * t]);
+  if (at !== triangles || new Set(order).size !== triangles)
+    throw new Error('LightVolume: internal error: the draw order is not a permutation of build\'s triangles');
+  return { indices: out, order, turn };
+}
+
 // ---- the light as lightvol describes it ------------------------------------------------------
 
 const rows = (m) => { const e = m.elements; return [0, 1, 2, 3].map((r) => [e[r], e[4 + r], e[8 + r], e[12 + r]]); };
@@ -589,18 +622,26 @@ export class LightVolume {
       indices = staticVolumeIndices(this.type, width, height, texels[0].standard);
     }
     const faces = omni ? OMNI_FACES : 1;
+    const drawn = cacheOrder(indices, width, height, faces);
+    indices = drawn.indices;
+    this.drawOrder = drawn;
     for (let i = 0; i < indices.length; ++i) indices[i] = drawVertexId(indices[i], width, height, pitch, faces);
     this.geometry.dispose();
     this.geometry.setIndex(new THREE.BufferAttribute(indices, 1));
     this.indicesFor = key;
   }
 
-  // The static volume's triangles as drawn, in build's vertex numbering (tests: build's indices,
-  // number for number): the index buffer, each id mapped back through the draw's pitch.
+  // The static volume's triangles as drawn, in build's vertex numbering and order (tests: build's
+  // indices, number for number): the index buffer, each id mapped back through the draw's pitch
+  // and each triangle put back in build's place and corner order (cacheOrder).
   buildIndices() {
     const [width, height] = this.size, faces = this.type === 'omni' ? OMNI_FACES : 1;
-    const pitch = this.live.live_pitch.value;
-    return Uint32Array.from(this.geometry.index.array, (id) => buildVertexId(id, width, height, pitch, faces));
+    const pitch = this.live.live_pitch.value, drawn = this.geometry.index.array;
+    const { order, turn } = this.drawOrder, out = new Uint32Array(drawn.length);
+    for (let i = 0; i < order.length; ++i)
+      for (let j = 0; j < 3; ++j)
+        out[3 * order[i] + (turn[i] + j) % 3] = buildVertexId(drawn[3 * i + j], width, height, pitch, faces);
+    return out;
   }
 
   // That frame's airlight, width × height floats, top row first.
