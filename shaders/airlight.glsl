@@ -50,10 +50,18 @@ void main() {
 // Spot and directional lights use shadow_maps[0]; omni lights the six faces +X -X +Y -Y +Z -Z.
 uniform sampler2D shadow_maps[6];
 uniform ivec2 live_size;       // W, H (of each face)
+#ifdef LIGHTVOL_LIVE_TYPE
+// The web addon: its maps are window depth, not flipped, and one program draws one light type,
+// so these are constants (branches a SIMD rasterizer need not run for every vertex).
+const int live_flip_y = 0;
+const int live_depth = 0;
+const int live_type = LIGHTVOL_LIVE_TYPE;
+#else
 uniform int live_flip_y;       // the light's flip_y: image row 0 is NDC y = -1
 uniform int live_depth;        // 0 window depth, 1 linear (eye -z), 2 radial (distance to the eye)
 uniform int live_type;         // 0 spot (closed by a fan to the apex), 1 directional (walls and a
                                // cap), 2 omni (six faces joined by seams and corners)
+#endif
 uniform int live_standard;     // 1 when the border ring runs top, right, bottom, left; 0 reversed
 uniform float live_min_t;      // the smallest parameter along a texel's near-far segment
 // A texel's near and far points in the light's eye space, homogeneous and affine in its NDC
@@ -80,14 +88,20 @@ vec3 live_segment(vec2 ndc, float t) {
   return pn + t * (pf - pn);
 }
 
-// The stored depth of face f's texel t (samplers are indexed by constants only).
+// The stored depth of face f's texel t (samplers are indexed by constants only). With
+// LIGHTVOL_LIVE_ONE_MAP defined (the web addon's spot and directional volumes) shadow_maps[0]
+// only: a SIMD rasterizer may run all six fetches below for every vertex.
 float live_fetch(int f, ivec2 t) {
+#ifdef LIGHTVOL_LIVE_ONE_MAP
+  return texelFetch(shadow_maps[0], t, 0).r;
+#else
   if (f == 0) return texelFetch(shadow_maps[0], t, 0).r;
   if (f == 1) return texelFetch(shadow_maps[1], t, 0).r;
   if (f == 2) return texelFetch(shadow_maps[2], t, 0).r;
   if (f == 3) return texelFetch(shadow_maps[3], t, 0).r;
   if (f == 4) return texelFetch(shadow_maps[4], t, 0).r;
   return texelFetch(shadow_maps[5], t, 0).r;
+#endif
 }
 
 // Face f's texel (col, row)'s grid vertex (eye space), as lightvol's Unprojector places it.
@@ -137,14 +151,28 @@ ivec2 live_ring_texel(int k) {
 #ifdef LIGHTVOL_LIVE_VOLUME_VERTEX
 uniform mat4 view_projection;
 out vec3 world;
+// With LIGHTVOL_LIVE_PITCH defined (the web addon), grid vertex ids run live_pitch >= W a row:
+// vertex row * live_pitch + col (omni: face * live_pitch * W + ...), the ids of columns W and up
+// unused, the closing's after the grid's, so that the rows' ids need not be W apart (a rasterizer
+// whose vertex cache is direct-mapped by id, SwiftShader's, reuses nothing when W is a multiple of
+// its size). Without it, live_pitch is W: build's numbering.
+#ifdef LIGHTVOL_LIVE_PITCH
+uniform int live_pitch;
+#else
+#define live_pitch live_size.x
+#endif
 void main() {
-  int texels = live_size.x * live_size.y;
+  int texels = live_pitch * live_size.y;
   int v = gl_VertexID;
   if (v < (live_type == 2 ? 6 * texels : texels)) {
     int f = v / texels;
     int i = v - f * texels;
-    vec3 eye = live_grid_point(f, ivec2(i % live_size.x, i / live_size.x));
+    vec3 eye = live_grid_point(f, ivec2(i % live_pitch, i / live_pitch));
+#ifdef LIGHTVOL_LIVE_ONE_MAP
+    world = (live_eye_to_world[0] * vec4(eye, 1.0)).xyz;
+#else
     world = (live_eye_to_world[f] * vec4(eye, 1.0)).xyz;
+#endif
   } else if (live_type == 0) {
     world = live_apex;
   } else {

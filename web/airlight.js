@@ -96,6 +96,53 @@ export function sunTable() {
 
 const PHASES = { isotropic: 0, hg: 1, schlick: 2 };
 
+// Reduced resolution (AirlightRenderer's `resolution`). Down: each low pixel takes the surface
+// distance of the full pixel under its centre. Up: each full pixel blends the 2 × 2 low pixels
+// around it, weighted bilinearly and by 1 / (1 + (Δ/0.01)²), Δ the relative difference of their
+// surface distances (3e38, nothing hit, matches only itself): where a surface edge crosses a
+// block, a pixel takes its airlight from the low pixels of its own side. A low pixel whose face
+// count is neither 0 nor 1 or whose airlight is negative (the rasterizer dropped or doubled a
+// fragment of the closed volume: measured on SwiftShader, a few low pixels a frame) weighs a
+// millionth.
+const DOWNSAMPLE = `uniform sampler2D surface;
+uniform vec2 scale;
+layout(location = 0) out float distance_along_ray;
+void main() {
+  ivec2 p = min(ivec2(gl_FragCoord.xy * scale), textureSize(surface, 0) - 1);
+  distance_along_ray = texelFetch(surface, p, 0).r;
+}
+`;
+const UPSAMPLE = `uniform sampler2D surface;
+uniform sampler2D low_surface;
+uniform sampler2D low_airlight;
+uniform sampler2D low_counts;
+uniform vec2 scale;
+layout(location = 0) out float airlight;
+void main() {
+  float t = texelFetch(surface, ivec2(gl_FragCoord.xy), 0).r;
+  vec2 x = gl_FragCoord.xy / scale - 0.5;
+  ivec2 i0 = ivec2(floor(x));
+  vec2 f = x - vec2(i0);
+  ivec2 last = textureSize(low_airlight, 0) - 1;
+  float sum = 0.0, weights = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 o = ivec2(k & 1, k >> 1);
+    ivec2 q = clamp(i0 + o, ivec2(0), last);
+    float tq = texelFetch(low_surface, q, 0).r;
+    float bilinear = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
+    float far = max(t, tq), near = min(t, tq);
+    float delta = far >= 1e38 ? (near >= 1e38 ? 0.0 : 1e4) : (far - near) / max(near, 1e-6);
+    float count = texelFetch(low_counts, q, 0).g;
+    float a = texelFetch(low_airlight, q, 0).r;
+    float valid = (abs(count) < 0.5 || abs(count - 1.0) < 0.5) && a >= 0.0 ? 1.0 : 1e-6;
+    float w = valid * (bilinear + 1e-6) / (1.0 + delta * delta * 1e4);
+    sum += w * a;
+    weights += w;
+  }
+  airlight = sum / weights;
+}
+`;
+
 function floatTarget(width, height, format, depth, count = 1) {
   const target = new THREE.WebGLRenderTarget(width, height, {
     type: THREE.FloatType, format, depthBuffer: depth, stencilBuffer: false, count,
@@ -148,8 +195,19 @@ export class Composite {
 // volume and resolve stages are airlight.glsl's LIGHTVOL_DENSITY ones: the volume pass also sums
 // each fragment's signed D(t) from a DensityGrid (web/density.js, setDensityGrid) into a second
 // target, which the resolve adds.
+// With `resolution` r < 1 the volume and resolve passes run on an image of r·width × r·height
+// pixels (rounded up): the surface distances are taken down to it (each low pixel the distance
+// of the full pixel under its centre), and an upsampling pass fills the full-size airlight from
+// the 2 × 2 low pixels around each pixel, weighted bilinearly and by how close their surface
+// distances are to the pixel's own (docs/web.md, "Reduced resolution").
 export class AirlightRenderer {
-  constructor(renderer, glsl, { width, height, density = false }) {
+  constructor(renderer, glsl, { width, height, density = false, resolution = 1 }) {
+    if (!(resolution > 0 && resolution <= 1))
+      throw new Error(`AirlightRenderer: resolution ${resolution}: a scale in (0, 1]`);
+    if (density && resolution !== 1)
+      throw new Error('AirlightRenderer: a reduced resolution takes homogeneous media only');
+    this.resolution = resolution;
+    this.reduced = resolution < 1;
     this.density = density;
     this.densityGrid = null;
     this.renderer = renderer;
@@ -162,8 +220,13 @@ export class AirlightRenderer {
     this.depthClamp = gl.getExtension('EXT_depth_clamp');
     this.table = sunTable();
     this.surfaceTarget = floatTarget(width, height, THREE.RedFormat, true);
-    this.accumulateTarget = floatTarget(width, height, THREE.RGFormat, false, density ? 2 : 1);
+    const [lowWidth, lowHeight] = this.lowSize(width, height);
+    this.accumulateTarget = floatTarget(lowWidth, lowHeight, THREE.RGFormat, false, density ? 2 : 1);
     this.airlightTarget = floatTarget(width, height, THREE.RedFormat, false);
+    if (this.reduced) {
+      this.lowSurfaceTarget = floatTarget(lowWidth, lowHeight, THREE.RedFormat, false);
+      this.lowAirlightTarget = floatTarget(lowWidth, lowHeight, THREE.RedFormat, false);
+    }
     this.common = {
       inv_projection: { value: new THREE.Matrix4() },
       eye_to_world: { value: new THREE.Matrix3() },
@@ -214,7 +277,7 @@ export class AirlightRenderer {
       grid_reach: { value: null },
     };
     this.volumeMaterial = material('VOLUME', {
-      surface: { value: this.surfaceTarget.texture },
+      surface: { value: (this.reduced ? this.lowSurfaceTarget : this.surfaceTarget).texture },
       baseline: { value: 1 },
       panels: { value: 2 },
       facing_sign: { value: -1 },
@@ -235,6 +298,35 @@ export class AirlightRenderer {
     this.volumeScene = new THREE.Scene();
     this.surfaceScene = new THREE.Scene();
     this.dummyCamera = new THREE.Camera();
+    if (this.reduced) {
+      // Full-screen passes of their own: the surface distances taken down, the airlight taken up.
+      const pass = (fragmentShader, uniforms) => {
+        const scene = new THREE.Scene();
+        const mesh = new THREE.Mesh(triangle, new THREE.RawShaderMaterial({
+          glslVersion: THREE.GLSL3, vertexShader: stageSource(glsl, 'LIGHTVOL_RESOLVE_VERTEX'),
+          fragmentShader: `${PREFIX}${fragmentShader}`, uniforms, depthTest: false, depthWrite: false }));
+        mesh.frustumCulled = false;
+        scene.add(mesh);
+        return scene;
+      };
+      this.scale = { value: new THREE.Vector2(1, 1) };  // full pixels per low pixel, x and y
+      this.downScene = pass(DOWNSAMPLE, { surface: { value: this.surfaceTarget.texture }, scale: this.scale });
+      this.upScene = pass(UPSAMPLE, {
+        surface: { value: this.surfaceTarget.texture }, low_surface: { value: this.lowSurfaceTarget.texture },
+        low_airlight: { value: this.lowAirlightTarget.texture },
+        low_counts: { value: this.accumulateTarget.textures[0] }, scale: this.scale });
+      this.setScale();
+    }
+  }
+
+  // The volume and resolve passes' image size for a camera of width × height pixels.
+  lowSize(width, height) {
+    return [Math.max(1, Math.ceil(width * this.resolution)), Math.max(1, Math.ceil(height * this.resolution))];
+  }
+
+  setScale() {
+    const [lw, lh] = this.lowSize(this.width, this.height);
+    this.scale.value.set(this.width / lw, this.height / lh);
   }
 
   // A new image size (the camera's, in pixels): the targets keep their textures, reallocated at
@@ -242,7 +334,14 @@ export class AirlightRenderer {
   setSize(width, height) {
     this.width = width;
     this.height = height;
-    for (const t of [this.surfaceTarget, this.accumulateTarget, this.airlightTarget]) t.setSize(width, height);
+    for (const t of [this.surfaceTarget, this.airlightTarget]) t.setSize(width, height);
+    const [lowWidth, lowHeight] = this.lowSize(width, height);
+    this.accumulateTarget.setSize(lowWidth, lowHeight);
+    if (this.reduced) {
+      this.lowSurfaceTarget.setSize(lowWidth, lowHeight);
+      this.lowAirlightTarget.setSize(lowWidth, lowHeight);
+      this.setScale();
+    }
     this.common.viewport.value.set(width, height);
   }
 
@@ -349,6 +448,12 @@ export class AirlightRenderer {
     // A varying density: this frame's opacity map and grid, for this camera and these surfaces.
     if (this.densityGrid)
       this.densityGrid.update({ ...this.camera, width: this.width, height: this.height }, this.readSurface());
+    // Reduced resolution: the volume and resolve passes see the low image's pixel rays.
+    if (this.reduced) {
+      this.common.viewport.value.set(this.accumulateTarget.width, this.accumulateTarget.height);
+      renderer.setRenderTarget(this.lowSurfaceTarget);
+      renderer.render(this.downScene, this.dummyCamera);
+    }
 
     renderer.setRenderTarget(this.accumulateTarget);
     gl.clearBufferfv(gl.COLOR, 0, new Float32Array([0, 0, 0, 0]));
@@ -357,8 +462,13 @@ export class AirlightRenderer {
     renderer.render(this.volumeScene, this.dummyCamera);
     if (this.depthClamp) gl.disable(this.depthClamp.DEPTH_CLAMP_EXT);
 
-    renderer.setRenderTarget(this.airlightTarget);
+    renderer.setRenderTarget(this.reduced ? this.lowAirlightTarget : this.airlightTarget);
     renderer.render(this.resolveScene, this.dummyCamera);
+    if (this.reduced) {
+      this.common.viewport.value.set(this.width, this.height);
+      renderer.setRenderTarget(this.airlightTarget);
+      renderer.render(this.upScene, this.dummyCamera);
+    }
     renderer.setRenderTarget(previousTarget);
     renderer.autoClear = autoClear;
   }
@@ -370,11 +480,12 @@ export class AirlightRenderer {
 
   // Per pixel, back faces minus front faces the volume pass counted (pass 1's second channel), top
   // row first: 0 or 1 for a closed volume (1 when the camera is inside), unless the rasterizer
-  // dropped or doubled a fragment.
+  // dropped or doubled a fragment. With a reduced resolution, of the low image's pixels.
   readFaceCounts() { return this.read(this.accumulateTarget, 1); }
 
   read(target, channel = 0) {
-    const { renderer, gl, width, height } = this;
+    const { renderer, gl } = this;
+    const { width, height } = target;
     const previousTarget = renderer.getRenderTarget();
     renderer.setRenderTarget(target);
     const rgba = new Float32Array(width * height * 4);

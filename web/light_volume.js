@@ -220,6 +220,66 @@ export function omniVolumeIndices(width, faceStandard, adjacency) {
   return out;
 }
 
+// ---- the draw's vertex numbering ---------------------------------------------------------------
+
+// The grid's vertex ids a row in the draw (LIGHTVOL_LIVE_PITCH): W, unless W is 0 or 1 modulo 64,
+// then W + 32. SwiftShader (the software WebGL of headless chromium) keeps transformed vertices in
+// a 64-entry cache indexed by id modulo 64: with rows W ≡ 0 apart, a texel and the one below it
+// take the same entry and each quad runs the vertex shader about 3 times for 4 lanes; with
+// another pitch, about once (docs/web.md). build's triangles, renumbered.
+export function livePitch(width) {
+  return width % 64 <= 1 ? width + 32 : width;
+}
+
+// build's vertex v (grid row·W + col, omni face·W·H + row·W + col, then the closing's) as the draw
+// numbers it, and back.
+export function drawVertexId(v, width, height, pitch, faces) {
+  const texels = width * height;
+  if (v >= faces * texels) return v - faces * texels + faces * pitch * height;
+  const f = Math.floor(v / texels), i = v - f * texels;
+  return f * pitch * height + Math.floor(i / width) * pitch + i % width;
+}
+export function buildVertexId(id, width, height, pitch, faces) {
+  const ids = pitch * height;
+  if (id >= faces * ids) return id - faces * ids + faces * width * height;
+  const f = Math.floor(id / ids), i = id - f * ids, col = i % pitch;
+  if (col >= width) throw new Error(`LightVolume: internal error: vertex id ${id} is in no grid column`);
+  return f * width * height + Math.floor(i / pitch) * width + col;
+}
+
+// build's triangles in the order the draw sends them: each grid row's quads in groups of three,
+// first the three quads' second triangles, each turned so that its new vertex (the quad's lower
+// right) comes first (the group's first quad: its lower left first), then their first triangles;
+// the closing, seams and corners after, as build orders them. A miss in SwiftShader's vertex
+// cache runs the shader on the next 4 indices: this way they hold 2–3 vertices not yet made (a
+// simulation of that cache: 0.70 runs a quad against 1.0 in build's order). Returns the indices
+// and, for each drawn triangle, build's triangle and how far its corners were turned.
+export function cacheOrder(indices, width, height, faces) {
+  const triangles = indices.length / 3, grid = 2 * (width - 1) * (height - 1);
+  const order = new Uint32Array(triangles), turn = new Uint8Array(triangles), out = new Uint32Array(indices.length);
+  let at = 0;
+  const put = (t, first) => {
+    const k = [0, 1, 2].find((j) => indices[3 * t + j] === first);
+    if (k === undefined) throw new Error('LightVolume: internal error: a grid triangle without its corner');
+    for (let j = 0; j < 3; ++j) out[3 * at + j] = indices[3 * t + (k + j) % 3];
+    order[at] = t;
+    turn[at++] = k;
+  };
+  for (let f = 0; f < faces; ++f)
+    for (let r = 0; r + 1 < height; ++r)
+      for (let c0 = 0; c0 + 1 < width; c0 += 3) {
+        const quads = [];
+        for (let c = c0; c < Math.min(c0 + 3, width - 1); ++c) quads.push(f * grid + 2 * (r * (width - 1) + c));
+        const below = (c) => f * width * height + (r + 1) * width + c;
+        quads.forEach((t, j) => put(t + 1, j === 0 ? below(c0) : below(c0 + j + 1)));
+        quads.forEach((t, j) => put(t, indices[3 * t]));
+      }
+  for (let t = faces * grid; t < triangles; ++t) put(t, indices[3 * t]);
+  if (at !== triangles || new Set(order).size !== triangles)
+    throw new Error('LightVolume: internal error: the draw order is not a permutation of build\'s triangles');
+  return { indices: out, order, turn };
+}
+
 // ---- the light as lightvol describes it ------------------------------------------------------
 
 const rows = (m) => { const e = m.elements; return [0, 1, 2, 3].map((r) => [e[r], e[4 + r], e[8 + r], e[12 + r]]); };
@@ -280,8 +340,12 @@ export class LightVolume {
   // maxError (spot and directional lights: build's adaptive volume at that bound, `--adaptive
   // --max-error E --tessellation quadtree`, made on the GPU each frame: live_adaptive.js; with
   // adaptiveGlsl, loadAdaptiveShader()'s text), rounds (its fix-up rounds a frame, default 4) and
-  // count ('readback', the default, or 'bound': how its grid draw is sized, live_adaptive.js).
-  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds, count }) {
+  // count ('readback', the default, or 'bound': how its grid draw is sized, live_adaptive.js),
+  // resolution (a scale in (0, 1], default 1: the volume's airlight computed on an image that
+  // much smaller on each side and taken up to width × height by a depth-aware upsampling,
+  // airlight.js; docs/web.md).
+  constructor(renderer, light, { glsl, width, height, medium = {}, cone = true, maxError, adaptiveGlsl, rounds, count,
+                                 resolution = 1 }) {
     const name = light && (light.name ? `'${light.name}'` : light.type);
     if (!light || !(light.isSpotLight || light.isDirectionalLight || light.isPointLight))
       throw new Error(`LightVolume: ${name ?? 'no light'} is not a SpotLight, DirectionalLight or PointLight`);
@@ -305,13 +369,16 @@ export class LightVolume {
     if (maxError !== undefined && this.type === 'omni')
       throw new Error('LightVolume: maxError (an adaptive volume) takes spot and directional lights; ' +
                       'point lights have static volumes only');
-    this.airlight = new AirlightRenderer(renderer, glsl, { width, height });
+    if (!(resolution > 0 && resolution <= 1))
+      throw new Error(`LightVolume: resolution ${resolution}: a scale in (0, 1] of the camera's image`);
+    this.airlight = new AirlightRenderer(renderer, glsl, { width, height, resolution });
     this.medium = medium;
     this.cone = cone;
     this.size = null;        // [W, H] of the current index buffer
     this.copies = [];        // the shadow map's depth, copied: 1 or 6 render targets
     this.live = {
       live_size: { value: new THREE.Vector2(2, 2) },
+      live_pitch: { value: 2 },
       live_flip_y: { value: 0 },
       live_depth: { value: 0 },
       live_type: { value: 0 },
@@ -342,7 +409,7 @@ export class LightVolume {
     const vu = a.volumeMaterial.uniforms;
     this.volumeMaterial = new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3,
-      vertexShader: stageSource(glsl, 'LIGHTVOL_LIVE_VOLUME_VERTEX'),
+      vertexShader: stageSource(`${this.liveDefines()}${glsl}`, 'LIGHTVOL_LIVE_VOLUME_VERTEX'),
       fragmentShader: stageSource(glsl, 'LIGHTVOL_VOLUME_FRAGMENT'),
       uniforms: { ...a.common, surface: vu.surface, baseline: vu.baseline, panels: vu.panels,
                   facing_sign: vu.facing_sign, ...this.live },
@@ -380,6 +447,14 @@ export class LightVolume {
     readMesh.frustumCulled = false;
     this.readScene.add(readMesh);
     this.lastLight = null;
+  }
+
+  // The live stage's defines (shaders/airlight.glsl): ids a row by live_pitch; the light type, the
+  // depth encoding (window) and flip (none) as constants; one map for spot and directional lights.
+  liveDefines() {
+    const type = { spot: 0, directional: 1, omni: 2 }[this.type];
+    return `#define LIGHTVOL_LIVE_PITCH\n#define LIGHTVOL_LIVE_TYPE ${type}\n` +
+           `${this.type === 'omni' ? '' : '#define LIGHTVOL_LIVE_ONE_MAP\n'}`;
   }
 
   get airlightTexture() { return this.airlight.airlightTarget.texture; }
@@ -516,6 +591,8 @@ export class LightVolume {
     const texels = views.map((v) => new Texels(v, projection, width, height, false, this.type === 'directional'));
     const u = this.live;
     u.live_size.value.set(width, height);
+    const pitch = livePitch(width);
+    u.live_pitch.value = pitch;
     u.live_depth.value = 0;
     u.live_flip_y.value = 0;
     u.live_type.value = omni ? 2 : this.type === 'directional' ? 1 : 0;
@@ -544,9 +621,27 @@ export class LightVolume {
     } else {
       indices = staticVolumeIndices(this.type, width, height, texels[0].standard);
     }
+    const faces = omni ? OMNI_FACES : 1;
+    const drawn = cacheOrder(indices, width, height, faces);
+    indices = drawn.indices;
+    this.drawOrder = drawn;
+    for (let i = 0; i < indices.length; ++i) indices[i] = drawVertexId(indices[i], width, height, pitch, faces);
     this.geometry.dispose();
     this.geometry.setIndex(new THREE.BufferAttribute(indices, 1));
     this.indicesFor = key;
+  }
+
+  // The static volume's triangles as drawn, in build's vertex numbering and order (tests: build's
+  // indices, number for number): the index buffer, each id mapped back through the draw's pitch
+  // and each triangle put back in build's place and corner order (cacheOrder).
+  buildIndices() {
+    const [width, height] = this.size, faces = this.type === 'omni' ? OMNI_FACES : 1;
+    const pitch = this.live.live_pitch.value, drawn = this.geometry.index.array;
+    const { order, turn } = this.drawOrder, out = new Uint32Array(drawn.length);
+    for (let i = 0; i < order.length; ++i)
+      for (let j = 0; j < 3; ++j)
+        out[3 * order[i] + (turn[i] + j) % 3] = buildVertexId(drawn[3 * i + j], width, height, pitch, faces);
+    return out;
   }
 
   // That frame's airlight, width × height floats, top row first.
@@ -598,7 +693,8 @@ export class LightVolume {
         return s;
       };
       const program = gl.createProgram();
-      gl.attachShader(program, shader(gl.VERTEX_SHADER, stageSource(this.glsl, 'LIGHTVOL_LIVE_VOLUME_VERTEX')));
+      gl.attachShader(program, shader(gl.VERTEX_SHADER, stageSource(`${this.liveDefines()}${this.glsl}`,
+                                                                    'LIGHTVOL_LIVE_VOLUME_VERTEX')));
       gl.attachShader(program, shader(gl.FRAGMENT_SHADER,
                                       'precision highp float;\nout vec4 colour;\nvoid main() { colour = vec4(0.0); }\n'));
       gl.transformFeedbackVaryings(program, ['world'], gl.INTERLEAVED_ATTRIBS);
@@ -608,11 +704,15 @@ export class LightVolume {
     }
     const program = this.captureProgram;
     const [width, height] = this.size;
-    const n = staticVolumeCounts(this.type, width, height).vertices;
+    const faces = this.type === 'omni' ? OMNI_FACES : 1, pitch = u.live_pitch.value;
+    const vertices = staticVolumeCounts(this.type, width, height).vertices;
+    // Every id of the draw's numbering (the unused columns too), then build's vertices picked out.
+    const n = drawVertexId(vertices - 1, width, height, pitch, faces) + 1;
     renderer.resetState();
     gl.useProgram(program);
     const at = (name) => gl.getUniformLocation(program, name);
     gl.uniform2i(at('live_size'), width, height);
+    gl.uniform1i(at('live_pitch'), pitch);
     for (const name of ['live_flip_y', 'live_depth', 'live_type', 'live_standard']) gl.uniform1i(at(name), u[name].value);
     gl.uniform1f(at('live_min_t'), u.live_min_t.value);
     for (const name of ['live_ray_x', 'live_ray_y', 'live_near_0', 'live_far_0']) gl.uniform4fv(at(name), u[name].value.toArray());
@@ -640,9 +740,14 @@ export class LightVolume {
     gl.disable(gl.RASTERIZER_DISCARD);
     gl.bindBufferBase(gl.TRANSFORM_FEEDBACK_BUFFER, 0, null);
     gl.bindTransformFeedback(gl.TRANSFORM_FEEDBACK, null);
-    const out = new Float32Array(3 * n);
+    const drawn = new Float32Array(3 * n);
     gl.bindBuffer(gl.COPY_READ_BUFFER, buffer);
-    gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, out);
+    gl.getBufferSubData(gl.COPY_READ_BUFFER, 0, drawn);
+    const out = new Float32Array(3 * vertices);
+    for (let v = 0; v < vertices; ++v) {
+      const id = drawVertexId(v, width, height, pitch, faces);
+      out.set(drawn.subarray(3 * id, 3 * id + 3), 3 * v);
+    }
     gl.bindBuffer(gl.COPY_READ_BUFFER, null);
     gl.deleteBuffer(buffer);
     gl.deleteTransformFeedback(feedback);

@@ -107,6 +107,9 @@ async function main() {
     throw new Error(`adaptive=${params.get('adaptive')}: a bound E >= 0 (world units along the texel rays)`);
   const rounds = params.has('rounds') ? Number(params.get('rounds')) : undefined;
   const count = params.get('count') ?? undefined;
+  // resolution=R: LightVolume's airlight on an image R times the camera's on each side, taken up
+  // to it by a depth-aware upsampling.
+  const resolution = params.has('resolution') ? Number(params.get('resolution')) : 1;
   say('loading…');
   const [glsl, adaptiveGlsl, lightJson, cameraJson, medium, sceneRoot] = await Promise.all([
     LightVolume.loadShader(), maxError !== undefined ? LightVolume.loadAdaptiveShader() : Promise.resolve(null),
@@ -184,7 +187,8 @@ async function main() {
   orbit.target.copy(target);
   orbit.update();
 
-  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds, count });
+  const volume = new LightVolume(renderer, light, { glsl, width, height, medium, maxError, adaptiveGlsl, rounds, count,
+                                                      resolution });
 
   // The lit scene into a float target; the composite as the viewer's (airlight.js's Composite):
   // the scene through the medium plus the airlight in the light's colour, × exposure, x/(1+x), sRGB.
@@ -246,7 +250,7 @@ async function main() {
                  light: structuredClone(volume.lightJson()), medium: structuredClone(volume.lastMediumJson()),
                  surface: volume.readSurface(),
                  counts: volume.readFaceCounts(),
-                 indices: volume.adaptive ? null : volume.geometry.index.array,
+                 indices: volume.adaptive ? null : volume.buildIndices(),
                  positions: volume.adaptive ? null : volume.readPositions(),
                  triangles: volume.adaptive ? volume.readTriangles() : null,
                  converged: volume.adaptive ? volume.converged() : true };

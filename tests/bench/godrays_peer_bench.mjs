@@ -6,7 +6,10 @@
 // reference` of `lightvol build`'s volume of the very shadow map the page used), and their frame
 // times. One table.
 //   node tests/bench/godrays_peer_bench.mjs PATH/TO/lightvol [--frames N] [--demo-size N]
-//        [--map N] [--omni-map N]
+//        [--map N] [--omni-map N] [--live LIST] [--live-only]
+// --live: the live page's settings, one row each, separated by commas, each a query string added
+// to live.html's address ("static" for none; default "static,resolution=0.5,adaptive=0.05";
+// adaptive=E is skipped for the point light, which has static volumes only). --live-only: no peer.
 // KEEP=1 keeps the work folder (maps, volumes, references and the peer's images as PFM).
 // The peer and its peers (three 0.182.0, postprocessing 6.39.6) are installed with npm into a
 // scratch folder outside the repository (PEER_DIR, default /tmp/lightvol-peer), where its page is
@@ -43,6 +46,8 @@ const demoSize = Number(option('--demo-size', 256));  // the camera: demoSize ×
 const mapSize = Number(option('--map', 512));         // the directional light's map
 const omniSize = Number(option('--omni-map', 256));   // each cube face of the point light's map
 const TOLERANCE = 0.01;
+const liveSettings = option('--live', 'static,resolution=0.5,adaptive=0.05').split(',');
+const liveOnly = args.includes('--live-only');
 
 const web = fileURLToPath(new URL('../../web', import.meta.url));
 const repository = resolve(web, '..');
@@ -274,20 +279,33 @@ try {
   for (const [name, json] of Object.entries(LIGHTS)) {
     const size = name === 'point' ? omniSize : mapSize;
     const query = `scene=/data/scene.glb&light=/data/light_${name}.json&medium=/data/thin.json&camera=/data/camera.json&size=${size}`;
-    // lightvol's live page: its airlight against the reference of its own map, and its times.
-    const live = await open(url(`/web/live.html?${query}`), 'lightvol:done');
-    const lc = await live.evaluate(() => ({
-      map: Array.from(window.lightvolShadowMap()), light: window.lightvolLight(), surface: Array.from(window.lightvolSurface()),
-      airlight: Array.from(window.lightvolAirlight()) }));
-    const faces = lc.light.type === 'omni' ? 6 : 1;
-    const mw = faces === 6 ? Math.round(Math.sqrt(lc.map.length / 6)) : size;
-    lc.size = [mw, lc.map.length / mw / faces];
-    const liveReference = reference(`${name}_live`, lc);
-    const liveError = relativeL2(lc.airlight, liveReference);
-    const lt = await live.evaluate((n) => window.lightvolTime(n), frames);
-    await live.close();
-    rows.push([name, `lightvol LightVolume (live.html), static volume, ${lt.triangles.toLocaleString('en')} triangles`,
-               liveError, lt.frame, lt.volume]);
+    // lightvol's live page at each setting: its airlight against the reference of its own map
+    // (build's static volume of it), and its times.
+    for (const setting of liveSettings) {
+      if (name === 'point' && setting.includes('adaptive')) continue;
+      const extra = setting === 'static' ? '' : `&${setting}`;
+      const live = await open(url(`/web/live.html?${query}${extra}`), 'lightvol:done');
+      const lc = await live.evaluate(() => ({
+        map: Array.from(window.lightvolShadowMap()), light: window.lightvolLight(), surface: Array.from(window.lightvolSurface()),
+        airlight: Array.from(window.lightvolAirlight()) }));
+      const faces = lc.light.type === 'omni' ? 6 : 1;
+      const mw = faces === 6 ? Math.round(Math.sqrt(lc.map.length / 6)) : size;
+      lc.size = [mw, lc.map.length / mw / faces];
+      const tag = `${name}_live_${setting.replace(/[^a-z0-9.]+/g, '_')}`;
+      const liveReference = reference(tag, lc);
+      if (process.env.KEEP) writePfm(join(work, `${tag}_airlight.pfm`), lc.airlight, camera.width, camera.height);
+      const liveError = relativeL2(lc.airlight, liveReference);
+      const lt = await live.evaluate((n) => window.lightvolTime(n), frames);
+      await live.close();
+      const p = new URLSearchParams(extra);
+      const kind = p.has('adaptive') ? `adaptive volume, E = ${p.get('adaptive')}` : 'static volume';
+      const scale = p.has('resolution') ? `, airlight at ${p.get('resolution')} resolution` : '';
+      rows.push([name, `lightvol LightVolume (live.html), ${kind}${scale}, ${lt.triangles.toLocaleString('en')} triangles`,
+                 liveError, lt.frame, lt.volume]);
+      console.log(`${name}: live.html ${setting}: ${(100 * liveError).toFixed(3)} %, frame ${seconds(lt.frame)}, ` +
+                  `volume ${seconds(lt.volume)}${lt.passes ? `, quadtree passes ${seconds(lt.passes)}` : ''}`);
+    }
+    if (liveOnly) continue;
     // The peer's page: its map as lightvol reads it, the reference of that map; its settings.
     const peer = await open(peerServer.url(`/godrays.html?${query}`), 'peer:done');
     const pc = await peer.evaluate(() => window.peerCapture());
