@@ -125,7 +125,16 @@ uniform int grid_tile;
 uniform int grid_slices;
 uniform int grid_substeps;
 uniform highp sampler2D grid_reach;
-uniform highp sampler2D grid_state;   // (D, eye-side optical depth) at the previous slice
+uniform highp sampler2D grid_state;   // (D, eye-side optical depth, t) at the previous slice
+// The column's ray, its t1 and its angle at the light there (slices uniform in airlight.glsl's
+// grid_coordinate; density_grid.glsl's grid_node gives their distances).
+float grid_setup(ivec2 id, out float psi1) {
+  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
+  pixel_ray(g_ray_origin, g_ray_dir);
+  float t1 = texelFetch(grid_reach, id, 0).r;
+  psi1 = light_type == 1 ? 0.0 : grid_light_angle(light_position - g_ray_origin, g_ray_dir, t1);
+  return t1;
+}
 `;
 
 const GRID_STEP = `
@@ -133,32 +142,35 @@ uniform int grid_slice;
 layout(location = 0) out vec4 out_state;
 void main() {
   ivec2 id = ivec2(lv_column_coord.xy);
-  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
-  pixel_ray(g_ray_origin, g_ray_dir);
-  vec2 state = texelFetch(grid_state, id, 0).rg;
-  float d = state.x, tau_e = state.y;
-  float slice = texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
-  float dt = slice / float(grid_substeps);
+  float psi1;
+  float t1 = grid_setup(id, psi1);
+  vec3 state = texelFetch(grid_state, id, 0).rgb;
+  float d = state.x, tau_e = state.y, t0 = state.z;
+  if (!(t1 > 0.0)) { out_state = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  float tk = grid_node(float(grid_slice) / float(grid_slices - 1), t0, t1, psi1);
+  float dt = (tk - t0) / float(grid_substeps);
   for (int j = 0; j < grid_substeps; ++j) {
-    float t = (float(grid_slice - 1) + (float(j) + 0.5) / float(grid_substeps)) * slice;
+    float t = t0 + (float(j) + 0.5) * dt;
     float rho = density(g_ray_origin + t * g_ray_dir);
     d += d_integrand(t, rho, tau_e + 0.5 * sigma_t * rho * dt) * dt;
     tau_e += sigma_t * rho * dt;
   }
-  out_state = vec4(d, tau_e, 0.0, 1.0);
+  out_state = vec4(d, tau_e, tk, 1.0);
 }
 `;
 
+// (D, dD/dw) at the slice the state has reached.
 const GRID_LAYER = `
-uniform int grid_slice;
 layout(location = 0) out vec4 out_d;
 void main() {
   ivec2 id = ivec2(lv_column_coord.xy);
-  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
-  pixel_ray(g_ray_origin, g_ray_dir);
-  vec2 state = texelFetch(grid_state, id, 0).rg;
-  float t = float(grid_slice) * texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
-  out_d = vec4(state.x, d_integrand(t, density(g_ray_origin + t * g_ray_dir), state.y), 0.0, 1.0);
+  float psi1;
+  float t1 = grid_setup(id, psi1);
+  vec3 state = texelFetch(grid_state, id, 0).rgb;
+  if (!(t1 > 0.0)) { out_d = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  float t = state.z;
+  out_d = vec4(state.x, d_integrand(t, density(g_ray_origin + t * g_ray_dir), state.y) /
+                            grid_coordinate_rate(t, t1, psi1), 0.0, 1.0);
 }
 `;
 
@@ -456,7 +468,7 @@ export class DensityGrid {
     if (!this.columns || this.columns.width !== cx || this.columns.height !== cy) {
       for (const t of [this.columns, this.gridState?.[0], this.gridState?.[1], this.grid]) t?.dispose();
       this.columns = { width: cx, height: cy };
-      this.gridState = [floatTarget(cx, cy, THREE.RGFormat), floatTarget(cx, cy, THREE.RGFormat)];
+      this.gridState = [floatTarget(cx, cy, THREE.RGBAFormat), floatTarget(cx, cy, THREE.RGBAFormat)];
       this.grid = floatTarget(cx, cy, THREE.RGFormat, this.options.slices);
       this.reachTexture?.dispose();
       this.reachTexture = new THREE.DataTexture(t1, cx, cy, THREE.RedFormat, THREE.FloatType);
@@ -487,7 +499,6 @@ export class DensityGrid {
     [a, b] = this.gridState;
     this.clear(a);
     u.grid_state.value = a.texture;
-    u.grid_slice.value = 0;
     this.draw(this.gridLayer, this.grid, 0);
     for (let k = 1; k < this.options.slices; ++k) {
       u.grid_state.value = a.texture;
