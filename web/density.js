@@ -7,10 +7,11 @@
 //     running sum in a 2D target and copies it into that layer of an R32F 3D texture;
 //   - the in-scattering grid: per column of `tile`×`tile` pixels, D(t) = F(t) − F_hom(t) and its
 //     derivative (for a point light times the column ray's distance to the light) at `slices`
-//     distances uniform on [0, t1], t1 the farthest any pixel interpolated from the column needs
+//     distances on [0, t1] uniform in airlight.glsl's grid_coordinate (a point light's: a blend of
+//     the distance and the angle at the light), t1 the farthest any pixel interpolated from the column needs
 //     (its surface, or where its ray leaves the light's bounds; for a point light the column's
 //     point at the pixel's angle from the light): one pass per
-//     slice carries (D, eye-side optical depth) and writes (D, D') into an RG32F 3D texture, which
+//     slice carries (D, eye-side optical depth, t) and writes (D, dD/dw) into an RG32F 3D texture, which
 //     shaders/airlight.glsl's LIGHTVOL_DENSITY stage reads (its GL_ES branch).
 // The density ρ(x) is shaders/density.glsl and the opacity map's look-up and the integrand of D
 // shaders/density_grid.glsl, the files lightvol's OpenGL renderer compiles (fetched, never

@@ -86,9 +86,11 @@ class GlOpacityMap {
 // ---- the in-scattering grid ---------------------------------------------------------------------
 
 // The eye-side cumulative in-scattering, per frame, on a camera-aligned grid: one column per
-// `tile`×`tile` pixels (along the ray through the tile's centre) by `slices` samples uniform in
-// the distance from the eye up to the farthest surface (or light bound) the column's pixels see.
-// A column stores D(t) = F(t) − F_hom(t) and its derivative: the heterogeneous cumulative integral
+// `tile`×`tile` pixels (along the ray through the tile's centre) by `slices` samples from the eye
+// up to the farthest surface (or light bound) the column's pixels see, uniform in the distance
+// (directional light) or in a blend of the distance and the angle at the light (point light: dense
+// where the ray passes the light, so that the in-scattering's 1/d² peak is resolved).
+// A column stores D(t) = F(t) − F_hom(t) and its derivative in that coordinate: the heterogeneous cumulative integral
 // minus the homogeneous one the volume fragments already compute exactly, so that a constant
 // density gives the homogeneous image; for a point light times the column ray's distance h to the
 // light. Fragments read D bilinearly across columns and by cubic Hermite interpolation across
