@@ -175,6 +175,33 @@ void main() {
 }
 `;
 
+// The surfaces' transmittance e^(−τ_E(t_surface)) through the density, per pixel (the composite's
+// dimming of the lit scene, as `lightvol render --composite`'s add_constant_surfaces): σt ∫ρ along
+// the pixel's ray to its surface by 4-point Gauss–Legendre panels of at most twice the density's
+// finest wavelength; 0 where the ray hits nothing (e^(−∞)).
+const THROUGH = `
+uniform highp sampler2D surface_distance;
+uniform float through_step;
+layout(location = 0) out vec4 out_through;
+void main() {
+  lv_frag_coord = gl_FragCoord;
+  vec3 origin, dir;
+  pixel_ray(origin, dir);
+  float t = texelFetch(surface_distance, ivec2(gl_FragCoord.xy), 0).r;
+  if (!(t < 1e38)) { out_through = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  int panels = clamp(int(ceil(t / through_step)), 1, 65536);
+  float width = t / float(panels), sum = 0.0;
+  for (int p = 0; p < panels; ++p) {
+    float mid = (float(p) + 0.5) * width;
+    for (int i = 0; i < 4; ++i) {
+      float dx = 0.5 * width * GL_X[i];
+      sum += GL_W[i] * (density(origin + (mid - dx) * dir) + density(origin + (mid + dx) * dir));
+    }
+  }
+  out_through = vec4(exp(-sigma_t * sum * 0.5 * width), 0.0, 0.0, 1.0);
+}
+`;
+
 const FULL_SCREEN_VERTEX = `
 void main() {
   vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
@@ -308,6 +335,12 @@ export class DensityGrid {
       `${common}\n${shaders.density}${OPACITY_LOOKUP}${shaders.grid}${GRID_COMMON}${main}`;
     this.gridStep = material(gridSource(GRID_STEP));
     this.gridLayer = material(gridSource(GRID_LAYER));
+    this.throughPass = material(
+      `${PREFIX}#define LIGHTVOL_COMMON\nvec4 lv_frag_coord;\n${common}\n${shaders.density}${THROUGH}`);
+    this.throughPass.uniforms.surface_distance = { value: airlight.surfaceTarget.texture };
+    this.throughPass.uniforms.through_step = {
+      value: 2 / (noise.frequency * noise.lacunarity ** (noise.octaves - 1)) };
+    this.throughTarget = floatTarget(airlight.width, airlight.height, THREE.RedFormat);
     const triangle = new THREE.BufferGeometry();
     triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
     this.quad = new THREE.Mesh(triangle, this.copy);
@@ -509,6 +542,9 @@ export class DensityGrid {
       this.draw(this.gridLayer, this.grid, k);
       [a, b] = [b, a];
     }
+    // The surfaces' transmittance, for the composite.
+    if (this.throughTarget.width !== w || this.throughTarget.height !== h) this.throughTarget.setSize(w, h);
+    this.draw(this.throughPass, this.throughTarget);
     renderer.setRenderTarget(previousTarget);
     renderer.autoClear = autoClear;
     this.airlight.setDensityGrid(this);
