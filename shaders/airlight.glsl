@@ -325,6 +325,26 @@ float angular_integral(float a, float b, float u, int panels) {
   if (phase_type == 0 && u <= f_u_max && profile_enabled == 0) return (sun_f(u, b) - sun_f(u, a)) * (1.0 / (4.0 * PI));
   return quadrature(a, b, u, panels);
 }
+
+// The in-scattering grid of a medium of varying density (docs/design.md 6) spaces its slices
+// along a column's ray uniformly in grid_coordinate, which its builders (density_grid.glsl's
+// grid_node) and its readers (LIGHTVOL_DENSITY below) share.
+// A ray's distance to the point light, a the vector from the ray's origin to the light.
+float grid_light_h(vec3 a, vec3 dir) { return max(length(cross(dir, a)), 1e-6 * max(1.0, length(a))); }
+// The angle at the point light between the ray's origin and its point at distance t: by the law of
+// sines atan2(t h, |a|^2 - t s0), s0 = a . dir; d psi / dt = h / d^2, the in-scattering's peak.
+float grid_light_angle(vec3 a, vec3 dir, float t) {
+  return atan(t * grid_light_h(a, dir), dot(a, a) - t * dot(a, dir));
+}
+// Where the point at distance t (at angle psi from the light) lies along a column reaching t1
+// (angle psi1), in [0, 1]: t / t1 for a directional light; for a point light the mean of t / t1
+// and psi / psi1, so that slices are dense where the ray passes the light (no slice longer than
+// twice either uniform spacing: uniform in t where the density and the eye-side transmittance
+// vary, in angle across the 1/d^2 peak).
+float grid_coordinate(float t, float psi, float t1, float psi1) {
+  float w = light_type == 1 || !(psi1 > 0.0) ? t / t1 : 0.5 * (t / t1 + psi / psi1);
+  return clamp(w, 0.0, 1.0);
+}
 #endif
 
 #ifdef LIGHTVOL_VOLUME_FRAGMENT
@@ -336,18 +356,21 @@ uniform int panels;
 uniform float facing_sign;
 #ifdef LIGHTVOL_DENSITY
 // Media of varying density (docs/design.md 6): a per-frame grid of columns, one per grid_tile x
-// grid_tile pixels, each holding D(t) = F(t) - F_hom(t) and its derivative at grid_slices
-// distances uniform on [0, t1 of the column]: the heterogeneous cumulative in-scattering along the
-// column's ray minus the homogeneous one that this fragment computes exactly; for a point light
-// times h, the column ray's distance to the light (density_grid.glsl's grid_ray_scale). Each
-// fragment adds its signed D(t) (bilinear across columns, cubic Hermite across slices) to a second
-// target. Across columns a point light's D is matched by angle, not by distance: each column is
-// read at its point seen from the light at the same angle psi from the ray's origin as the
-// fragment's point (half of which is xi - xi0 of the closed form), and the sum divided by the
-// fragment's own h, so that what is interpolated varies slowly even for rays passing close to the
-// light. OpenGL 4.5 (lightvol's GlDensityGrid) keeps the grid in shader storage buffers; WebGL2
-// (the web viewer's web/density.js, GL_ES) in textures: grid_texture RG32F (D, D') at (column x,
-// column y, slice), grid_reach R32F t1 at (column x, column y).
+// grid_tile pixels, each holding D = F - F_hom and dD/dw at grid_slices points along the column's
+// ray uniform in w = grid_coordinate (above: the distance for a directional light; for a point
+// light a blend of the distance and the angle at the light, so that slices are dense where the
+// ray passes the light), w from 0 at the eye to 1 at t1 of the column: the heterogeneous
+// cumulative in-scattering along the column's ray minus the homogeneous one that this fragment
+// computes exactly; for a point light times h, the column ray's distance to the light
+// (density_grid.glsl's grid_ray_scale). Each fragment adds its signed D (bilinear across columns,
+// cubic Hermite across slices) to a second target. Across columns a point light's D is matched by
+// angle, not by distance: each column is read at its point seen from the light at the same angle
+// psi from the ray's origin as the fragment's point (half of which is xi - xi0 of the closed
+// form), and the sum divided by the fragment's own h, so that what is interpolated varies slowly
+// even for rays passing close to the light. OpenGL 4.5 (lightvol's GlDensityGrid) keeps the grid
+// in shader storage buffers; WebGL2 (the web viewer's web/density.js, GL_ES) in textures:
+// grid_texture RG32F (D, dD/dw) at (column x, column y, slice), grid_reach R32F t1 at (column x,
+// column y).
 uniform ivec2 grid_columns;
 uniform int grid_tile;
 uniform int grid_slices;
@@ -363,24 +386,30 @@ float grid_t1(ivec2 c) { return grid_t1_buffer[c.y * grid_columns.x + c.x]; }
 vec2 grid_d(ivec2 c, int k) { return grid_d_buffer[(c.y * grid_columns.x + c.x) * grid_slices + k]; }
 #endif
 layout(location = 1) out float varying_part;
-float grid_column(ivec2 c, float t) {
-  float t1 = grid_t1(c);
-  if (!(t1 > 0.0)) return 0.0;
-  float k = clamp(t / t1, 0.0, 1.0) * float(grid_slices - 1);
-  int k0 = min(int(k), grid_slices - 2);
+// Column c's D at grid coordinate w (its slices are uniform in w, storing D and dD/dw): cubic
+// Hermite.
+float grid_column(ivec2 c, float w) {
+  float k = w * float(grid_slices - 1);
+  int k0 = clamp(int(k), 0, grid_slices - 2);
   vec2 a = grid_d(c, k0);
   vec2 b = grid_d(c, k0 + 1);
-  float u = k - float(k0), h = t1 / float(grid_slices - 1);
+  float u = k - float(k0), h = 1.0 / float(grid_slices - 1);
   float u2 = u * u, u3 = u2 * u;
   return (2.0 * u3 - 3.0 * u2 + 1.0) * a.x + (u3 - 2.0 * u2 + u) * h * a.y +
          (3.0 * u2 - 2.0 * u3) * b.x + (u3 - u2) * h * b.y;
 }
-// A ray's distance to the light, as density_grid.glsl's grid_ray_scale.
-float grid_light_h(vec3 a, vec3 dir) { return max(length(cross(dir, a)), 1e-6 * max(1.0, length(a))); }
+// Column c's D at distance t of its own ray, at angle psi from a point light (a the vector from
+// the ray's origin to the light).
+float grid_column_at(ivec2 c, float t, float psi, vec3 a, vec3 dir) {
+  float t1 = grid_t1(c);
+  if (!(t1 > 0.0)) return 0.0;
+  float psi1 = light_type == 1 ? 0.0 : grid_light_angle(a, dir, t1);
+  return grid_column(c, grid_coordinate(t, psi, t1, psi1));
+}
 // Column c's value at its point seen from the light at angle psi (sin, cos) from its ray's origin:
 // by the law of sines, t = |a|^2 sin psi / (h cos psi + s0 sin psi), a the origin-to-light vector,
 // s0 = a . dir; beyond the ray's last angle (the denominator <= 0) its end.
-float grid_column_at_angle(ivec2 c, float sin_psi, float cos_psi) {
+float grid_column_at_angle(ivec2 c, float psi, float sin_psi, float cos_psi) {
   vec2 ndc = 2.0 * (vec2(c) + 0.5) * float(grid_tile) / viewport - 1.0;
   if (flip_y == 1) ndc.y = -ndc.y;
   vec4 n = inv_projection * vec4(ndc, -1.0, 1.0);
@@ -389,29 +418,32 @@ float grid_column_at_angle(ivec2 c, float sin_psi, float cos_psi) {
   vec3 dir = normalize(eye_to_world * (perspective == 1 ? near_eye : vec3(0.0, 0.0, -1.0)));
   vec3 a = light_position - origin;
   float den = grid_light_h(a, dir) * cos_psi + dot(a, dir) * sin_psi;
-  return grid_column(c, den > 0.0 ? dot(a, a) * sin_psi / den : 3e38);
+  if (!(den > 0.0)) return grid_t1(c) > 0.0 ? grid_column(c, 1.0) : 0.0;
+  return grid_column_at(c, dot(a, a) * sin_psi / den, psi, a, dir);
 }
 float grid_lookup(float t, vec3 origin, vec3 dir) {
   vec2 q = clamp(gl_FragCoord.xy / float(grid_tile) - 0.5, vec2(0.0), vec2(grid_columns - 1));
   ivec2 i = ivec2(q);
+  vec3 a = light_position - origin;
+  float psi = light_type == 1 ? 0.0 : grid_light_angle(a, dir, t);
+  float scale = light_type == 1 ? 1.0 : 1.0 / grid_light_h(a, dir);
+  // One pixel per column: the pixel's own column (its ray) at its own t.
+  if (grid_tile == 1) return grid_column_at(i, t, psi, a, dir) * scale;
   ivec2 j = min(i + 1, grid_columns - 1);
   vec2 f = q - vec2(i);
-  float d00, d10, d01, d11, scale = 1.0;
-  if (light_type == 1 || grid_tile == 1) {  // directional, or the pixel's own column
-    d00 = grid_column(i, t);
-    d10 = grid_column(ivec2(j.x, i.y), t);
-    d01 = grid_column(ivec2(i.x, j.y), t);
-    d11 = grid_column(j, t);
+  float d00, d10, d01, d11;
+  if (light_type == 1) {  // directional: by distance
+    d00 = grid_column_at(i, t, 0.0, a, dir);
+    d10 = grid_column_at(ivec2(j.x, i.y), t, 0.0, a, dir);
+    d01 = grid_column_at(ivec2(i.x, j.y), t, 0.0, a, dir);
+    d11 = grid_column_at(j, t, 0.0, a, dir);
   } else {
-    vec3 a = light_position - origin;
-    float psi = atan(t * grid_light_h(a, dir), dot(a, a) - t * dot(a, dir));
     float sp = sin(psi), cp = cos(psi);
-    d00 = grid_column_at_angle(i, sp, cp);
-    d10 = grid_column_at_angle(ivec2(j.x, i.y), sp, cp);
-    d01 = grid_column_at_angle(ivec2(i.x, j.y), sp, cp);
-    d11 = grid_column_at_angle(j, sp, cp);
+    d00 = grid_column_at_angle(i, psi, sp, cp);
+    d10 = grid_column_at_angle(ivec2(j.x, i.y), psi, sp, cp);
+    d01 = grid_column_at_angle(ivec2(i.x, j.y), psi, sp, cp);
+    d11 = grid_column_at_angle(j, psi, sp, cp);
   }
-  if (light_type != 1) scale = 1.0 / grid_light_h(light_position - origin, dir);
   float y0 = d00 + f.x * (d10 - d00);
   float y1 = d01 + f.x * (d11 - d01);
   return (y0 + f.y * (y1 - y0)) * scale;

@@ -8,7 +8,8 @@
 //   LIGHTVOL_OPACITY_LOOKUP      light_optical_depth(x); the host also defines the macro
 //                                om_fetch(face, c, r, k): tau at column (c, r) of `face`, layer k
 //   LIGHTVOL_DENSITY_INTEGRAND   d_integrand(t, rho, tau_e) along the ray g_ray_origin + t g_ray_dir,
-//                                scaled by grid_ray_scale() (what the in-scattering grid stores)
+//                                scaled by grid_ray_scale() (what the in-scattering grid stores),
+//                                and the distances of the grid's slices along it (grid_node)
 // Without either, only the opacity map's uniforms (for the pass that makes the map).
 
 uniform int om_size;            // columns per face side
@@ -62,8 +63,35 @@ vec3 g_ray_dir;
 // look-up by its own h); 1 for a directional light. The same expression as grid_lookup's.
 float grid_ray_scale() {
   if (light_type == 1) return 1.0;
+  return grid_light_h(light_position - g_ray_origin, g_ray_dir);
+}
+// The column's slices are uniform in airlight.glsl's grid_coordinate w (from 0 at the eye to 1 at
+// t1, psi1 the angle at the light there). dw/dt at distance t:
+float grid_coordinate_rate(float t, float t1, float psi1) {
+  if (light_type == 1 || !(psi1 > 0.0)) return 1.0 / t1;
   vec3 a = light_position - g_ray_origin;
-  return max(length(cross(g_ray_dir, a)), 1e-6 * max(1.0, length(a)));
+  float h = grid_light_h(a, g_ray_dir);
+  vec3 x = a - t * g_ray_dir;
+  return 0.5 * (1.0 / t1 + h / max(dot(x, x), h * h) / psi1);
+}
+// The distance t in [t_lo, t1] where w = grid_coordinate(t) (w increases with t; t_lo is at or
+// below it): Newton's method, bisecting whenever a step leaves the bracket.
+float grid_node(float w, float t_lo, float t1, float psi1) {
+  if (w >= 1.0) return t1;
+  if (light_type == 1 || !(psi1 > 0.0)) return w * t1;
+  vec3 a = light_position - g_ray_origin;
+  float lo = t_lo, hi = t1, t = t_lo;
+  for (int i = 0; i < 60; ++i) {
+    float f = grid_coordinate(t, grid_light_angle(a, g_ray_dir, t), t1, psi1) - w;
+    if (abs(f) < 1e-6) break;
+    if (f < 0.0) lo = t;
+    else hi = t;
+    float next = t - f / grid_coordinate_rate(t, t1, psi1);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (next == t || hi - lo <= 1e-7 * t) break;
+    t = next;
+  }
+  return t;
 }
 // The integrand of D at distance t, times grid_ray_scale(): (heterogeneous - homogeneous)
 // in-scattering, given the density there and the eye-side optical depth up to it.

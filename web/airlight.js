@@ -152,15 +152,18 @@ function floatTarget(width, height, format, depth, count = 1) {
 }
 
 // The composite both pages show, as lightvol demo's pictures: the lit scene (`scene`, a float
-// texture) seen through the medium (× e^(−σt·t), t the distance in `surface`; × show_scene, 0 for
-// no scene), plus the airlight (R32F) in the light's colour, × exposure, Reinhard x/(1+x), sRGB.
-// sigmaT: a uniform object ({ value }), shared with the airlight's when it is the same medium.
+// texture) seen through the medium (× e^(−σt·t), t the distance in `surface`; with `through`, an
+// R32F texture of each pixel's transmittance to its surface, × that instead: a medium of varying
+// density, DensityGrid's throughTarget; × show_scene, 0 for no scene), plus the airlight (R32F) in
+// the light's colour, × exposure, Reinhard x/(1+x), sRGB. sigmaT: a uniform object ({ value }),
+// shared with the airlight's when it is the same medium.
 export class Composite {
-  constructor({ scene, airlight, surface, sigmaT, lightColour = [1, 1, 1] }) {
+  constructor({ scene, airlight, surface, sigmaT, through = null, lightColour = [1, 1, 1] }) {
     this.uniforms = {
       scene_color: { value: scene }, airlight: { value: airlight }, surface: { value: surface },
       sigma_t: sigmaT, light_colour: { value: new THREE.Vector3(...lightColour) },
       exposure: { value: 1 }, show_scene: { value: 1 },
+      through: { value: through }, use_through: { value: through ? 1 : 0 },
     };
     const mesh = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
       uniforms: this.uniforms,
@@ -168,9 +171,11 @@ export class Composite {
       fragmentShader: `
         uniform sampler2D scene_color; uniform sampler2D airlight; uniform sampler2D surface;
         uniform float sigma_t; uniform float exposure; uniform float show_scene; uniform vec3 light_colour;
+        uniform sampler2D through; uniform float use_through;
         varying vec2 uv_;
         void main() {
-          float through = exp(-sigma_t * min(texture2D(surface, uv_).r, 1e30));
+          float through = use_through > 0.5 ? texture2D(through, uv_).r
+                                            : exp(-sigma_t * min(texture2D(surface, uv_).r, 1e30));
           vec3 c = show_scene * through * texture2D(scene_color, uv_).rgb +
                    light_colour * max(texture2D(airlight, uv_).r, 0.0);
           c *= exposure;

@@ -7,10 +7,11 @@
 //     running sum in a 2D target and copies it into that layer of an R32F 3D texture;
 //   - the in-scattering grid: per column of `tile`×`tile` pixels, D(t) = F(t) − F_hom(t) and its
 //     derivative (for a point light times the column ray's distance to the light) at `slices`
-//     distances uniform on [0, t1], t1 the farthest any pixel interpolated from the column needs
+//     distances on [0, t1] uniform in airlight.glsl's grid_coordinate (a point light's: a blend of
+//     the distance and the angle at the light), t1 the farthest any pixel interpolated from the column needs
 //     (its surface, or where its ray leaves the light's bounds; for a point light the column's
 //     point at the pixel's angle from the light): one pass per
-//     slice carries (D, eye-side optical depth) and writes (D, D') into an RG32F 3D texture, which
+//     slice carries (D, eye-side optical depth, t) and writes (D, dD/dw) into an RG32F 3D texture, which
 //     shaders/airlight.glsl's LIGHTVOL_DENSITY stage reads (its GL_ES branch).
 // The density ρ(x) is shaders/density.glsl and the opacity map's look-up and the integrand of D
 // shaders/density_grid.glsl, the files lightvol's OpenGL renderer compiles (fetched, never
@@ -125,7 +126,16 @@ uniform int grid_tile;
 uniform int grid_slices;
 uniform int grid_substeps;
 uniform highp sampler2D grid_reach;
-uniform highp sampler2D grid_state;   // (D, eye-side optical depth) at the previous slice
+uniform highp sampler2D grid_state;   // (D, eye-side optical depth, t) at the previous slice
+// The column's ray, its t1 and its angle at the light there (slices uniform in airlight.glsl's
+// grid_coordinate; density_grid.glsl's grid_node gives their distances).
+float grid_setup(ivec2 id, out float psi1) {
+  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
+  pixel_ray(g_ray_origin, g_ray_dir);
+  float t1 = texelFetch(grid_reach, id, 0).r;
+  psi1 = light_type == 1 ? 0.0 : grid_light_angle(light_position - g_ray_origin, g_ray_dir, t1);
+  return t1;
+}
 `;
 
 const GRID_STEP = `
@@ -133,32 +143,62 @@ uniform int grid_slice;
 layout(location = 0) out vec4 out_state;
 void main() {
   ivec2 id = ivec2(lv_column_coord.xy);
-  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
-  pixel_ray(g_ray_origin, g_ray_dir);
-  vec2 state = texelFetch(grid_state, id, 0).rg;
-  float d = state.x, tau_e = state.y;
-  float slice = texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
-  float dt = slice / float(grid_substeps);
+  float psi1;
+  float t1 = grid_setup(id, psi1);
+  vec3 state = texelFetch(grid_state, id, 0).rgb;
+  float d = state.x, tau_e = state.y, t0 = state.z;
+  if (!(t1 > 0.0)) { out_state = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  float tk = grid_node(float(grid_slice) / float(grid_slices - 1), t0, t1, psi1);
+  float dt = (tk - t0) / float(grid_substeps);
   for (int j = 0; j < grid_substeps; ++j) {
-    float t = (float(grid_slice - 1) + (float(j) + 0.5) / float(grid_substeps)) * slice;
+    float t = t0 + (float(j) + 0.5) * dt;
     float rho = density(g_ray_origin + t * g_ray_dir);
     d += d_integrand(t, rho, tau_e + 0.5 * sigma_t * rho * dt) * dt;
     tau_e += sigma_t * rho * dt;
   }
-  out_state = vec4(d, tau_e, 0.0, 1.0);
+  out_state = vec4(d, tau_e, tk, 1.0);
 }
 `;
 
+// (D, dD/dw) at the slice the state has reached.
 const GRID_LAYER = `
-uniform int grid_slice;
 layout(location = 0) out vec4 out_d;
 void main() {
   ivec2 id = ivec2(lv_column_coord.xy);
-  lv_frag_coord = vec4((vec2(id) + 0.5) * float(grid_tile), 0.0, 1.0);
-  pixel_ray(g_ray_origin, g_ray_dir);
-  vec2 state = texelFetch(grid_state, id, 0).rg;
-  float t = float(grid_slice) * texelFetch(grid_reach, id, 0).r / float(grid_slices - 1);
-  out_d = vec4(state.x, d_integrand(t, density(g_ray_origin + t * g_ray_dir), state.y), 0.0, 1.0);
+  float psi1;
+  float t1 = grid_setup(id, psi1);
+  vec3 state = texelFetch(grid_state, id, 0).rgb;
+  if (!(t1 > 0.0)) { out_d = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  float t = state.z;
+  out_d = vec4(state.x, d_integrand(t, density(g_ray_origin + t * g_ray_dir), state.y) /
+                            grid_coordinate_rate(t, t1, psi1), 0.0, 1.0);
+}
+`;
+
+// The surfaces' transmittance e^(−τ_E(t_surface)) through the density, per pixel (the composite's
+// dimming of the lit scene, as `lightvol render --composite`'s add_constant_surfaces): σt ∫ρ along
+// the pixel's ray to its surface by 4-point Gauss–Legendre panels of at most twice the density's
+// finest wavelength; 0 where the ray hits nothing (e^(−∞)).
+const THROUGH = `
+uniform highp sampler2D surface_distance;
+uniform float through_step;
+layout(location = 0) out vec4 out_through;
+void main() {
+  lv_frag_coord = gl_FragCoord;
+  vec3 origin, dir;
+  pixel_ray(origin, dir);
+  float t = texelFetch(surface_distance, ivec2(gl_FragCoord.xy), 0).r;
+  if (!(t < 1e38)) { out_through = vec4(0.0, 0.0, 0.0, 1.0); return; }
+  int panels = clamp(int(ceil(t / through_step)), 1, 65536);
+  float width = t / float(panels), sum = 0.0;
+  for (int p = 0; p < panels; ++p) {
+    float mid = (float(p) + 0.5) * width;
+    for (int i = 0; i < 4; ++i) {
+      float dx = 0.5 * width * GL_X[i];
+      sum += GL_W[i] * (density(origin + (mid - dx) * dir) + density(origin + (mid + dx) * dir));
+    }
+  }
+  out_through = vec4(exp(-sigma_t * sum * 0.5 * width), 0.0, 0.0, 1.0);
 }
 `;
 
@@ -295,6 +335,12 @@ export class DensityGrid {
       `${common}\n${shaders.density}${OPACITY_LOOKUP}${shaders.grid}${GRID_COMMON}${main}`;
     this.gridStep = material(gridSource(GRID_STEP));
     this.gridLayer = material(gridSource(GRID_LAYER));
+    this.throughPass = material(
+      `${PREFIX}#define LIGHTVOL_COMMON\nvec4 lv_frag_coord;\n${common}\n${shaders.density}${THROUGH}`);
+    this.throughPass.uniforms.surface_distance = { value: airlight.surfaceTarget.texture };
+    this.throughPass.uniforms.through_step = {
+      value: 2 / (noise.frequency * noise.lacunarity ** (noise.octaves - 1)) };
+    this.throughTarget = floatTarget(airlight.width, airlight.height, THREE.RedFormat);
     const triangle = new THREE.BufferGeometry();
     triangle.setAttribute('position', new THREE.BufferAttribute(new Float32Array(9), 3));
     this.quad = new THREE.Mesh(triangle, this.copy);
@@ -456,7 +502,7 @@ export class DensityGrid {
     if (!this.columns || this.columns.width !== cx || this.columns.height !== cy) {
       for (const t of [this.columns, this.gridState?.[0], this.gridState?.[1], this.grid]) t?.dispose();
       this.columns = { width: cx, height: cy };
-      this.gridState = [floatTarget(cx, cy, THREE.RGFormat), floatTarget(cx, cy, THREE.RGFormat)];
+      this.gridState = [floatTarget(cx, cy, THREE.RGBAFormat), floatTarget(cx, cy, THREE.RGBAFormat)];
       this.grid = floatTarget(cx, cy, THREE.RGFormat, this.options.slices);
       this.reachTexture?.dispose();
       this.reachTexture = new THREE.DataTexture(t1, cx, cy, THREE.RedFormat, THREE.FloatType);
@@ -487,7 +533,6 @@ export class DensityGrid {
     [a, b] = this.gridState;
     this.clear(a);
     u.grid_state.value = a.texture;
-    u.grid_slice.value = 0;
     this.draw(this.gridLayer, this.grid, 0);
     for (let k = 1; k < this.options.slices; ++k) {
       u.grid_state.value = a.texture;
@@ -497,6 +542,9 @@ export class DensityGrid {
       this.draw(this.gridLayer, this.grid, k);
       [a, b] = [b, a];
     }
+    // The surfaces' transmittance, for the composite.
+    if (this.throughTarget.width !== w || this.throughTarget.height !== h) this.throughTarget.setSize(w, h);
+    this.draw(this.throughPass, this.throughTarget);
     renderer.setRenderTarget(previousTarget);
     renderer.autoClear = autoClear;
     this.airlight.setDensityGrid(this);

@@ -6,7 +6,9 @@
 // 'lightvol:done' and window.lightvolAirlight() returns that frame's airlight (Float32Array,
 // width × height, top row first, linear; window.lightvolSurface(): its distances along the pixel
 // rays to the scene, 3e38 where none; window.lightvolFaceCounts(): back minus front faces per
-// pixel). The orbit camera and the sliders re-render.
+// pixel; window.lightvolThrough(), for a medium of varying density: each pixel's transmittance to
+// its surface, by which the composite dims the lit scene, 0 where none, else null). The orbit
+// camera and the sliders re-render.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -161,8 +163,10 @@ async function main() {
   wire.add(new THREE.LineSegments(new THREE.WireframeGeometry(volumeGeometry), wireMaterial));
 
   // Composite as lightvol demo's picture (airlight.js's Composite, the live page's too).
+  // A varying density dims the lit scene by each pixel's own transmittance (DensityGrid's).
   const composite = new Composite({ scene: litTarget.texture, airlight: airlight.airlightTarget.texture,
-                                    surface: airlight.surfaceTarget.texture, sigmaT: airlight.common.sigma_t });
+                                    surface: airlight.surfaceTarget.texture, sigmaT: airlight.common.sigma_t,
+                                    through: noise ? airlight.densityGrid.throughTarget.texture : null });
 
   // The camera: exactly the JSON's first; the orbit controls then move its view.
   const orbitCamera = new THREE.PerspectiveCamera();
@@ -215,11 +219,13 @@ async function main() {
       const gl = renderer.getContext(), rgba = new Float32Array(width * height * 4);
       gl.readPixels(0, 0, width, height, gl.RGBA, gl.FLOAT, rgba);
       const surface = airlight.readSurface(), sigmaT = airlight.common.sigma_t.value;
+      const densityThrough = noise ? airlight.read(airlight.densityGrid.throughTarget) : null;
       const picture = new Float32Array(width * height);
       for (let i = 0; i < picture.length; ++i) {
         const row = height - 1 - Math.floor(i / width), col = i % width;  // GL rows bottom-up
         const j = (row * width + col) * 4;
-        const through = sceneGeometries.length > 0 ? Math.exp(-sigmaT * Math.min(surface[i], 1e30)) : 0;
+        const through = sceneGeometries.length === 0 ? 0
+          : densityThrough ? densityThrough[i] : Math.exp(-sigmaT * Math.min(surface[i], 1e30));
         picture[i] = through * (rgba[j] + rgba[j + 1] + rgba[j + 2]) / 3 + Math.max(frame[i], 0);
       }
       picture.sort();
@@ -262,10 +268,12 @@ async function main() {
   draw();
   if (shaderError) throw new Error(shaderError);
   const first = frame.slice(), surface = airlight.readSurface(), counts = airlight.readFaceCounts();
+  const through = noise ? airlight.read(airlight.densityGrid.throughTarget) : null;
   window.lightvolAirlight = () => first;
   window.lightvolSurface = () => surface;
   window.lightvolFaceCounts = () => counts;
   window.lightvolCurrentAirlight = () => frame;
+  window.lightvolThrough = () => through;
   say('');
   document.title = 'lightvol:done';
 }

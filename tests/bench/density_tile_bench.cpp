@@ -4,7 +4,7 @@
 // fog: a spot seen from outside, an omni (point) light in the view near the camera, a directional
 // light; against the reference on every STRIDE-th pixel of every STRIDE-th row (the reference of
 // a whole image this size takes too long; STRIDE 1: all). Then, with a BIG size, the automatic
-// tile at BIG×BIG the same way.
+// tile at BIG×BIG the same way, and the milliseconds of one frame there.
 //
 //   density_tile_bench [WIDTH HEIGHT [STRIDE [BIG]]]   (defaults 512 384 8, no BIG)
 #include <algorithm>
@@ -90,6 +90,21 @@ Image render_volume(const RenderScene& scene, const Mesh& volume, int tile, int*
   return (*r)->render();
 }
 
+// Milliseconds of a second frame at the automatic tile (the grid's compute passes, the volume and
+// the resolve: GlVolumeRenderer::render's time; not the set-up, not the read-back).
+double frame_ms(const RenderScene& scene, const Mesh& volume) {
+  Result<std::unique_ptr<GlVolumeRenderer>> r = GlVolumeRenderer::create(scene, {});
+  if (!r) {
+    std::fprintf(stderr, "density_tile_bench: %s\n", r.error().message.c_str());
+    std::exit(2);
+  }
+  (*r)->set_volume(volume);
+  (*r)->render();
+  double seconds = 0;
+  (*r)->render(&seconds);
+  return 1000 * seconds;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -130,8 +145,9 @@ int main(int argc, char** argv) {
     std::printf("\n");
   }
   if (big <= 0) return 0;
-  std::printf("\n%dx%d, automatic tile\n\n| view | tile | relative L2 |\n|---|---:|---:|\n", big,
-              big);
+  std::printf(
+      "\n%dx%d, automatic tile\n\n| view | tile | relative L2 | ms/frame |\n|---|---:|---:|---:|\n",
+      big, big);
   for (const View& v : kViews) {
     const Light light = test::light_from_json(v.light_json);
     const Mesh volume = volume_of(light);
@@ -140,7 +156,8 @@ int main(int argc, char** argv) {
     const Image ref = render_reference(volume, scene, stride);
     int tile = 0;
     const Image gpu = sampled(render_volume(scene, volume, 0, &tile));
-    std::printf("| %s | %d | %.2e |\n", v.name, tile, compare_images(gpu, ref).relative_l2);
+    std::printf("| %s | %d | %.2e | %.0f |\n", v.name, tile, compare_images(gpu, ref).relative_l2,
+                frame_ms(scene, volume));
   }
   return 0;
 }

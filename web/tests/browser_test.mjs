@@ -4,7 +4,9 @@
 // same camera within 1 % relative L2; without `scene=` (no surface: the airlight runs through the
 // whole volume) it must match `render` with a camera depth of 1 everywhere. With a noise medium
 // ("density": {"type": "noise"}; spot and omni volumes) likewise, and the homogeneous medium's
-// render must be at least 5 % away (the density matters); a density lightvol refuses (octaves 13)
+// render must be at least 5 % away (the density matters), and the transmittance by which the
+// composite dims the surfaces (window.lightvolThrough()) must match `render --composite`'s within
+// 1 %; a density lightvol refuses (octaves 13)
 // gives lightvol:error and the message naming the key on the page and in the console.
 //   node web/tests/browser_test.mjs PATH/TO/lightvol [--demo-size N] [--only CASE] [--screenshot FILE.png]
 //                                   [--keep DIR]
@@ -104,6 +106,12 @@ for (const c of cases.filter((c) => !c.error)) {
   run('render', c.volume, '--light', c.light, '--camera', 'camera.json',
       '--depth', c.noScene ? 'empty_depth.exr' : 'camera_depth.exr',
       '--medium', c.medium ?? 'medium.json', '--method', 'volume', '--out', `${c.name}_reference.exr`);
+  // The composite's surfaces seen through the density: with --composite --background 1, render
+  // adds each pixel's transmittance e^(−τ_E) to its surface; less the airlight, that alone.
+  if (c.medium)
+    run('render', c.volume, '--light', c.light, '--camera', 'camera.json', '--depth', 'camera_depth.exr',
+        '--medium', c.medium, '--method', 'volume', '--composite', '--background', '1',
+        '--out', `${c.name}_composite.exr`);
 }
 
 // ---- the browser ---------------------------------------------------------------------------------
@@ -179,6 +187,23 @@ try {
       console.log(`${c.name}: the homogeneous medium's render is ${(100 * apart).toFixed(1)} % away` +
                   (matters ? '' : '  FAILED (want >= 5 %: the case would not test the density)'));
       ok = ok && matters;
+      // The composite dims the lit scene by the density's own transmittance (window.lightvolThrough),
+      // as render --composite does: within 1 % of it where both see a surface, and at least 1 %
+      // from the homogeneous e^(−σt·t) (the density matters there too).
+      const through = Float32Array.from(await page.evaluate(() => Array.from(window.lightvolThrough())));
+      const composite = readExr(join(work, `${c.name}_composite.exr`)).values;
+      const expected = composite.map((x, i) => x - reference.values[i]);
+      const sigmaT = (medium.scattering ?? 0) + (medium.absorption ?? 0);
+      const flat = new Float32Array(through.length);
+      const seen = Uint8Array.from(mask, (m, i) => (m || !(lightvolSurface[i] < Infinity) ? 1 : 0));
+      for (let i = 0; i < flat.length; ++i) flat[i] = seen[i] ? 0 : Math.exp(-sigmaT * lightvolSurface[i]);
+      const throughL2 = through.length === expected.length ? relativeL2(through, expected, seen) : Infinity;
+      const throughApart = relativeL2(flat, expected, seen);
+      const throughOk = throughL2 <= TOLERANCE && throughApart >= 0.01;
+      console.log(`${c.name}: the composite's transmittance to the surfaces is ${(100 * throughL2).toFixed(4)} % ` +
+                  `from render --composite's, the homogeneous one ${(100 * throughApart).toFixed(1)} %` +
+                  (throughOk ? '' : '  FAILED (want <= 1 % and >= 1 %)'));
+      ok = ok && throughOk;
     }
     console.log(`${c.name}: relative L2 ${(100 * l2).toFixed(4)} % against lightvol render --method volume ` +
                 `(${reference.width}x${reference.height}, left out: ${disagree} pixels whose scene surfaces differ, ${cracks} whose face count is not the camera's ${inside}; ${info}; page ${((Date.now() - started) / 1000).toFixed(1)} s)` +

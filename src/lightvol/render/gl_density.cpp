@@ -166,20 +166,30 @@ void main() {
   pixel_ray(g_ray_origin, g_ray_dir);
   float t1 = grid_t1[column];
   int base = column * grid_slices;
-  float slice = t1 / float(grid_slices - 1);
-  float dt = slice / float(grid_substeps);
-  float tau_e = 0.0, d = 0.0;
-  // Each slice boundary keeps D and its derivative (the integrand), for cubic Hermite look-ups.
-  grid_d[base] = vec2(0.0, d_integrand(0.0, density(g_ray_origin), 0.0));
+  if (!(t1 > 0.0)) {  // no pixel reads this column
+    for (int k = 0; k < grid_slices; ++k) grid_d[base + k] = vec2(0.0);
+    return;
+  }
+  // Slices uniform in grid_coordinate (airlight.glsl; density_grid.glsl's grid_node).
+  float psi1 = light_type == 1 ? 0.0 : grid_light_angle(light_position - g_ray_origin, g_ray_dir, t1);
+  float dw = 1.0 / float(grid_slices - 1);
+  float tau_e = 0.0, d = 0.0, t0 = 0.0;
+  // Each slice boundary keeps D and its derivative in w (the integrand times dt/dw), for cubic
+  // Hermite look-ups.
+  grid_d[base] = vec2(0.0, d_integrand(0.0, density(g_ray_origin), 0.0) /
+                               grid_coordinate_rate(0.0, t1, psi1));
   for (int k = 1; k < grid_slices; ++k) {
+    float tk = grid_node(float(k) * dw, t0, t1, psi1);
+    float dt = (tk - t0) / float(grid_substeps);
     for (int j = 0; j < grid_substeps; ++j) {
-      float t = (float(k - 1) + (float(j) + 0.5) / float(grid_substeps)) * slice;
+      float t = t0 + (float(j) + 0.5) * dt;
       float rho = density(g_ray_origin + t * g_ray_dir);
       d += d_integrand(t, rho, tau_e + 0.5 * sigma_t * rho * dt) * dt;
       tau_e += sigma_t * rho * dt;
     }
-    float t = float(k) * slice;
-    grid_d[base + k] = vec2(d, d_integrand(t, density(g_ray_origin + t * g_ray_dir), tau_e));
+    grid_d[base + k] = vec2(d, d_integrand(tk, density(g_ray_origin + tk * g_ray_dir), tau_e) /
+                                   grid_coordinate_rate(tk, t1, psi1));
+    t0 = tk;
   }
 }
 )";

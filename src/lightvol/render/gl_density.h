@@ -86,16 +86,18 @@ class GlOpacityMap {
 // ---- the in-scattering grid ---------------------------------------------------------------------
 
 // The eye-side cumulative in-scattering, per frame, on a camera-aligned grid: one column per
-// `tile`×`tile` pixels (along the ray through the tile's centre) by `slices` samples uniform in
-// the distance from the eye up to the farthest surface (or light bound) the column's pixels see.
-// A column stores D(t) = F(t) − F_hom(t) and its derivative: the heterogeneous cumulative integral
-// minus the homogeneous one the volume fragments already compute exactly, so that a constant
-// density gives the homogeneous image; for a point light times the column ray's distance h to the
-// light. Fragments read D bilinearly across columns and by cubic Hermite interpolation across
-// slices; a point light's columns at their points seen from the light at the fragment's angle
-// from its ray's origin, the sum divided by the fragment's h (docs/design.md §6, "Columns wider
-// than a pixel"). The automatic tile (tile = 0) is one pixel while the grid stays within 2^25
-// samples, larger beyond.
+// `tile`×`tile` pixels (along the ray through the tile's centre) by `slices` samples from the eye
+// up to the farthest surface (or light bound) the column's pixels see, uniform in the distance
+// (directional light) or in a blend of the distance and the angle at the light (point light: dense
+// where the ray passes the light, so that the in-scattering's 1/d² peak is resolved).
+// A column stores D(t) = F(t) − F_hom(t) and its derivative in that coordinate: the heterogeneous
+// cumulative integral minus the homogeneous one the volume fragments already compute exactly, so
+// that a constant density gives the homogeneous image; for a point light times the column ray's
+// distance h to the light. Fragments read D bilinearly across columns and by cubic Hermite
+// interpolation across slices; a point light's columns at their points seen from the light at the
+// fragment's angle from its ray's origin, the sum divided by the fragment's h (docs/design.md §6,
+// "Columns wider than a pixel"). The automatic tile (tile = 0) is one pixel while the grid stays
+// within 2^25 samples, larger beyond.
 struct DensityGridOptions {
   int tile = 0;
   int slices = 128;
