@@ -142,20 +142,18 @@ class Collapser {
   // flips are the same as trying every triangle in every sweep.
   std::uint64_t flip() {
     std::uint64_t flips = 0;
-    tried_.assign(tri_.size(), 0);
-    changed_.assign(tri_.size(), 1);
-    clock_ = 1;
+    untried_.assign(tri_.size(), 1);
     for (int sweep = 0; sweep < options_.flip_sweeps; ++sweep) {
       std::uint64_t made = 0;
       for (std::size_t k = 0; k < tri_.size(); ++k) {
-        if (!alive_[k] || (!options_.reference_flips && tried_[k] >= changed_[k])) continue;
+        if (!alive_[k] || (!options_.reference_flips && !untried_[k])) continue;
         bool flipped = false;
         for (int e = 0; e < 3 && !flipped; ++e)
           flipped = try_flip(static_cast<std::uint32_t>(k), e);
         if (flipped) {
           ++made;
         } else {
-          tried_[k] = clock_;
+          untried_[k] = 0;
         }
       }
       flips += made;
@@ -418,9 +416,8 @@ class Collapser {
     drop(b, k);
     star_[c].push_back(m);
     star_[d].push_back(k);
-    ++clock_;
     for (const std::uint32_t v : {a, b, c, d})
-      for (const std::uint32_t n : star_[v]) changed_[n] = clock_;
+      for (const std::uint32_t n : star_[v]) untried_[n] = 1;
     return true;
   }
 
@@ -492,10 +489,9 @@ class Collapser {
   std::vector<std::uint8_t> alive_, vertex_alive_;
   std::vector<std::vector<std::uint32_t>> star_;
   std::vector<std::uint8_t> queued_;
-  // flip(): the clock (flips made so far + 1) when each triangle's three tries last failed, and
-  // when it or a triangle around it last changed.
-  std::vector<std::uint64_t> tried_, changed_;
-  std::uint64_t clock_ = 1;
+  // flip(): 1 for a triangle not tried since it or a triangle around it last changed (a byte a
+  // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
+  std::vector<std::uint8_t> untried_;
   bool exact_angles_ = false;
 };
 
