@@ -3,6 +3,8 @@
 // IsolatedServer; the requests are core/detail/image_helper.h's, the answers
 // depth/detail/image_codec.h's and airlight/detail/vdb_codec.h's) until it closes. The only program
 // of lightvol that links OpenImageIO and OpenVDB; not meant to be run by hand.
+#include <malloc.h>
+
 #include <cstdio>
 #include <cstring>
 #include <new>
@@ -20,6 +22,15 @@ int main(int argc, char** argv) {
                  lightvol::kProgramChannel);
     return std::strcmp(argv[1], "--help") == 0 ? 0 : 2;
   }
+  // Each request decodes into buffers of a few hundred KiB to tens of MiB (OpenEXR's chunks and
+  // line buffers, the converted rows), freed and allocated again request after request and chunk
+  // after chunk. Past glibc's mmap threshold each such block is a fresh mapping, zeroed by the
+  // kernel page by page on first touch, then unmapped on free; the next one faults in anew (tens of
+  // thousands of page faults for one 4097² map). Serving blocks below 32 MiB from the heap, and
+  // keeping up to 64 MiB of freed heap instead of trimming it, lets the next buffer reuse the pages
+  // of the last one.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 64 << 20);
   lightvol::ChildOutput channel(lightvol::kProgramChannel);
   try {
     // Loaded, or done with a request: the parent sets the limits for the next one now.

@@ -31,6 +31,24 @@ void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
   advise_huge_pages(buffer.data(), capacity * sizeof(T));
 }
 
+// Makes `buffer` hold `n` copies of `value` (its old contents dropped), on huge pages when large:
+// the huge-page advice is given before the first write, so filling the buffer takes one page fault
+// per 2 MiB instead of one per 4 KiB.
+template <class T>
+void assign_large(std::vector<T>& buffer, std::size_t n, const T& value) {
+  buffer.clear();
+  reserve_large(buffer, n);
+  buffer.assign(n, value);
+}
+
+// Resizes `buffer` to `n` elements (new ones value-initialized), on huge pages when it has to
+// grow into a new allocation that is large.
+template <class T>
+void resize_large(std::vector<T>& buffer, std::size_t n) {
+  reserve_large(buffer, n);
+  buffer.resize(n);
+}
+
 // An array of `n` elements left uninitialized (the caller's parallel loop writes each first, and
 // its threads take the page faults), on huge pages when large.
 template <class T>

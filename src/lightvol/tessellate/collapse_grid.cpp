@@ -9,6 +9,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/collapse_grid.h>
 #include <lightvol/tessellate/detail/lattice.h>
@@ -58,8 +59,8 @@ class Collapser {
       LV_CHECK(std::is_sorted(keep.begin(), keep.end()));
     const int w = grid.width, h = grid.height;
     const std::size_t nv = grid.vertices.size(), nt = grid.num_triangles();
-    pt_.resize(nv);
-    sides_.resize(nv);
+    resize_large(pt_, nv);
+    resize_large(sides_, nv);
     for (std::size_t v = 0; v < nv; ++v) {
       const std::uint32_t id = grid.vertices[v];
       const Pt p{static_cast<int>(id % static_cast<std::uint32_t>(w)),
@@ -72,9 +73,10 @@ class Collapser {
       if (p.x == 0) s |= 1u << kLeft;
       sides_[v] = s;
     }
-    tri_.resize(nt);
-    alive_.assign(nt, 1);
-    std::vector<std::uint32_t> degree(nv + 1, 0);
+    resize_large(tri_, nt);
+    assign_large(alive_, nt, std::uint8_t{1});
+    std::vector<std::uint32_t> degree;
+    assign_large(degree, nv + 1, std::uint32_t{0});
     for (std::size_t k = 0; k < nt; ++k) {
       for (int c = 0; c < 3; ++c) {
         tri_[k][c] = grid.indices[3 * k + c];
@@ -85,11 +87,11 @@ class Collapser {
       if (k == 0) sign_ = a > 0 ? 1 : -1;
       LV_CHECK((a > 0) == (sign_ > 0));
     }
-    star_.resize(nv);
+    resize_large(star_, nv);
     for (std::size_t v = 0; v < nv; ++v) star_[v].reserve(degree[v]);
     for (std::size_t k = 0; k < nt; ++k)
       for (int c = 0; c < 3; ++c) star_[tri_[k][c]].push_back(static_cast<std::uint32_t>(k));
-    vertex_alive_.assign(nv, 1);
+    assign_large(vertex_alive_, nv, std::uint8_t{1});
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
   }
 
@@ -103,9 +105,10 @@ class Collapser {
   CollapseReport run() {
     CollapseReport r;
     const std::size_t nv = pt_.size();
-    std::vector<std::uint32_t> todo(nv);
+    std::vector<std::uint32_t> todo;
+    resize_large(todo, nv);
     for (std::size_t v = 0; v < nv; ++v) todo[v] = static_cast<std::uint32_t>(v);
-    queued_.assign(nv, 0);
+    assign_large(queued_, nv, std::uint8_t{0});
     // Stripe s of a pass with offset o holds rows [s·kStripe − o, (s + 1)·kStripe − o).
     const int stripes = (grid_.height + kStripe / 2) / kStripe + 1;
     std::vector<Work> work(static_cast<std::size_t>(stripes));
@@ -142,7 +145,7 @@ class Collapser {
   // flips are the same as trying every triangle in every sweep.
   std::uint64_t flip() {
     std::uint64_t flips = 0;
-    untried_.assign(tri_.size(), 1);
+    assign_large(untried_, tri_.size(), std::uint8_t{1});
     for (int sweep = 0; sweep < options_.flip_sweeps; ++sweep) {
       std::uint64_t made = 0;
       for (std::size_t k = 0; k < tri_.size(); ++k) {
@@ -166,7 +169,8 @@ class Collapser {
     AdaptiveGrid out;
     out.width = grid_.width;
     out.height = grid_.height;
-    std::vector<std::uint32_t> rank(pt_.size(), kNone);
+    std::vector<std::uint32_t> rank;
+    assign_large(rank, pt_.size(), kNone);
     for (std::size_t v = 0; v < pt_.size(); ++v) {
       if (!vertex_alive_[v]) continue;
       rank[v] = static_cast<std::uint32_t>(out.vertices.size());

@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/tessellate/detail/lattice.h>
@@ -143,7 +144,7 @@ void Refiner::threshold() {
   for (int level = 1; level <= q_.top; ++level) {
     const std::vector<float>& v = value_[level];
     std::vector<std::uint8_t>& s = split_[level];
-    s.resize(v.size());
+    resize_large(s, v.size());
     for (std::size_t c = 0; c < v.size(); ++c) s[c] = v[c] > bound_ ? 1 : 0;
   }
 }
@@ -293,7 +294,7 @@ bool Refiner::split_failing_leaves() {
   const std::vector<Block> blks = blocks();
   std::vector<std::vector<std::uint8_t>> fail(split_.size());
   for (int level = 2; level <= q_.top; ++level) {
-    fail[level].assign(split_[level].size(), 0);
+    assign_large(fail[level], split_[level].size(), std::uint8_t{0});
     visits_ += split_[level].size();
   }
   const bool any_fail = tbb::parallel_reduce(
@@ -370,7 +371,7 @@ std::vector<std::uint64_t> Refiner::mark_vertices(const std::vector<Block>& bloc
   const int w = texels_.width(), h = texels_.height();
   std::vector<std::uint64_t> block_triangles(blocks.size() + 1, 0), block_leaves(blocks.size(), 0);
   bits->words = (static_cast<std::size_t>(w) + 63) / 64;
-  bits->used.assign(bits->words * static_cast<std::size_t>(h), 0);
+  assign_large(bits->used, bits->words * static_cast<std::size_t>(h), std::uint64_t{0});
   const auto mark = [&](Pt p) {
     std::atomic_ref<std::uint64_t> word(
         bits->used[static_cast<std::size_t>(p.y) * bits->words + p.x / 64]);
@@ -411,10 +412,10 @@ void Refiner::rank_vertices(VertexBits* bits, AdaptiveGrid* grid) const {
   const int w = texels_.width(), h = texels_.height();
   const std::vector<std::uint64_t>& used = bits->used;
   std::vector<std::uint32_t>& word_rank = bits->word_rank;
-  word_rank.assign(used.size() + 1, 0);
+  assign_large(word_rank, used.size() + 1, std::uint32_t{0});
   for (std::size_t k = 0; k < used.size(); ++k)
     word_rank[k + 1] = word_rank[k] + static_cast<std::uint32_t>(std::popcount(used[k]));
-  grid->vertices.resize(word_rank.back());
+  resize_large(grid->vertices, word_rank.back());
   const std::size_t words = bits->words;
   tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r)
@@ -433,7 +434,7 @@ void Refiner::rank_vertices(VertexBits* bits, AdaptiveGrid* grid) const {
 void Refiner::write_triangles(const std::vector<Block>& blocks,
                               const std::vector<std::uint64_t>& first_triangle,
                               const VertexBits& bits, bool standard, AdaptiveGrid* grid) const {
-  grid->indices.resize(3 * first_triangle.back());
+  resize_large(grid->indices, 3 * first_triangle.back());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t k = range.begin(); k != range.end(); ++k) {
