@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -50,6 +51,82 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+// Each vertex's star (the triangles around it), flat: one 64-byte slot a vertex (a cache line)
+// holding the count and up to kInline triangles; a larger star moves to a heap block of its own,
+// owned by the slot (collapses merge stars, so nothing bounds a degree). The collapse's stripes
+// change the stars of disjoint vertices in parallel: a slot is only ever touched by one thread.
+class StarTable {
+ public:
+  StarTable() = default;
+  StarTable(const StarTable&) = delete;
+  StarTable& operator=(const StarTable&) = delete;
+  ~StarTable() {
+    for (Slot& s : slots_)
+      if (s.cap != 0) delete[] s.heap;
+  }
+
+  // `degree[v]`: the size v's star will have once filled by push().
+  void init(const std::vector<std::uint32_t>& degree, std::size_t nv) {
+    resize_large(slots_, nv);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (degree[v] > kInline) {
+        slots_[v].cap = degree[v];
+        slots_[v].heap = new std::uint32_t[degree[v]];
+      }
+  }
+
+  std::span<const std::uint32_t> operator[](std::uint32_t v) const {
+    const Slot& s = slots_[v];
+    return {s.cap != 0 ? s.heap : s.in, s.n};
+  }
+
+  void push(std::uint32_t v, std::uint32_t k) {
+    Slot& s = slots_[v];
+    if (s.cap == 0 && s.n < kInline) {
+      s.in[s.n++] = k;
+      return;
+    }
+    if (s.cap == 0 || s.n == s.cap) grow(&s);
+    s.heap[s.n++] = k;
+  }
+
+  // Removes k from v's star (it must be there), keeping the others' order.
+  void erase(std::uint32_t v, std::uint32_t k) {
+    Slot& s = slots_[v];
+    std::uint32_t* d = s.cap != 0 ? s.heap : s.in;
+    std::uint32_t* at = std::find(d, d + s.n, k);
+    LV_CHECK(at != d + s.n);
+    std::copy(at + 1, d + s.n, at);
+    --s.n;
+  }
+
+  void clear(std::uint32_t v) { slots_[v].n = 0; }
+
+ private:
+  static constexpr std::uint32_t kInline = 14;
+  struct alignas(64) Slot {
+    std::uint32_t n;    // triangles in the star
+    std::uint32_t cap;  // 0: in `in`; else the capacity of `heap`
+    union {
+      std::uint32_t in[kInline];
+      std::uint32_t* heap;
+    };
+  };
+  static_assert(sizeof(Slot) == 64);
+
+  static void grow(Slot* s) {
+    const std::uint32_t cap = s->cap == 0 ? 2 * kInline : 2 * s->cap;
+    auto* heap = new std::uint32_t[cap];
+    const std::uint32_t* d = s->cap != 0 ? s->heap : s->in;
+    std::copy(d, d + s->n, heap);
+    if (s->cap != 0) delete[] s->heap;
+    s->heap = heap;
+    s->cap = cap;
+  }
+
+  std::vector<Slot> slots_;
+};
+
 class Collapser {
  public:
   Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
@@ -87,10 +164,9 @@ class Collapser {
       if (k == 0) sign_ = a > 0 ? 1 : -1;
       LV_CHECK((a > 0) == (sign_ > 0));
     }
-    resize_large(star_, nv);
-    for (std::size_t v = 0; v < nv; ++v) star_[v].reserve(degree[v]);
+    star_.init(degree, nv);
     for (std::size_t k = 0; k < nt; ++k)
-      for (int c = 0; c < 3; ++c) star_[tri_[k][c]].push_back(static_cast<std::uint32_t>(k));
+      for (int c = 0; c < 3; ++c) star_.push(tri_[k][c], static_cast<std::uint32_t>(k));
     assign_large(vertex_alive_, nv, std::uint8_t{1});
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
   }
@@ -209,7 +285,7 @@ class Collapser {
   static constexpr int kStripe = 64;
 
   struct Scratch {
-    std::vector<std::uint32_t> candidates, touched;
+    std::vector<std::uint32_t> candidates, touched, star;
     std::vector<std::uint64_t> keys;
   };
 
@@ -347,7 +423,7 @@ class Collapser {
         }
       }
       if (!ok) continue;
-      apply(u, v, &scratch->touched);
+      apply(u, v, scratch);
       ++r->collapses;
       return true;
     }
@@ -412,14 +488,10 @@ class Collapser {
     if (!within(pc, pa, pd) || !within(pc, pd, pb)) return false;
     tri_[k] = {c, a, d};
     tri_[m] = {c, d, b};
-    const auto drop = [&](std::uint32_t v, std::uint32_t t) {
-      std::vector<std::uint32_t>& st = star_[v];
-      st.erase(std::find(st.begin(), st.end(), t));
-    };
-    drop(a, m);
-    drop(b, k);
-    star_[c].push_back(m);
-    star_[d].push_back(k);
+    star_.erase(a, m);
+    star_.erase(b, k);
+    star_.push(c, m);
+    star_.push(d, k);
     for (const std::uint32_t v : {a, b, c, d})
       for (const std::uint32_t n : star_[v]) untried_[n] = 1;
     return true;
@@ -456,27 +528,25 @@ class Collapser {
     return less(before, after);
   }
 
-  void apply(std::uint32_t u, std::uint32_t v, std::vector<std::uint32_t>* touched) {
-    std::vector<std::uint32_t>& touched_ = *touched;
+  void apply(std::uint32_t u, std::uint32_t v, Scratch* scratch) {
+    std::vector<std::uint32_t>& touched_ = scratch->touched;
     touched_.clear();
     touched_.push_back(v);
-    const std::vector<std::uint32_t> star = std::move(star_[u]);
-    star_[u].clear();
+    std::vector<std::uint32_t>& star = scratch->star;
+    star.assign(star_[u].begin(), star_[u].end());
+    star_.clear(u);
     for (const std::uint32_t k : star) {
       std::array<std::uint32_t, 3>& tr = tri_[k];
       for (int c = 0; c < 3; ++c)
         if (tr[c] != u && tr[c] != v) touched_.push_back(tr[c]);
       if (tr[0] == v || tr[1] == v || tr[2] == v) {
         alive_[k] = 0;
-        for (int c = 0; c < 3; ++c) {
-          if (tr[c] == u) continue;
-          std::vector<std::uint32_t>& s = star_[tr[c]];
-          s.erase(std::find(s.begin(), s.end(), k));
-        }
+        for (int c = 0; c < 3; ++c)
+          if (tr[c] != u) star_.erase(tr[c], k);
       } else {
         for (int c = 0; c < 3; ++c)
           if (tr[c] == u) tr[c] = v;
-        star_[v].push_back(k);
+        star_.push(v, k);
       }
     }
     vertex_alive_[u] = 0;
@@ -491,7 +561,7 @@ class Collapser {
   std::vector<std::uint8_t> sides_;
   std::vector<std::array<std::uint32_t, 3>> tri_;
   std::vector<std::uint8_t> alive_, vertex_alive_;
-  std::vector<std::vector<std::uint32_t>> star_;
+  StarTable star_;
   std::vector<std::uint8_t> queued_;
   // flip(): 1 for a triangle not tried since it or a triangle around it last changed (a byte a
   // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
