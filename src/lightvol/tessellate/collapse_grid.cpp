@@ -3,6 +3,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <span>
@@ -51,10 +52,11 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-// Each vertex's star (the triangles around it), flat: one 64-byte slot a vertex (a cache line)
-// holding the count and up to kInline triangles; a larger star moves to a heap block of its own,
-// owned by the slot (collapses merge stars, so nothing bounds a degree). The collapse's stripes
-// change the stars of disjoint vertices in parallel: a slot is only ever touched by one thread.
+// Each vertex's star (the triangles around it), flat: one 32-byte slot a vertex (two a cache
+// line) holding the count and up to kInline triangles; a larger star moves to a heap block of its
+// own, owned by the slot, and stays there (collapses merge stars: nothing bounds a degree). The
+// collapse's stripes change the stars of disjoint vertices in parallel: a slot is only ever
+// touched by one thread at a time.
 class StarTable {
  public:
   StarTable() = default;
@@ -62,66 +64,75 @@ class StarTable {
   StarTable& operator=(const StarTable&) = delete;
   ~StarTable() {
     for (Slot& s : slots_)
-      if (s.cap != 0) delete[] s.heap;
+      if (s.n & kHeap) delete[] heap(s);
   }
 
   // `degree[v]`: the size v's star will have once filled by push().
   void init(const std::vector<std::uint32_t>& degree, std::size_t nv) {
     resize_large(slots_, nv);
     for (std::size_t v = 0; v < nv; ++v)
-      if (degree[v] > kInline) {
-        slots_[v].cap = degree[v];
-        slots_[v].heap = new std::uint32_t[degree[v]];
-      }
+      if (degree[v] > kInline) set_heap(&slots_[v], new std::uint32_t[degree[v]], degree[v], 0);
   }
 
   std::span<const std::uint32_t> operator[](std::uint32_t v) const {
     const Slot& s = slots_[v];
-    return {s.cap != 0 ? s.heap : s.in, s.n};
+    return {s.n & kHeap ? heap(s) : s.in, s.n & ~kHeap};
   }
 
   void push(std::uint32_t v, std::uint32_t k) {
     Slot& s = slots_[v];
-    if (s.cap == 0 && s.n < kInline) {
-      s.in[s.n++] = k;
-      return;
+    if (!(s.n & kHeap)) {
+      if (s.n < kInline) {
+        s.in[s.n++] = k;
+        return;
+      }
+      auto* block = new std::uint32_t[2 * kInline];
+      std::copy(s.in, s.in + kInline, block);
+      set_heap(&s, block, 2 * kInline, kInline);
+    } else if ((s.n & ~kHeap) == s.in[0]) {
+      const std::uint32_t size = s.n & ~kHeap;
+      LV_CHECK(size < kHeap / 2);
+      std::uint32_t* old = heap(s);
+      auto* block = new std::uint32_t[2 * size];
+      std::copy(old, old + size, block);
+      delete[] old;
+      set_heap(&s, block, 2 * size, size);
     }
-    if (s.cap == 0 || s.n == s.cap) grow(&s);
-    s.heap[s.n++] = k;
+    heap(s)[s.n++ & ~kHeap] = k;
   }
 
   // Removes k from v's star (it must be there), keeping the others' order.
   void erase(std::uint32_t v, std::uint32_t k) {
     Slot& s = slots_[v];
-    std::uint32_t* d = s.cap != 0 ? s.heap : s.in;
-    std::uint32_t* at = std::find(d, d + s.n, k);
-    LV_CHECK(at != d + s.n);
-    std::copy(at + 1, d + s.n, at);
-    --s.n;
+    std::uint32_t* d = s.n & kHeap ? heap(s) : s.in;
+    std::uint32_t* end = d + (s.n & ~kHeap);
+    std::uint32_t* at = std::find(d, end, k);
+    LV_CHECK(at != end);
+    std::copy(at + 1, end, at);
+    --s.n;  // the size is at least 1: the flag stays
   }
 
-  void clear(std::uint32_t v) { slots_[v].n = 0; }
+  void clear(std::uint32_t v) { slots_[v].n &= kHeap; }
 
  private:
-  static constexpr std::uint32_t kInline = 14;
-  struct alignas(64) Slot {
-    std::uint32_t n;    // triangles in the star
-    std::uint32_t cap;  // 0: in `in`; else the capacity of `heap`
-    union {
-      std::uint32_t in[kInline];
-      std::uint32_t* heap;
-    };
+  static constexpr std::uint32_t kInline = 7, kHeap = 1u << 31;
+  // n: the star's size; with kHeap set, the star is in a heap block: in[0] holds its capacity
+  // and in[1..2] its address.
+  struct alignas(32) Slot {
+    std::uint32_t n;
+    std::uint32_t in[kInline];
   };
-  static_assert(sizeof(Slot) == 64);
+  static_assert(sizeof(Slot) == 32 && sizeof(std::uint32_t*) <= 2 * sizeof(std::uint32_t));
 
-  static void grow(Slot* s) {
-    const std::uint32_t cap = s->cap == 0 ? 2 * kInline : 2 * s->cap;
-    auto* heap = new std::uint32_t[cap];
-    const std::uint32_t* d = s->cap != 0 ? s->heap : s->in;
-    std::copy(d, d + s->n, heap);
-    if (s->cap != 0) delete[] s->heap;
-    s->heap = heap;
-    s->cap = cap;
+  static std::uint32_t* heap(const Slot& s) {
+    std::uint32_t* p = nullptr;
+    std::memcpy(&p, &s.in[1], sizeof p);
+    return p;
+  }
+  static void set_heap(Slot* s, std::uint32_t* block, std::uint32_t capacity, std::uint32_t size) {
+    s->n = kHeap | size;
+    s->in[0] = capacity;
+    std::memcpy(&s->in[1], &block, sizeof block);
   }
 
   std::vector<Slot> slots_;
