@@ -117,10 +117,10 @@ constexpr double kAdaptiveGridWorstBytesPerTexel = 4 + 2 * 12;
 // of position per two triangles, 12 of indices, the check's and the writer's share); the collapse
 // adds its tables (a point and a star of triangles per vertex, a triangle's corners and flags) and
 // the grid it returns. Measured on noise at a bound of 0 (T = 2 per texel; 2048²: peaks of
-// 400.5 MiB and 778 MiB, 36.5 and 83.5 bytes per triangle over the per-texel tables), with some
+// 400.5 MiB and 669 MiB, 36.5 and 70 bytes per triangle over the per-texel tables), with some
 // room above.
 constexpr double kQuadtreeBytesPerTriangle = 40;
-constexpr double kCollapseBytesPerTriangle = 90;
+constexpr double kCollapseBytesPerTriangle = 78;
 // lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
 // file's buffers.
 constexpr double kImageReaderBase = 136.0 * (1 << 20);

@@ -3,8 +3,10 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -50,6 +52,92 @@ bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+// Each vertex's star (the triangles around it), flat: one 32-byte slot a vertex (two a cache
+// line) holding the count and up to kInline triangles; a larger star moves to a heap block of its
+// own, owned by the slot, and stays there (collapses merge stars: nothing bounds a degree). The
+// collapse's stripes change the stars of disjoint vertices in parallel: a slot is only ever
+// touched by one thread at a time.
+class StarTable {
+ public:
+  StarTable() = default;
+  StarTable(const StarTable&) = delete;
+  StarTable& operator=(const StarTable&) = delete;
+  ~StarTable() {
+    for (Slot& s : slots_)
+      if (s.n & kHeap) delete[] heap(s);
+  }
+
+  // `degree[v]`: the size v's star will have once filled by push().
+  void init(const std::vector<std::uint32_t>& degree, std::size_t nv) {
+    resize_large(slots_, nv);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (degree[v] > kInline) set_heap(&slots_[v], new std::uint32_t[degree[v]], degree[v], 0);
+  }
+
+  std::span<const std::uint32_t> operator[](std::uint32_t v) const {
+    const Slot& s = slots_[v];
+    return {s.n & kHeap ? heap(s) : s.in, s.n & ~kHeap};
+  }
+
+  void push(std::uint32_t v, std::uint32_t k) {
+    Slot& s = slots_[v];
+    if (!(s.n & kHeap)) {
+      if (s.n < kInline) {
+        s.in[s.n++] = k;
+        return;
+      }
+      auto* block = new std::uint32_t[2 * kInline];
+      std::copy(s.in, s.in + kInline, block);
+      set_heap(&s, block, 2 * kInline, kInline);
+    } else if ((s.n & ~kHeap) == s.in[0]) {
+      const std::uint32_t size = s.n & ~kHeap;
+      LV_CHECK(size < kHeap / 2);
+      std::uint32_t* old = heap(s);
+      auto* block = new std::uint32_t[2 * size];
+      std::copy(old, old + size, block);
+      delete[] old;
+      set_heap(&s, block, 2 * size, size);
+    }
+    heap(s)[s.n++ & ~kHeap] = k;
+  }
+
+  // Removes k from v's star (it must be there), keeping the others' order.
+  void erase(std::uint32_t v, std::uint32_t k) {
+    Slot& s = slots_[v];
+    std::uint32_t* d = s.n & kHeap ? heap(s) : s.in;
+    std::uint32_t* end = d + (s.n & ~kHeap);
+    std::uint32_t* at = std::find(d, end, k);
+    LV_CHECK(at != end);
+    std::copy(at + 1, end, at);
+    --s.n;  // the size is at least 1: the flag stays
+  }
+
+  void clear(std::uint32_t v) { slots_[v].n &= kHeap; }
+
+ private:
+  static constexpr std::uint32_t kInline = 7, kHeap = 1u << 31;
+  // n: the star's size; with kHeap set, the star is in a heap block: in[0] holds its capacity
+  // and in[1..2] its address.
+  struct alignas(32) Slot {
+    std::uint32_t n;
+    std::uint32_t in[kInline];
+  };
+  static_assert(sizeof(Slot) == 32 && sizeof(std::uint32_t*) <= 2 * sizeof(std::uint32_t));
+
+  static std::uint32_t* heap(const Slot& s) {
+    std::uint32_t* p = nullptr;
+    std::memcpy(&p, &s.in[1], sizeof p);
+    return p;
+  }
+  static void set_heap(Slot* s, std::uint32_t* block, std::uint32_t capacity, std::uint32_t size) {
+    s->n = kHeap | size;
+    s->in[0] = capacity;
+    std::memcpy(&s->in[1], &block, sizeof block);
+  }
+
+  std::vector<Slot> slots_;
+};
+
 class Collapser {
  public:
   Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
@@ -87,10 +175,9 @@ class Collapser {
       if (k == 0) sign_ = a > 0 ? 1 : -1;
       LV_CHECK((a > 0) == (sign_ > 0));
     }
-    resize_large(star_, nv);
-    for (std::size_t v = 0; v < nv; ++v) star_[v].reserve(degree[v]);
+    star_.init(degree, nv);
     for (std::size_t k = 0; k < nt; ++k)
-      for (int c = 0; c < 3; ++c) star_[tri_[k][c]].push_back(static_cast<std::uint32_t>(k));
+      for (int c = 0; c < 3; ++c) star_.push(tri_[k][c], static_cast<std::uint32_t>(k));
     assign_large(vertex_alive_, nv, std::uint8_t{1});
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
   }
@@ -209,7 +296,7 @@ class Collapser {
   static constexpr int kStripe = 64;
 
   struct Scratch {
-    std::vector<std::uint32_t> candidates, touched;
+    std::vector<std::uint32_t> candidates, touched, star;
     std::vector<std::uint64_t> keys;
   };
 
@@ -347,7 +434,7 @@ class Collapser {
         }
       }
       if (!ok) continue;
-      apply(u, v, &scratch->touched);
+      apply(u, v, scratch);
       ++r->collapses;
       return true;
     }
@@ -412,14 +499,10 @@ class Collapser {
     if (!within(pc, pa, pd) || !within(pc, pd, pb)) return false;
     tri_[k] = {c, a, d};
     tri_[m] = {c, d, b};
-    const auto drop = [&](std::uint32_t v, std::uint32_t t) {
-      std::vector<std::uint32_t>& st = star_[v];
-      st.erase(std::find(st.begin(), st.end(), t));
-    };
-    drop(a, m);
-    drop(b, k);
-    star_[c].push_back(m);
-    star_[d].push_back(k);
+    star_.erase(a, m);
+    star_.erase(b, k);
+    star_.push(c, m);
+    star_.push(d, k);
     for (const std::uint32_t v : {a, b, c, d})
       for (const std::uint32_t n : star_[v]) untried_[n] = 1;
     return true;
@@ -456,27 +539,25 @@ class Collapser {
     return less(before, after);
   }
 
-  void apply(std::uint32_t u, std::uint32_t v, std::vector<std::uint32_t>* touched) {
-    std::vector<std::uint32_t>& touched_ = *touched;
+  void apply(std::uint32_t u, std::uint32_t v, Scratch* scratch) {
+    std::vector<std::uint32_t>& touched_ = scratch->touched;
     touched_.clear();
     touched_.push_back(v);
-    const std::vector<std::uint32_t> star = std::move(star_[u]);
-    star_[u].clear();
+    std::vector<std::uint32_t>& star = scratch->star;
+    star.assign(star_[u].begin(), star_[u].end());
+    star_.clear(u);
     for (const std::uint32_t k : star) {
       std::array<std::uint32_t, 3>& tr = tri_[k];
       for (int c = 0; c < 3; ++c)
         if (tr[c] != u && tr[c] != v) touched_.push_back(tr[c]);
       if (tr[0] == v || tr[1] == v || tr[2] == v) {
         alive_[k] = 0;
-        for (int c = 0; c < 3; ++c) {
-          if (tr[c] == u) continue;
-          std::vector<std::uint32_t>& s = star_[tr[c]];
-          s.erase(std::find(s.begin(), s.end(), k));
-        }
+        for (int c = 0; c < 3; ++c)
+          if (tr[c] != u) star_.erase(tr[c], k);
       } else {
         for (int c = 0; c < 3; ++c)
           if (tr[c] == u) tr[c] = v;
-        star_[v].push_back(k);
+        star_.push(v, k);
       }
     }
     vertex_alive_[u] = 0;
@@ -491,7 +572,7 @@ class Collapser {
   std::vector<std::uint8_t> sides_;
   std::vector<std::array<std::uint32_t, 3>> tri_;
   std::vector<std::uint8_t> alive_, vertex_alive_;
-  std::vector<std::vector<std::uint32_t>> star_;
+  StarTable star_;
   std::vector<std::uint8_t> queued_;
   // flip(): 1 for a triangle not tried since it or a triangle around it last changed (a byte a
   // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
