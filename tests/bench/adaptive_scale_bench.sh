@@ -47,21 +47,9 @@ for n in $sizes; do
   maps+=("synthetic spot $n² (window)|$work/d$n.exr|$work/spot.json")
 done
 if [ -n "$scenes" ]; then
-  n=4097
-  awk -v n="$n" 'BEGIN { s = n - 1; printf "{\"type\": \"directional\", \"position\": [0, 0, 0], \"direction\": [0, 0, -1], \"up\": [0, 1, 0], \"ortho\": [%.17g, %.17g, %.17g, %.17g], \"near\": 0, \"far\": 1, \"depth\": \"linear\"}\n", -0.5 / s, (s + 0.5) / s, -(s + 0.5) / s, 0.5 / s }' > "$work/box.json"
-  for scene in sponza sibenik; do
-    obj="$scenes/$scene/$scene.obj"
-    [ -f "$obj" ] || { echo "(no $obj: $scene skipped)" >&2; continue; }
-    case $scene in  # tessellation_bench.sh's lights
-      sponza) light='"position": [0, 14, -1], "direction": [0, -14, 4], "near": 0.5, "far": 40'; far=40 ;;
-      sibenik) light='"position": [150, 400, 0], "direction": [0.3, -1, 0.0001], "near": 1, "far": 800'; far=800 ;;
-    esac
-    echo "{ \"type\": \"spot\", $light, \"up\": [1, 0, 0], \"fov_y_deg\": 90, \"depth\": \"linear\" }" > "$work/spot_$scene.json"
-    "$build/lightvol" shadowmap "$obj" --light "$work/spot_$scene.json" --size $n --out "$work/shadow.exr" --quiet
-    "$build/tests/bench/heightfield_tool" from "$work/shadow.exr" $n "$(awk -v f=$far 'BEGIN { print 1 / f }')" \
-      "$work/$scene.exr" "$work/$scene.f32"
-    rm -f "$work/$scene.f32"
-    maps+=("$scene spot $n² (depth/far)|$work/$scene.exr|$work/box.json")
+  real_spot_maps "$build" "$scenes" 4097
+  for scene in "${real_maps[@]}"; do
+    maps+=("$scene spot 4097² (depth/far)|$work/$scene.exr|$work/box.json")
   done
 fi
 
