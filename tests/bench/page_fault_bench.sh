@@ -20,7 +20,6 @@ versions=("$build")
 [ -n "$other" ] && versions+=("$other")
 
 real_spot_maps "$build" "$scenes" 4097
-maps=("${real_maps[@]}")
 
 # measure OUT SCENE BUILD: appends "lv_minor lv_major lv_cpu helper_minor helper_major helper_cpu md5".
 # lightvol ends an idle helper that has not ended 0.1 s after its channel closed (killing its process
@@ -51,7 +50,7 @@ col() { cut -d' ' -f"$2" "$1" | median; }
 echo "E = 0.001; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg); $(date -u '+%Y-%m-%d %H:%M')"
 printf '| map | version | lightvol minor faults | lightvol CPU | helper minor faults | helper CPU | output md5 |\n'
 printf '|---|---|---:|---:|---:|---:|---|\n'
-for scene in "${maps[@]}"; do
+for scene in "${real_maps[@]}"; do
   for j in "${!versions[@]}"; do : > "$work/v$j"; done
   for ((i = 0; i < runs; i++)); do
     for j in "${!versions[@]}"; do measure "$work/v$j" "$scene" "${versions[$j]}"; done

@@ -79,6 +79,7 @@ class StarTable {
     return {s.n & kHeap ? heap(s) : s.in, s.n & ~kHeap};
   }
 
+  // Appends k to v's star; only v's slot (and its heap block) changes.
   void push(std::uint32_t v, std::uint32_t k) {
     Slot& s = slots_[v];
     if (!(s.n & kHeap)) {
@@ -296,7 +297,7 @@ class Collapser {
   static constexpr int kStripe = 64;
 
   struct Scratch {
-    std::vector<std::uint32_t> candidates, touched, star;
+    std::vector<std::uint32_t> candidates, touched;
     std::vector<std::uint64_t> keys;
   };
 
@@ -434,7 +435,7 @@ class Collapser {
         }
       }
       if (!ok) continue;
-      apply(u, v, scratch);
+      apply(u, v, &scratch->touched);
       ++r->collapses;
       return true;
     }
@@ -539,14 +540,12 @@ class Collapser {
     return less(before, after);
   }
 
-  void apply(std::uint32_t u, std::uint32_t v, Scratch* scratch) {
-    std::vector<std::uint32_t>& touched_ = scratch->touched;
+  void apply(std::uint32_t u, std::uint32_t v, std::vector<std::uint32_t>* touched) {
+    std::vector<std::uint32_t>& touched_ = *touched;
     touched_.clear();
     touched_.push_back(v);
-    std::vector<std::uint32_t>& star = scratch->star;
-    star.assign(star_[u].begin(), star_[u].end());
-    star_.clear(u);
-    for (const std::uint32_t k : star) {
+    // u's star is read in place: the loop changes only the stars of u's neighbours (v among them).
+    for (const std::uint32_t k : star_[u]) {
       std::array<std::uint32_t, 3>& tr = tri_[k];
       for (int c = 0; c < 3; ++c)
         if (tr[c] != u && tr[c] != v) touched_.push_back(tr[c]);
@@ -560,6 +559,7 @@ class Collapser {
         star_.push(v, k);
       }
     }
+    star_.clear(u);
     vertex_alive_[u] = 0;
   }
 
