@@ -318,13 +318,14 @@ async function main() {
       passesMs = 0;
       for (let i = 0; i < n; ++i) {
         t0 = performance.now();
-        volume.adaptive.generate(volume.lightJson(), volume.copies[0].depthTexture, ...volume.size);
+        volume.adaptive.generate(volume.lightJson(), volume.depthTextures(), ...volume.size);
         wait();
         passesMs += performance.now() - t0;
       }
       passesMs /= n;
     }
     return { frame: frameMs, volume: volumeMs / n, passes: passesMs, rounds: volume.adaptive ? volume.adaptive.roundsRun : null,
+             seamRounds: volume.adaptive && volume.adaptive.omni ? volume.adaptive.seamRoundsRun : null,
              triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });
