@@ -34,7 +34,16 @@
 //                   the read-back count) degenerate.
 //   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
 //                   that edge's closing (spot: a triangle to the apex; directional: two wall
-//                   triangles and one of the cap), others degenerate.
+//                   triangles and one of the cap), others degenerate. Omni: 6 a unit edge of each
+//                   of the 12 seams (its two triangles when it starts a leaf's border edge), 3 a
+//                   corner.
+// Omni lights (LVA_OMNI, six faces in one atlas; each stage above runs over all six) add:
+//   LVA_FORCE       fragment, over the whole atlas at the start of a seam round: the thresholded
+//                   pyramid (lva_threshold) plus the cells along a side that hold a position the
+//                   last round's union forced (lva_forced), build's force_border.
+//   LVA_UNITE       fragment, per position of each of the 24 face sides (lva_forced, W × 24): 1 when
+//                   the union of the seam's two borders holds it, 3 when this side lacks it (then
+//                   LVA_CODE sets bit 30 of the pyramid: another seam round).
 // The pyramid's base is lva_cells (R32UI, base width × height); levels 1..top lie in one RGBA32UI
 // atlas, lva_pyramid, level k a rectangle of max(1, base >> k) texels at lva_px[k], lva_py[k].
 

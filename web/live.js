@@ -14,7 +14,8 @@
 // lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
 // first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
 // the last captured frame and renders). lightvolTime(n): milliseconds per frame (adaptive=E: also
-// the quadtree passes alone, and the fix-up rounds the last frame ran); lightvolTriangles(),
+// the quadtree passes alone, the fix-up rounds the last frame ran and, omni, its seam rounds);
+// lightvolTriangles(),
 // lightvolConverged(): adaptive=E volumes;
 // lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';

@@ -10,7 +10,10 @@
 // pyramid, and one of 9 vertices a border ring edge (the closing). The grid draw's vertex count is
 // the pyramid's top texel, read back (one integer a frame, count: 'readback', the default), or
 // the static volume's triangle count, an upper bound, its surplus vertices degenerate (count:
-// 'bound': no read-back). docs/web.md says which costs what.
+// 'bound': no read-back). docs/web.md says which costs what. A point light's six faces share the
+// atlas (each level's rectangle six faces tall), with build's seam rounds (a pass forcing the
+// border vertices the last round's union asked for, a pass uniting each seam's two borders) and an
+// omni closing draw (the seams' strips and the corners).
 import * as THREE from 'three';
 
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
