@@ -40,8 +40,9 @@
 // Omni lights (LVA_OMNI, six faces in one atlas; each stage above runs over all six) add:
 //   LVA_FORCE       fragment, over the whole atlas at the start of a seam round: the thresholded
 //                   pyramid (lva_threshold) plus the cells along a side that hold a position the
-//                   last round's union forced (lva_forced), build's force_border.
-//   LVA_UNITE       fragment, per position of each of the 24 face sides (lva_forced, W × 24): 1 when
+//                   last round's union forced (lva_forced), build's force_border; a face not
+//                   re-tessellated (lva_dirty) keeps its cells.
+//   LVA_UNITE       fragment, per position of each of the 24 face sides (lva_union, W × 24): 1 when
 //                   the union of the seam's two borders holds it, 3 when this side lacks it (then
 //                   LVA_CODE sets bit 30 of the pyramid: another seam round).
 // The pyramid's base is lva_cells (R32UI, base width × height); levels 1..top lie in one RGBA32UI
@@ -189,9 +190,12 @@ uint pyramid_at(int k, ivec2 q) {
 #ifdef LVA_OMNI
 // The seams (build's omni_adaptive.cpp): positions along a face's side (GridSide: 0 top, 1 right,
 // 2 bottom, 3 left; columns for top and bottom, rows for left and right, 0..W − 1).
-// lva_forced: W × 24 texels, row 4f + side: 1 where the next seam round forces a border vertex (the
-// union of the seam's two borders), 3 where that vertex is not yet on this side (LVA_UNITE).
+// lva_union: W × 24 texels, row 4f + side (LVA_UNITE): 1 where the union of the seam's two borders
+// has a vertex, 3 where that vertex is not yet on this side. lva_forced, the same layout: the
+// border vertices a seam round forces (nonzero), build's BorderSplits: each side the union of the
+// last seam round that found the side lacking a vertex (the host copies those rows over).
 uniform highp usampler2D lva_forced;
+uniform highp usampler2D lva_union;
 // Per face side: the side across the seam, 8 g + 2 side + reversed.
 uniform int lva_across[24];
 
@@ -229,6 +233,11 @@ ivec2 side_leaf(int side, int k) {
     defined(LVA_REDUCE) || defined(LVA_FORCE) || defined(LVA_UNITE)
 uniform int lva_level;  // LVA_OWN, LVA_BALANCE, LVA_REDUCE
 uniform int lva_round;  // LVA_BALANCE, LVA_TEST
+// Omni: bit f set when face f is re-tessellated in this seam round (build's dirty faces: the
+// first round all six, then those a side of which lacked a seam vertex); the others keep their
+// quadtree as it is (LVA_FORCE copies it, LVA_BALANCE keeps it, LVA_TEST fails none of it).
+uniform int lva_dirty;
+bool clean() { return lva_faces == 6 && ((lva_dirty >> lva_f) & 1) == 0; }
 #endif
 #if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
     defined(LVA_FORCE) || defined(LVA_UNITE)
@@ -351,6 +360,10 @@ void main() {
   int i = c.x, j = c.y - lva_f * lva_ny[L];
   uint mark = uint(lva_round) + 1u;
   uint old = split_at(L, i, j);
+  if (clean()) {
+    lva_out = old;
+    return;
+  }
   if (lva_round > 0 && texelFetch(lva_fails, atlas_at(L, i, j), 0).r == uint(lva_round)) {
     lva_out = mark;
     return;
@@ -374,7 +387,7 @@ void main() {
   lva_out = 0u;
   ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 2);
   int L = cl.x, i = cl.y, j = cl.z;
-  if (L < 2 || is_split(L, i, j)) return;
+  if (L < 2 || clean() || is_split(L, i, j)) return;
   uint parent = L == lva_top ? 1u : split_at(L + 1, i / 2, j / 2);
   if (parent == 0u) return;  // not a leaf
   if (lva_round > 1) {
@@ -396,8 +409,8 @@ void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   int c = p.y * lva_base.x + p.x;
 #ifdef LVA_OMNI
-  // Texel c of lva_forced (W × 24): whether a seam still lacks a vertex there.
-  if (c < 24 * lva_map.x && texelFetch(lva_forced, ivec2(c % lva_map.x, c / lva_map.x), 0).r == 3u)
+  // Texel c of lva_union (W × 24): whether a seam still lacks a vertex there.
+  if (c < 24 * lva_map.x && texelFetch(lva_union, ivec2(c % lva_map.x, c / lva_map.x), 0).r == 3u)
     lva_out = kSeam;
 #endif
   if (c >= lva_faces * lva_first[lva_top + 1]) return;
@@ -427,6 +440,10 @@ void main() {
   ivec3 cl = atlas_cell(p, 1);
   int L = cl.x, i = cl.y, j = cl.z;
   if (L == 0) return;
+  if (clean()) {
+    lva_out = texelFetch(lva_splits, p, 0).r;
+    return;
+  }
   if (texelFetch(lva_threshold, p, 0).r != 0u) {
     lva_out = 1u;
     return;

@@ -164,8 +164,8 @@ export class AdaptiveVolume {
       lva_px: { value: new Array(17).fill(0) }, lva_py: { value: new Array(17).fill(0) },
       lva_cells: { value: null }, lva_pyramid: { value: null },
       lva_depth: { value: null }, lva_rays: { value: null },
-      lva_faces: { value: faces }, lva_standard: { value: 63 },
-      lva_forced: { value: null }, lva_threshold: { value: null },
+      lva_faces: { value: faces }, lva_standard: { value: 63 }, lva_dirty: { value: 63 },
+      lva_forced: { value: null }, lva_union: { value: null }, lva_threshold: { value: null },
       lva_across: { value: new Array(24).fill(0) },
       lva_seam: { value: new Array(72).fill(0) }, lva_corner: { value: new Array(72).fill(0) },
     };
@@ -307,9 +307,11 @@ export class AdaptiveVolume {
     if (this.omni) {
       this.threshold = integerTarget(aw, ah);
       this.forced = integerTarget(width, 4 * faces);
-      this.targets.push(this.threshold, this.forced);
+      this.union = integerTarget(width, 4 * faces);
+      this.targets.push(this.threshold, this.forced, this.union);
       u.lva_threshold.value = this.threshold.texture;
       u.lva_forced.value = this.forced.texture;
+      u.lva_union.value = this.union.texture;
     }
     for (const t of this.targets) this.renderer.initRenderTarget(t);
     u.lva_splits.value = this.splits.texture;
@@ -430,21 +432,46 @@ export class AdaptiveVolume {
     // Omni: a seam round tessellates every face from its threshold with the border vertices the
     // last round's union forced (lva_forced; none in the first), as build's OmniRefinement::build
     // does the faces it marked dirty (the others come out as they were: the same input).
-    const tessellate = () => {
+    const tessellate = (dirty = 63) => {
       if (this.omni) {
         ++seamRound;
-        run('FORCE', this.splits, whole, null);
+        u.lva_dirty.value = dirty;
+        run('FORCE', this.scratch, whole, this.splits);
       }
       balance(0);
       clear(this.fails);
       round = 0;
       while (round < this.rounds && this.top >= 2) fixup(++round);
     };
-    const unite = () => { if (this.omni) run('UNITE', this.forced, forced, null); };
+    const unite = () => { if (this.omni) run('UNITE', this.union, forced, null); };
     if (this.omni) {
       copy(this.splits, this.threshold, whole);
       clear(this.forced);
+      clear(this.union);
     }
+    // Omni, after a read-back that found a seam lacking vertices (so no further wait): the sides
+    // that lack one (3 in lva_union) take the union as their forced vertices (a row copied into
+    // lva_forced), and their faces are re-tessellated, as build's unite_seams and dirty faces.
+    // count 'bound' reads nothing: every side takes the union and every face is re-tessellated.
+    const lacking = () => {
+      if (this.count === 'bound') {
+        copy(this.union, this.forced, forced);
+        return 63;
+      }
+      const w = width, out = new Uint32Array(4 * w * 24);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(this.union));
+      gl.readPixels(0, 0, w, 24, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+      let dirty = 0;
+      for (let row = 0; row < 24; ++row) {
+        let lacks = false;
+        for (let k = 0; k < w && !lacks; ++k) lacks = out[4 * (row * w + k)] === 3;
+        if (!lacks) continue;
+        dirty |= 1 << (row >> 2);
+        copy(this.union, this.forced, [0, row, w, 1]);
+      }
+      return dirty;
+    };
     tessellate();
     unite();
     // The count pyramid, from the cells' codes up to its top.
@@ -476,7 +503,7 @@ export class AdaptiveVolume {
     };
     if (this.count === 'bound') {
       while (seamRound < this.seamRounds && this.omni) {
-        tessellate();
+        tessellate(lacking());
         unite();
       }
     }
@@ -487,7 +514,7 @@ export class AdaptiveVolume {
       // round splits nothing; then (omni) while a seam lacks vertices, another seam round.
       for (;;) {
         if (mark !== 0 && round < MAX_ROUNDS) fixup(++round);
-        else if (seam !== 0 && seamRound < 4 * width + 4) tessellate();
+        else if (seam !== 0 && seamRound < 4 * width + 4) tessellate(lacking());
         else break;
         unite();
         build();
@@ -518,7 +545,7 @@ export class AdaptiveVolume {
       const w = this.u.lva_map.value.x, h = 24;
       const seams = new Uint32Array(4 * w * h);
       renderer.resetState();
-      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, renderer.properties.get(this.forced).__webglFramebuffer);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, renderer.properties.get(this.union).__webglFramebuffer);
       gl.readPixels(0, 0, w, h, gl.RGBA_INTEGER, gl.UNSIGNED_INT, seams);
       renderer.resetState();
       for (let k = 0; k < seams.length; k += 4) if (seams[k] === 3) return false;
