@@ -34,7 +34,17 @@
 //                   the read-back count) degenerate.
 //   LVA_EMIT_CLOSE  vertex, 9 a border ring edge p: the edge that starts a leaf's border edge emits
 //                   that edge's closing (spot: a triangle to the apex; directional: two wall
-//                   triangles and one of the cap), others degenerate.
+//                   triangles and one of the cap), others degenerate. Omni: 6 a unit edge of each
+//                   of the 12 seams (its two triangles when it starts a leaf's border edge), 3 a
+//                   corner.
+// Omni lights (LVA_OMNI, six faces in one atlas; each stage above runs over all six) add:
+//   LVA_FORCE       fragment, over the whole atlas at the start of a seam round: the thresholded
+//                   pyramid (lva_threshold) plus the cells along a side that hold a position the
+//                   last round's union forced (lva_forced), build's force_border; a face not
+//                   re-tessellated (lva_dirty) keeps its cells.
+//   LVA_UNITE       fragment, per position of each of the 24 face sides (lva_union, W × 24): 1 when
+//                   the union of the seam's two borders holds it, 3 when this side lacks it (then
+//                   LVA_CODE sets bit 30 of the pyramid: another seam round).
 // The pyramid's base is lva_cells (R32UI, base width × height); levels 1..top lie in one RGBA32UI
 // atlas, lva_pyramid, level k a rectangle of max(1, base >> k) texels at lva_px[k], lva_py[k].
 
@@ -53,7 +63,13 @@ uniform int lva_py[17];
 uniform highp usampler2D lva_fails;    // the last fix-up round's marks (levels 2..top)
 uniform highp usampler2D lva_cells;    // the pyramid's base
 uniform highp usampler2D lva_pyramid;  // its levels 1..top
-const uint kFlag = 0x80000000u, kCount = 0x7fffffffu;
+// Omni lights (LVA_OMNI): six faces' quadtrees in one atlas, level L's rectangle nx(L) × 6 ny(L),
+// face f's cells in its rows f·ny(L) on; lva_f is the face a pass is working on.
+uniform int lva_faces;  // 1, or 6 (LVA_OMNI)
+int lva_f = 0;
+// Bit 31 of a pyramid texel: the last fix-up round split a cell below; bit 30 (omni): a seam's
+// border vertices were not yet on both its faces when the pyramid was built.
+const uint kFlag = 0x80000000u, kSeam = 0x40000000u, kFlags = 0xc0000000u, kCount = 0x3fffffffu;
 
 const uint kSplitTop = 1u, kSplitRight = 2u, kSplitBottom = 4u, kSplitLeft = 8u;
 const uint kQuads = 17u;
@@ -62,8 +78,11 @@ bool in_level(int L, int i, int j) {
   return L >= 1 && L <= lva_top && i >= 0 && j >= 0 && i < lva_nx[L] && j < lva_ny[L];
 }
 
+// Cell (L, i, j) of face lva_f in the atlas.
+ivec2 atlas_at(int L, int i, int j) { return ivec2(lva_ox[L] + i, lva_oy[L] + lva_f * lva_ny[L] + j); }
+
 uint split_at(int L, int i, int j) {
-  return in_level(L, i, j) ? texelFetch(lva_splits, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r : 0u;
+  return in_level(L, i, j) ? texelFetch(lva_splits, atlas_at(L, i, j), 0).r : 0u;
 }
 bool is_split(int L, int i, int j) { return split_at(L, i, j) != 0u; }
 
@@ -124,11 +143,15 @@ int cell_triangles(ivec4 b, int half_, uint config, out ivec2 tri[18]) {
   return n;
 }
 
-// The level and coordinates of the atlas texel p among levels first..top (x: 0 when none).
+// The level and coordinates of the atlas texel p among levels first..top (x: 0 when none); sets
+// lva_f to its face.
 ivec3 atlas_cell(ivec2 p, int first) {
   for (int L = first; L <= lva_top; ++L) {
     ivec2 q = p - ivec2(lva_ox[L], lva_oy[L]);
-    if (q.x >= 0 && q.y >= 0 && q.x < lva_nx[L] && q.y < lva_ny[L]) return ivec3(L, q);
+    if (q.x >= 0 && q.y >= 0 && q.x < lva_nx[L] && q.y < lva_faces * lva_ny[L]) {
+      lva_f = q.y / lva_ny[L];
+      return ivec3(L, q.x, q.y - lva_f * lva_ny[L]);
+    }
   }
   return ivec3(0);
 }
@@ -141,8 +164,10 @@ int code_triangles(uint code, ivec4 b) {
   return 2 + int(config & 1u) + int((config >> 1) & 1u) + int((config >> 2) & 1u) + int(config >> 3);
 }
 
-// The level and coordinates of cell c (lva_first's numbering).
+// The level and coordinates of cell c (lva_first's numbering, face by face); sets lva_f.
 ivec3 cell_of(int c) {
+  lva_f = c / lva_first[lva_top + 1];
+  c -= lva_f * lva_first[lva_top + 1];
   int L = 1;
   while (L < lva_top && c >= lva_first[L + 1]) ++L;
   int k = c - lva_first[L];
@@ -155,19 +180,67 @@ ivec2 level_size(int k) { return max(lva_base >> k, ivec2(1)); }
 uint pyramid_at(int k, ivec2 q) {
   if (k == 0) {
     uint v = texelFetch(lva_cells, q, 0).r;
-    return (v & kFlag) | (v & 15u);
+    return (v & kFlags) | (v & 15u);
   }
   uvec4 c = texelFetch(lva_pyramid, ivec2(lva_px[k], lva_py[k]) + q, 0);
   uvec4 n = c & kCount;
-  return (n.x + n.y + n.z + n.w) | ((c.x | c.y | c.z | c.w) & kFlag);
+  return (n.x + n.y + n.z + n.w) | ((c.x | c.y | c.z | c.w) & kFlags);
 }
 
+#ifdef LVA_OMNI
+// The seams (build's omni_adaptive.cpp): positions along a face's side (GridSide: 0 top, 1 right,
+// 2 bottom, 3 left; columns for top and bottom, rows for left and right, 0..W − 1).
+// lva_union: W × 24 texels, row 4f + side (LVA_UNITE): 1 where the union of the seam's two borders
+// has a vertex, 3 where that vertex is not yet on this side. lva_forced, the same layout: the
+// border vertices a seam round forces (nonzero), build's BorderSplits: each side the union of the
+// last seam round that found the side lacking a vertex (the host copies those rows over).
+uniform highp usampler2D lva_forced;
+uniform highp usampler2D lva_union;
+// Per face side: the side across the seam, 8 g + 2 side + reversed.
+uniform int lva_across[24];
+
+// Cell (level L, index k along the side) of face lva_f's border row or column on `side`.
+ivec2 side_cell(int L, int side, int k) {
+  return side == 0 ? ivec2(k, 0) : side == 2 ? ivec2(k, lva_ny[L] - 1) : side == 3 ? ivec2(0, k)
+                                                                                   : ivec2(lva_nx[L] - 1, k);
+}
+
+// Whether position p of side `side` of face f is a vertex of the face's quadtree: a corner, or a
+// position inside (not at the ends of) the smallest cell along the side that has it inside, split.
+bool border_vertex(int f, int side, int p) {
+  int n = lva_map.x - 1;
+  if (p <= 0 || p >= n) return true;
+  int l = 0;
+  while (((p >> l) & 1) == 0) ++l;
+  int L = l + 1;
+  lva_f = f;
+  ivec2 c = side_cell(L, side, p >> L);
+  return is_split(L, c.x, c.y);
+}
+
+// Face lva_f's leaf along `side` that holds the unit edge [k, k + 1] of the side: its edge's ends.
+ivec2 side_leaf(int side, int k) {
+  int n = lva_map.x - 1;
+  for (int L = lva_top; L >= 1; --L) {
+    ivec2 c = side_cell(L, side, k >> L);
+    if (!is_split(L, c.x, c.y)) return ivec2((k >> L) << L, min(((k >> L) + 1) << L, n));
+  }
+  return ivec2(k, k + 1);
+}
+#endif
+
 #if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
-    defined(LVA_REDUCE)
+    defined(LVA_REDUCE) || defined(LVA_FORCE) || defined(LVA_UNITE)
 uniform int lva_level;  // LVA_OWN, LVA_BALANCE, LVA_REDUCE
 uniform int lva_round;  // LVA_BALANCE, LVA_TEST
+// Omni: bit f set when face f is re-tessellated in this seam round (build's dirty faces: the
+// first round all six, then those a side of which lacked a seam vertex); the others keep their
+// quadtree as it is (LVA_FORCE copies it, LVA_BALANCE keeps it, LVA_TEST fails none of it).
+uniform int lva_dirty;
+bool clean() { return lva_faces == 6 && ((lva_dirty >> lva_f) & 1) == 0; }
 #endif
-#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE)
+#if defined(LVA_OWN) || defined(LVA_BALANCE) || defined(LVA_TEST) || defined(LVA_CODE) || \
+    defined(LVA_FORCE) || defined(LVA_UNITE)
 layout(location = 0) out uint lva_out;
 #elif defined(LVA_REDUCE)
 layout(location = 0) out uvec4 lva_out;
@@ -184,14 +257,31 @@ layout(location = 0) out uvec4 lva_out;
 // The plane's dp − d = (d0 − d) + (d1 − d0)·β + (d2 − d0)·γ in the triangle's barycentrics: its
 // rounding is at most a few units of 2^-24 times M = |d0 − d| + |d1 − d0|·β + |d2 − d0|·γ, and
 // the rest of the measure's a few units relative; the margin allows 32 of each.
+#ifdef LVA_OMNI
+uniform highp sampler2D lva_depth[6];  // the six faces' maps (window depth), texture rows bottom-up
+#else
 uniform highp sampler2D lva_depth;  // the shadow map (window depth), texture rows bottom-up
+#endif
 uniform highp sampler2D lva_rays;   // per texel, build's rows: K, d∞ hi, d∞ lo
 uniform int lva_uniform;
 uniform float lva_scale;
 uniform float lva_bound;  // the largest float <= E
 const float kUnit = 5.9604645e-8;  // 2^-24
 
+#ifdef LVA_OMNI
+// (GLSL ES 3.00 indexes sampler arrays by constants only.)
+float d_at(int x, int y) {
+  ivec2 t = ivec2(x, lva_map.y - 1 - y);
+  if (lva_f == 0) return texelFetch(lva_depth[0], t, 0).r;
+  if (lva_f == 1) return texelFetch(lva_depth[1], t, 0).r;
+  if (lva_f == 2) return texelFetch(lva_depth[2], t, 0).r;
+  if (lva_f == 3) return texelFetch(lva_depth[3], t, 0).r;
+  if (lva_f == 4) return texelFetch(lva_depth[4], t, 0).r;
+  return texelFetch(lva_depth[5], t, 0).r;
+}
+#else
 float d_at(int x, int y) { return texelFetch(lva_depth, ivec2(x, lva_map.y - 1 - y), 0).r; }
+#endif
 
 // Whether a texel of box b lies farther than E (with the margin) from the cell's triangles in
 // configuration `config`.
@@ -251,7 +341,8 @@ bool cell_fails(ivec4 b, int half_, uint config) {
 void main() {
   int L = lva_level;
   ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
-  int i = c.x, j = c.y;
+  lva_f = c.y / lva_ny[L];
+  int i = c.x, j = c.y - lva_f * lva_ny[L];
   if (L > 1 && (is_split(L - 1, 2 * i, 2 * j) || is_split(L - 1, 2 * i + 1, 2 * j) ||
                 is_split(L - 1, 2 * i, 2 * j + 1) || is_split(L - 1, 2 * i + 1, 2 * j + 1))) {
     lva_out = 1u;
@@ -265,11 +356,15 @@ void main() {
 void main() {
   int L = lva_level;
   ivec2 c = ivec2(gl_FragCoord.xy) - ivec2(lva_ox[L], lva_oy[L]);
-  int i = c.x, j = c.y;
+  lva_f = c.y / lva_ny[L];
+  int i = c.x, j = c.y - lva_f * lva_ny[L];
   uint mark = uint(lva_round) + 1u;
   uint old = split_at(L, i, j);
-  if (lva_round > 0 &&
-      texelFetch(lva_fails, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r == uint(lva_round)) {
+  if (clean()) {
+    lva_out = old;
+    return;
+  }
+  if (lva_round > 0 && texelFetch(lva_fails, atlas_at(L, i, j), 0).r == uint(lva_round)) {
     lva_out = mark;
     return;
   }
@@ -292,7 +387,7 @@ void main() {
   lva_out = 0u;
   ivec3 cl = atlas_cell(ivec2(gl_FragCoord.xy), 2);
   int L = cl.x, i = cl.y, j = cl.z;
-  if (L < 2 || is_split(L, i, j)) return;
+  if (L < 2 || clean() || is_split(L, i, j)) return;
   uint parent = L == lva_top ? 1u : split_at(L + 1, i / 2, j / 2);
   if (parent == 0u) return;  // not a leaf
   if (lva_round > 1) {
@@ -313,7 +408,12 @@ void main() {
   lva_out = 0u;
   ivec2 p = ivec2(gl_FragCoord.xy);
   int c = p.y * lva_base.x + p.x;
-  if (c >= lva_first[lva_top + 1]) return;
+#ifdef LVA_OMNI
+  // Texel c of lva_union (W × 24): whether a seam still lacks a vertex there.
+  if (c < 24 * lva_map.x && texelFetch(lva_union, ivec2(c % lva_map.x, c / lva_map.x), 0).r == 3u)
+    lva_out = kSeam;
+#endif
+  if (c >= lva_faces * lva_first[lva_top + 1]) return;
   ivec3 cl = cell_of(c);
   int L = cl.x, i = cl.y, j = cl.z;
   bool split = is_split(L, i, j);
@@ -324,8 +424,54 @@ void main() {
   } else if (!split && (L == lva_top || is_split(L + 1, i / 2, j / 2))) {
     code = 1u + config_of(L, i, j, b);
   }
-  uint mark = L >= 2 ? texelFetch(lva_fails, ivec2(lva_ox[L] + i, lva_oy[L] + j), 0).r : 0u;
-  lva_out = code << 4 | uint(code_triangles(code, b)) | (mark != 0u ? kFlag : 0u);
+  uint mark = L >= 2 ? texelFetch(lva_fails, atlas_at(L, i, j), 0).r : 0u;
+  lva_out |= code << 4 | uint(code_triangles(code, b)) | (mark != 0u ? kFlag : 0u);
+}
+#endif
+
+#ifdef LVA_FORCE
+// Omni, the start of a seam round, over the whole atlas: a cell splits when its threshold did, or
+// when it lies along a side with a forced position inside it (RefinementPyramid::tessellate's
+// force_border: every cell whose interior along the side holds the position).
+uniform highp usampler2D lva_threshold;
+void main() {
+  lva_out = 0u;
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  ivec3 cl = atlas_cell(p, 1);
+  int L = cl.x, i = cl.y, j = cl.z;
+  if (L == 0) return;
+  if (clean()) {
+    lva_out = texelFetch(lva_splits, p, 0).r;
+    return;
+  }
+  if (texelFetch(lva_threshold, p, 0).r != 0u) {
+    lva_out = 1u;
+    return;
+  }
+  int s = 1 << L, n = lva_map.x - 1;
+  for (int side = 0; side < 4; ++side) {
+    bool on = side == 0 ? j == 0 : side == 2 ? j == lva_ny[L] - 1 : side == 3 ? i == 0 : i == lva_nx[L] - 1;
+    if (!on) continue;
+    int k = side == 0 || side == 2 ? i : j;
+    for (int q = k * s + 1; q < min(k * s + s, n); ++q)
+      if (texelFetch(lva_forced, ivec2(q, 4 * lva_f + side), 0).r != 0u) {
+        lva_out = 1u;
+        return;
+      }
+  }
+}
+#endif
+
+#ifdef LVA_UNITE
+// Omni, the end of a seam round, per position p of face f's side (texel (p, 4f + side)): the
+// union of the seam's two borders (build's unite_seams), 3 where this side lacks it.
+void main() {
+  ivec2 t = ivec2(gl_FragCoord.xy);
+  int f = t.y / 4, side = t.y - 4 * f, p = t.x;
+  int across = lva_across[t.y], g = across / 8, gside = (across / 2) % 4;
+  bool mine = border_vertex(f, side, p);
+  bool theirs = border_vertex(g, gside, (across & 1) == 1 ? lva_map.x - 1 - p : p);
+  lva_out = mine ? 1u : theirs ? 3u : 0u;
 }
 #endif
 
@@ -345,11 +491,19 @@ uniform mat4 view_projection;
 out vec3 world;
 // For read-back by transform feedback (tests): kind << 28 | col << 14 | row; kind 0 none (a
 // degenerate triangle's vertex), 1 grid vertex of texel (col, row), 2 the apex, 3 the near-plane
-// copy of texel (col, row), 4 the cap's centre (col and row 0 for kinds 0, 2 and 4).
+// copy of texel (col, row), 4 the cap's centre (col and row 0 for kinds 0, 2 and 4), 8 + f grid
+// vertex of texel (col, row) of omni face f.
 flat out uint lva_vertex;
+uniform int lva_standard;  // omni: bit f set when face f's grid is wound as the standard one
 
 void emit(int kind, ivec2 t) {
-  lva_vertex = kind == 1 || kind == 3 ? uint(kind) << 28 | uint(t.x) << 14 | uint(t.y) : uint(kind) << 28;
+  lva_vertex = kind == 1 || kind == 3 || kind >= 8 ? uint(kind) << 28 | uint(t.x) << 14 | uint(t.y)
+                                                   : uint(kind) << 28;
+  if (kind >= 8) {
+    world = (live_eye_to_world[kind - 8] * vec4(live_grid_point(kind - 8, t), 1.0)).xyz;
+    gl_Position = view_projection * vec4(world, 1.0);
+    return;
+  }
   if (kind == 0) {
     world = vec3(0.0);
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: the triangle is culled
@@ -398,22 +552,67 @@ void main() {
   uint code = (texelFetch(lva_cells, p, 0).r & kCount) >> 4;
   ivec3 cl = cell_of(p.y * lva_base.x + p.x);
   int L = cl.x, i = cl.y, j = cl.z, tt = int(rest);
+#ifdef LVA_OMNI
+  int kind = 8 + lva_f;
+  if (((lva_standard >> lva_f) & 1) == 0 && corner != 0) corner = 3 - corner;  // build's winding
+#else
+  int kind = 1;
   if (live_standard == 0 && corner != 0) corner = 3 - corner;  // build's winding
+#endif
   ivec4 b = cell_box(L, i, j);
   ivec2 tri[18];
   if (code == kQuads) {
     int qx = b.z - b.x, q = tt / 2;  // the cell's quads inside the map, row by row
     ivec2 quad = b.xy + ivec2(q % qx, q / qx);
     cell_triangles(ivec4(quad, quad + 1), 0, 0u, tri);
-    emit(1, tri[3 * (tt % 2) + corner]);
+    emit(kind, tri[3 * (tt % 2) + corner]);
     return;
   }
   cell_triangles(b, 1 << (L - 1), code - 1u, tri);
-  emit(1, tri[3 * tt + corner]);
+  emit(kind, tri[3 * tt + corner]);
 }
 #endif
 
-#ifdef LVA_EMIT_CLOSE
+#if defined(LVA_EMIT_CLOSE) && defined(LVA_OMNI)
+// The omni closing (build's OmniRefinement::build): 6 vertices for each unit edge k of each seam's
+// first side, the seam's two triangles between the border vertices at k and the next one (when
+// k is one), then 3 for each of the eight corners.
+uniform int lva_seam[72];    // per seam: face, side, face across, its side, reversed, flip
+uniform int lva_corner[72];  // per corner, 3 × (face, last column, last row)
+
+ivec2 side_texel(int side, int position) {
+  int n = lva_map.x - 1;
+  return side == 0 ? ivec2(position, 0) : side == 2 ? ivec2(position, n) : side == 3 ? ivec2(0, position)
+                                                                                     : ivec2(n, position);
+}
+
+void main() {
+  int n = lva_map.x - 1, id = gl_VertexID;
+  if (id >= 72 * n) {
+    int c = (id - 72 * n) / 3, m = id - 72 * n - 3 * c;
+    int f = lva_corner[9 * c + 3 * m];
+    emit(8 + f, ivec2(lva_corner[9 * c + 3 * m + 1] * n, lva_corner[9 * c + 3 * m + 2] * n));
+    return;
+  }
+  int s = id / (6 * n), k = (id / 6) % n, v = id % 6;
+  int fa = lva_seam[6 * s], sa = lva_seam[6 * s + 1], fb = lva_seam[6 * s + 2], sb = lva_seam[6 * s + 3];
+  bool reversed = lva_seam[6 * s + 4] == 1, flip = lva_seam[6 * s + 5] == 1;
+  lva_f = fa;
+  ivec2 e = side_leaf(sa, k);
+  if (e.x != k) {
+    emit(0, ivec2(0));
+    return;
+  }
+  // a0 = (fa, e.x), a1 = (fa, e.y), b0 = (fb, e.x), b1 = (fb, e.y); (a0, a1, b0), (a1, b1, b0),
+  // the last two corners swapped when flip.
+  int t = v / 3, corner = v - 3 * t;
+  if (flip && corner != 0) corner = 3 - corner;
+  bool across = t == 0 ? corner == 2 : corner != 0;
+  int position = t == 0 ? (corner == 1 ? e.y : e.x) : (corner == 2 ? e.x : e.y);
+  if (across) emit(8 + fb, side_texel(sb, reversed ? n - position : position));
+  else emit(8 + fa, side_texel(sa, position));
+}
+#elif defined(LVA_EMIT_CLOSE)
 void main() {
   int p = gl_VertexID / 9, v = gl_VertexID - 9 * p;
   int perimeter = 2 * (lva_map.x - 1) + 2 * (lva_map.y - 1);

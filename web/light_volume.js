@@ -337,8 +337,9 @@ export class LightVolume {
   // height (the airlight target: the camera's image in pixels), medium (lightvol's medium JSON:
   // scattering, absorption, intensity, phase, profile; intensity defaults to the light's), cone
   // (spot lights: shafts only in the SpotLight's cone, as three.js lights it; default true),
-  // maxError (spot and directional lights: build's adaptive volume at that bound, `--adaptive
-  // --max-error E --tessellation quadtree`, made on the GPU each frame: live_adaptive.js; with
+  // maxError (build's adaptive volume at that bound, `--adaptive --max-error E --tessellation
+  // quadtree`, made on the GPU each frame: live_adaptive.js; point lights: six faces with build's
+  // seam rounds and omni closing; with
   // adaptiveGlsl, loadAdaptiveShader()'s text), rounds (its fix-up rounds a frame, default 4) and
   // count ('readback', the default, or 'bound': how its grid draw is sized, live_adaptive.js),
   // resolution (a scale in (0, 1], default 1: the volume's airlight computed on an image that
@@ -366,9 +367,6 @@ export class LightVolume {
     this.light = light;
     this.gl = gl;
     this.type = light.isSpotLight ? 'spot' : light.isDirectionalLight ? 'directional' : 'omni';
-    if (maxError !== undefined && this.type === 'omni')
-      throw new Error('LightVolume: maxError (an adaptive volume) takes spot and directional lights; ' +
-                      'point lights have static volumes only');
     if (!(resolution > 0 && resolution <= 1))
       throw new Error(`LightVolume: resolution ${resolution}: a scale in (0, 1] of the camera's image`);
     this.airlight = new AirlightRenderer(renderer, glsl, { width, height, resolution });
@@ -419,7 +417,7 @@ export class LightVolume {
     this.adaptive = null;
     if (maxError !== undefined) {
       this.adaptive = new AdaptiveVolume(renderer, glsl, adaptiveGlsl, {
-        maxError, rounds, count, live: this.live, volumeState: a.volumeState,
+        maxError, rounds, count, live: this.live, volumeState: a.volumeState, faces: this.type === 'omni' ? OMNI_FACES : 1,
         volumeUniforms: { ...a.common, surface: vu.surface, baseline: vu.baseline, panels: vu.panels,
                           facing_sign: vu.facing_sign },
         fragmentShader: stageSource(glsl, 'LIGHTVOL_VOLUME_FRAGMENT') });
@@ -496,7 +494,7 @@ export class LightVolume {
     const json = lightJson(light);
     this.lastLight = json;
     this.setUniforms(json);
-    if (this.adaptive) this.adaptive.generate(json, this.copies[0].depthTexture, ...this.size);
+    if (this.adaptive) this.adaptive.generate(json, this.depthTextures(), ...this.size);
     const frame = parseFrame(json);
     airlight.setLight(frame);
     this.lastMedium = this.mediumJson();
@@ -517,6 +515,11 @@ export class LightVolume {
       scene.overrideMaterial = override;
       renderer.shadowMap.autoUpdate = shadowUpdate;
     }
+  }
+
+  // The copied maps the adaptive volume reads: one, or an omni light's six.
+  depthTextures() {
+    return this.type === 'omni' ? this.copies.map((t) => t.depthTexture) : this.copies[0].depthTexture;
   }
 
   // The shadow map's depth into this addon's own depth textures (a blit: three.js's depth texture
@@ -610,10 +613,17 @@ export class LightVolume {
       u.live_cap.value.copy(t.nearPoint(0, 0).add(t.nearPoint(width - 1, 0)).add(t.nearPoint(0, height - 1))
                              .add(t.nearPoint(width - 1, height - 1)).multiplyScalar(0.25));
     }
-    if (this.adaptive) return;  // made on the GPU each frame (render())
     // The triangles depend on the size and the windings only.
     const key = `${width}x${height}:${texels.map((t) => (t.standard ? 1 : 0)).join('')}`;
     if (this.indicesFor === key) return;
+    if (this.adaptive) {  // made on the GPU each frame (render()); omni: its faces' windings and seams
+      if (omni) {
+        const small = views.map((v) => new Texels(v, projection, 2, 2, false, false));
+        this.adaptive.setOmni(texels.map((t) => t.standard), omniAdjacency(small));
+      }
+      this.indicesFor = key;
+      return;
+    }
     let indices;
     if (omni) {
       const small = views.map((v) => new Texels(v, projection, 2, 2, false, false));

@@ -14,7 +14,8 @@
 // lightvolIndices(), lightvolPositions() and lightvolFrame() give the frame captured last: the
 // first, or the one lightvolStep(n) rendered (it stops the animation, advances it n frames from
 // the last captured frame and renders). lightvolTime(n): milliseconds per frame (adaptive=E: also
-// the quadtree passes alone, and the fix-up rounds the last frame ran); lightvolTriangles(),
+// the quadtree passes alone, the fix-up rounds the last frame ran and, omni, its seam rounds);
+// lightvolTriangles(),
 // lightvolConverged(): adaptive=E volumes;
 // lightvolResize(w, h): LightVolume.setSize there and back (tests).
 import * as THREE from 'three';
@@ -318,13 +319,14 @@ async function main() {
       passesMs = 0;
       for (let i = 0; i < n; ++i) {
         t0 = performance.now();
-        volume.adaptive.generate(volume.lightJson(), volume.copies[0].depthTexture, ...volume.size);
+        volume.adaptive.generate(volume.lightJson(), volume.depthTextures(), ...volume.size);
         wait();
         passesMs += performance.now() - t0;
       }
       passesMs /= n;
     }
     return { frame: frameMs, volume: volumeMs / n, passes: passesMs, rounds: volume.adaptive ? volume.adaptive.roundsRun : null,
+             seamRounds: volume.adaptive && volume.adaptive.omni ? volume.adaptive.seamRoundsRun : null,
              triangles: volume.adaptive ? volume.readTriangles().length : volume.triangles, size: volume.size };
   };
   gizmo.addEventListener('dragging-changed', (e) => { orbit.enabled = !e.value; });

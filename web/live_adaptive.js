@@ -10,7 +10,10 @@
 // pyramid, and one of 9 vertices a border ring edge (the closing). The grid draw's vertex count is
 // the pyramid's top texel, read back (one integer a frame, count: 'readback', the default), or
 // the static volume's triangle count, an upper bound, its surplus vertices degenerate (count:
-// 'bound': no read-back). docs/web.md says which costs what.
+// 'bound': no read-back). docs/web.md says which costs what. A point light's six faces share the
+// atlas (each level's rectangle six faces tall), with build's seam rounds (a pass forcing the
+// border vertices the last round's union asked for, a pass uniting each seam's two borders) and an
+// omni closing draw (the seams' strips and the corners).
 import * as THREE from 'three';
 
 const PREFIX = 'precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n';
@@ -87,6 +90,22 @@ function applyUniforms(gl, renderer, program, uniforms) {
   }
 }
 
+// An omni light's face f as lightvol sees it, in double: view omni_face_view (look_at) and
+// projection perspective(90°, 1, near, far), rows. The measure's per-texel constants are the same
+// for the six faces (a rigid view changes neither G nor w), so face 0's serve them all.
+export function omniFace(json, f) {
+  const look = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]][f];
+  const up = [[0, -1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [0, -1, 0], [0, -1, 0]][f];
+  const norm = (v) => { const l = Math.hypot(...v); return v.map((x) => x / l); };
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const e = json.position, fw = norm(look), sd = norm(cross(fw, up)), uu = cross(sd, fw);
+  const view = [[...sd, -dot(sd, e)], [...uu, -dot(uu, e)], [-fw[0], -fw[1], -fw[2], dot(fw, e)], [0, 0, 0, 1]];
+  const t = 1 / Math.tan(90 * Math.PI / 360), { near, far } = json;
+  const projection = [[t, 0, 0, 0], [0, t, 0, 0], [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]];
+  return { type: 'omni', view, projection };
+}
+
 export class AdaptiveVolume {
   // The text of shaders/live_adaptive_webgl.glsl (beside shaders/airlight.glsl).
   static async loadShader(url = SHADER_URL) {
@@ -103,7 +122,12 @@ export class AdaptiveVolume {
   // split a cell, so every frame converges; bound: default 4 and no more, build's quadtree needs
   // at most 1 on the demo's maps; converged() tells).
   // live: LightVolume's live-stage uniforms; volumeUniforms: the volume pass's.
-  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds, count = 'readback', live, volumeUniforms, volumeState, fragmentShader }) {
+  // faces: 6 for a point light (omni: the six cube faces' quadtrees in one atlas, with build's seam
+  // rounds and omni closing; setOmni() gives the faces' windings and adjacency), else 1;
+  // seamRounds: with count 'bound', the seam rounds a frame runs (default 8; readback: until the
+  // seams agree, one read-back a round).
+  constructor(renderer, glsl, adaptiveGlsl, { maxError, rounds, count = 'readback', live, volumeUniforms, volumeState, fragmentShader,
+                                              faces = 1, seamRounds = 8 }) {
     if (!(Number.isFinite(maxError) && maxError >= 0))
       throw new Error(`LightVolume: maxError: expected a finite number >= 0, got ${maxError}`);
     rounds ??= count === 'readback' ? 1 : 4;
@@ -120,6 +144,9 @@ export class AdaptiveVolume {
     this.rounds = rounds;
     this.count = count;
     this.live = live;
+    this.faces = faces;
+    this.omni = faces === 6;
+    this.seamRounds = seamRounds;
     this.key = null;
     this.raysKey = null;
     const zeros = () => new Array(16).fill(0);
@@ -137,10 +164,15 @@ export class AdaptiveVolume {
       lva_px: { value: new Array(17).fill(0) }, lva_py: { value: new Array(17).fill(0) },
       lva_cells: { value: null }, lva_pyramid: { value: null },
       lva_depth: { value: null }, lva_rays: { value: null },
+      lva_faces: { value: faces }, lva_standard: { value: 63 }, lva_dirty: { value: 63 },
+      lva_forced: { value: null }, lva_union: { value: null }, lva_threshold: { value: null },
+      lva_across: { value: new Array(24).fill(0) },
+      lva_seam: { value: new Array(72).fill(0) }, lva_corner: { value: new Array(72).fill(0) },
     };
+    this.define = this.omni ? '#define LVA_OMNI\n' : '';
     this.passes = {};
-    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE', 'REDUCE'])
-      this.passes[stage] = this.program(FULL_SCREEN, `#version 300 es\n${PREFIX}#define LVA_${stage}\n${adaptiveGlsl}`);
+    for (const stage of ['OWN', 'BALANCE', 'TEST', 'CODE', 'REDUCE', ...(this.omni ? ['FORCE', 'UNITE'] : [])])
+      this.passes[stage] = this.program(FULL_SCREEN, `#version 300 es\n${PREFIX}${this.define}#define LVA_${stage}\n${adaptiveGlsl}`);
     this.vao = this.gl.createVertexArray();
     const material = (stage) => new THREE.RawShaderMaterial({
       glslVersion: THREE.GLSL3,
@@ -163,7 +195,26 @@ export class AdaptiveVolume {
   }
 
   emitSource(stage) {
-    return `${PREFIX}#define LIGHTVOL_LIVE_COMMON\n#define LVA_EMIT_${stage}\n${this.glsl}\n${this.adaptiveGlsl}`;
+    return `${PREFIX}${this.define}#define LIGHTVOL_LIVE_COMMON\n#define LVA_EMIT_${stage}\n${this.glsl}\n${this.adaptiveGlsl}`;
+  }
+
+  // Omni: the faces' windings (standard[f]: face f's grid wound as the standard one) and the cube's
+  // adjacency (light_volume.js omniAdjacency: seams { face, border, reversed, flip }, corners
+  // { face, lastCol, lastRow }), as build's omni_adjacency gives them.
+  setOmni(standard, adjacency) {
+    const side = { top: 0, right: 1, bottom: 2, left: 3 };
+    const u = this.u;
+    u.lva_standard.value = standard.reduce((m, s, f) => m | (s ? 1 << f : 0), 0);
+    adjacency.seams.forEach((seam, k) => {
+      const [a, b] = seam.face, [sa, sb] = seam.border.map((x) => side[x]);
+      u.lva_seam.value.splice(6 * k, 6, a, sa, b, sb, seam.reversed ? 1 : 0, seam.flip ? 1 : 0);
+      u.lva_across.value[4 * a + sa] = 8 * b + 2 * sb + (seam.reversed ? 1 : 0);
+      u.lva_across.value[4 * b + sb] = 8 * a + 2 * sa + (seam.reversed ? 1 : 0);
+    });
+    adjacency.corners.forEach((c, k) => {
+      for (let m = 0; m < 3; ++m)
+        u.lva_corner.value.splice(9 * k + 3 * m, 3, c.face[m], c.lastCol[m] ? 1 : 0, c.lastRow[m] ? 1 : 0);
+    });
   }
 
   program(vertex, fragment, feedback = null) {
@@ -187,8 +238,11 @@ export class AdaptiveVolume {
   }
 
   // The quadtree of a W × H map (detail::Quadtree: levels 1..top, at least one) and its atlas:
-  // level 1 at (0, 0), levels 2..top stacked to its right.
+  // level 1 at (0, 0), levels 2..top stacked to its right; each level a rectangle of nx × faces·ny
+  // cells, face f's from row f·ny.
   resize(width, height) {
+    if (this.omni && width !== height) throw new Error(`LightVolume: a point light's faces are ${width}x${height}: not square`);
+    const faces = this.faces;
     const key = `${width}x${height}`;
     if (this.key === key) return;
     this.key = key;
@@ -214,13 +268,14 @@ export class AdaptiveVolume {
       } else {
         u.lva_ox.value[L] = u.lva_nx.value[1];
         u.lva_oy.value[L] = y;
-        y += ny;
+        y += faces * ny;
       }
     }
     u.lva_first.value[top + 1] = cells;
+    cells *= faces;
     this.cells = cells;
     this.top = top;
-    this.atlas = [u.lva_nx.value[1] + (top >= 2 ? u.lva_nx.value[2] : 0), Math.max(u.lva_ny.value[1], y)];
+    this.atlas = [u.lva_nx.value[1] + (top >= 2 ? u.lva_nx.value[2] : 0), Math.max(faces * u.lva_ny.value[1], y)];
     this.column = [u.lva_nx.value[1], 0, top >= 2 ? u.lva_nx.value[2] : 0, y];  // levels 2..top
     for (const t of this.targets) t.dispose();
     const [aw, ah] = this.atlas;
@@ -249,6 +304,15 @@ export class AdaptiveVolume {
     this.pyramid = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
     this.pyramidScratch = integerTarget(...this.pyramidAtlas, 'RGBA32UI');
     this.targets = [this.splits, this.scratch, this.fails, this.cellsTarget, this.pyramid, this.pyramidScratch];
+    if (this.omni) {
+      this.threshold = integerTarget(aw, ah);
+      this.forced = integerTarget(width, 4 * faces);
+      this.union = integerTarget(width, 4 * faces);
+      this.targets.push(this.threshold, this.forced, this.union);
+      u.lva_threshold.value = this.threshold.texture;
+      u.lva_forced.value = this.forced.texture;
+      u.lva_union.value = this.union.texture;
+    }
     for (const t of this.targets) this.renderer.initRenderTarget(t);
     u.lva_splits.value = this.splits.texture;
     u.lva_fails.value = this.fails.texture;
@@ -259,14 +323,18 @@ export class AdaptiveVolume {
     this.base = [bw, bh];
     this.levels = levels;
     this.perimeter = 2 * cw + 2 * ch;
-    this.bound = 2 * cw * ch;  // the static volume's grid triangles: no quadtree has more
+    this.bound = faces * 2 * cw * ch;  // the static volume's grid triangles: no quadtree has more
+    // The closing's vertices: 9 a border ring edge; omni: 6 a unit edge of each of the 12 seams,
+    // 3 a corner.
+    this.closeVertices = this.omni ? 72 * cw + 24 : CLOSE_VERTICES * this.perimeter;
     this.gridGeometry.setDrawRange(0, 3 * this.bound);
-    this.closeGeometry.setDrawRange(0, CLOSE_VERTICES * this.perimeter);
+    this.closeGeometry.setDrawRange(0, this.closeVertices);
   }
 
   // The measure's per-texel constants (TexelDepths::create, in double): orthographic lights a
   // uniform scale; perspective ones K = G / w1² and d∞ = −w0 / w1 as two floats (the GLSL file).
   prepareRays(json, width, height) {
+    if (json.type === 'omni') json = omniFace(json, 0);
     const key = `${width}x${height}:${json.projection.flat().join(',')}`;
     if (this.raysKey === key) return;
     this.raysKey = key;
@@ -308,8 +376,9 @@ export class AdaptiveVolume {
     u.lva_rays.value = this.rays;
   }
 
-  // The frame's quadtree, from `depth` (the copied shadow map, a THREE.DepthTexture) of light JSON
-  // `json`: after LightVolume set the live uniforms, before the volume is drawn.
+  // The frame's quadtree, from `depth` (the copied shadow map, a THREE.DepthTexture; omni: the six
+  // faces', an array) of light JSON `json`: after LightVolume set the live uniforms, before the
+  // volume is drawn.
   generate(json, depth, width, height) {
     const { gl, renderer, u } = this;
     this.resize(width, height);
@@ -317,10 +386,19 @@ export class AdaptiveVolume {
     u.lva_depth.value = depth;
     const props = renderer.properties;
     const fbo = (t) => props.get(t).__webglFramebuffer;
+    const clear = (t) => {
+      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(t));
+      gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
+    };
+    const copy = (from, to, [x, y, w, h]) => {
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(from));
+      gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(to));
+      gl.blitFramebuffer(x, y, x + w, y + h, x, y, x + w, y + h, gl.COLOR_BUFFER_BIT, gl.NEAREST);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+    };
     renderer.resetState();
     gl.bindVertexArray(this.vao);
-    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.splits));
-    gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
+    clear(this.splits);
     const run = (stage, target, [x, y, w, h], back) => {
       const p = this.passes[stage];
       gl.useProgram(p);
@@ -328,14 +406,10 @@ export class AdaptiveVolume {
       gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(target));
       gl.viewport(x, y, w, h);
       gl.drawArrays(gl.TRIANGLES, 0, 3);
-      if (back) {
-        gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(target));
-        gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(back));
-        gl.blitFramebuffer(x, y, x + w, y + h, x, y, x + w, y + h, gl.COLOR_BUFFER_BIT, gl.NEAREST);
-        gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
-      }
+      if (back) copy(target, back, [x, y, w, h]);
     };
-    const level = (L) => [u.lva_ox.value[L], u.lva_oy.value[L], u.lva_nx.value[L], u.lva_ny.value[L]];
+    const faces = this.faces;
+    const level = (L) => [u.lva_ox.value[L], u.lva_oy.value[L], u.lva_nx.value[L], faces * u.lva_ny.value[L]];
     const balance = (round) => {
       u.lva_round.value = round;
       for (let L = 2; L <= this.top; ++L) {
@@ -347,16 +421,59 @@ export class AdaptiveVolume {
       u.lva_level.value = L;
       run('OWN', this.scratch, level(L), this.splits);
     }
-    balance(0);
-    gl.bindFramebuffer(gl.DRAW_FRAMEBUFFER, fbo(this.fails));
-    gl.clearBufferuiv(gl.COLOR, 0, new Uint32Array(4));
     const fixup = (round) => {
       u.lva_round.value = round;
       run('TEST', this.fails, this.column, null);
       balance(round);
     };
-    let round = 0;
-    while (round < this.rounds && this.top >= 2) fixup(++round);
+    const whole = [0, 0, ...this.atlas];
+    const forced = [0, 0, width, 4 * faces];
+    let round = 0, seamRound = 0;
+    // Omni: a seam round tessellates every face from its threshold with the border vertices the
+    // last round's union forced (lva_forced; none in the first), as build's OmniRefinement::build
+    // does the faces it marked dirty (the others come out as they were: the same input).
+    const tessellate = (dirty = 63) => {
+      if (this.omni) {
+        ++seamRound;
+        u.lva_dirty.value = dirty;
+        run('FORCE', this.scratch, whole, this.splits);
+      }
+      balance(0);
+      clear(this.fails);
+      round = 0;
+      while (round < this.rounds && this.top >= 2) fixup(++round);
+    };
+    const unite = () => { if (this.omni) run('UNITE', this.union, forced, null); };
+    if (this.omni) {
+      copy(this.splits, this.threshold, whole);
+      clear(this.forced);
+      clear(this.union);
+    }
+    // Omni, after a read-back that found a seam lacking vertices (so no further wait): the sides
+    // that lack one (3 in lva_union) take the union as their forced vertices (a row copied into
+    // lva_forced), and their faces are re-tessellated, as build's unite_seams and dirty faces.
+    // count 'bound' reads nothing: every side takes the union and every face is re-tessellated.
+    const lacking = () => {
+      if (this.count === 'bound') {
+        copy(this.union, this.forced, forced);
+        return 63;
+      }
+      const w = width, out = new Uint32Array(4 * w * 24);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(this.union));
+      gl.readPixels(0, 0, w, 24, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
+      let dirty = 0;
+      for (let row = 0; row < 24; ++row) {
+        let lacks = false;
+        for (let k = 0; k < w && !lacks; ++k) lacks = out[4 * (row * w + k)] === 3;
+        if (!lacks) continue;
+        dirty |= 1 << (row >> 2);
+        copy(this.union, this.forced, [0, row, w, 1]);
+      }
+      return dirty;
+    };
+    tessellate();
+    unite();
     // The count pyramid, from the cells' codes up to its top.
     const pyramidLevel = (k) => [u.lva_px.value[k], u.lva_py.value[k], Math.max(1, this.base[0] >> k),
                                  Math.max(1, this.base[1] >> k)];
@@ -368,34 +485,46 @@ export class AdaptiveVolume {
     const build = () => {
       for (let k = 0; k <= this.levels; ++k) pyramid(k);
     };
-    // The top texel: its children's triangles (bit 31: the last fix-up round split a cell below).
+    // The top texel: its children's triangles (bit 31: the last fix-up round split a cell below;
+    // bit 30, omni: a seam's borders did not agree).
     const top = () => {
       const out = new Uint32Array(4);
       const [x, y] = pyramidLevel(this.levels);
       gl.bindFramebuffer(gl.READ_FRAMEBUFFER, fbo(this.pyramid));
       gl.readPixels(x, y, 1, 1, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
       gl.bindFramebuffer(gl.READ_FRAMEBUFFER, null);
-      let triangles = 0, mark = 0;
+      let triangles = 0, mark = 0, seam = 0;
       for (const v of out) {
-        triangles += v & 0x7fffffff;
+        triangles += v & 0x3fffffff;
         mark |= v >>> 31;
+        seam |= (v >>> 30) & 1;
       }
-      return [triangles, mark];
+      return [triangles, mark, seam];
     };
+    if (this.count === 'bound') {
+      while (seamRound < this.seamRounds && this.omni) {
+        tessellate(lacking());
+        unite();
+      }
+    }
     build();
     if (this.count === 'readback') {
-      let [triangles, mark] = top();
+      let [triangles, mark, seam] = top();
       // The last round split cells whose new leaves no round has tested: one more round, until a
-      // round splits nothing.
-      while (mark !== 0 && round < MAX_ROUNDS) {
-        fixup(++round);
+      // round splits nothing; then (omni) while a seam lacks vertices, another seam round.
+      for (;;) {
+        if (mark !== 0 && round < MAX_ROUNDS) fixup(++round);
+        else if (seam !== 0 && seamRound < 4 * width + 4) tessellate(lacking());
+        else break;
+        unite();
         build();
-        [triangles, mark] = top();
+        [triangles, mark, seam] = top();
       }
       this.gridTriangles = triangles;
       this.gridGeometry.setDrawRange(0, 3 * triangles);
     }
     this.roundsRun = round;
+    this.seamRoundsRun = seamRound;
     gl.bindVertexArray(null);
     renderer.resetState();
   }
@@ -412,6 +541,15 @@ export class AdaptiveVolume {
     gl.readPixels(x, y, w, h, gl.RGBA_INTEGER, gl.UNSIGNED_INT, out);
     renderer.resetState();
     for (let k = 0; k < out.length; k += 4) if (out[k] !== 0) return false;
+    if (this.omni) {  // and every seam's two borders agree
+      const w = this.u.lva_map.value.x, h = 24;
+      const seams = new Uint32Array(4 * w * h);
+      renderer.resetState();
+      gl.bindFramebuffer(gl.READ_FRAMEBUFFER, renderer.properties.get(this.union).__webglFramebuffer);
+      gl.readPixels(0, 0, w, h, gl.RGBA_INTEGER, gl.UNSIGNED_INT, seams);
+      renderer.resetState();
+      for (let k = 0; k < seams.length; k += 4) if (seams[k] === 3) return false;
+    }
     return true;
   }
 
@@ -431,8 +569,7 @@ export class AdaptiveVolume {
       };
     const uniforms = { ...this.live, ...this.u, view_projection: { value: new THREE.Matrix4() }, ...extraUniforms };
     const triangles = [];
-    for (const [stage, n] of [['GRID', this.gridGeometry.drawRange.count],
-                              ['CLOSE', CLOSE_VERTICES * this.perimeter]]) {
+    for (const [stage, n] of [['GRID', this.gridGeometry.drawRange.count], ['CLOSE', this.closeVertices]]) {
       const program = this.feedback[stage];
       renderer.resetState();
       gl.useProgram(program);

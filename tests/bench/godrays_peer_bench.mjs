@@ -8,8 +8,9 @@
 //   node tests/bench/godrays_peer_bench.mjs PATH/TO/lightvol [--frames N] [--demo-size N]
 //        [--map N] [--omni-map N] [--live LIST] [--live-only]
 // --live: the live page's settings, one row each, separated by commas, each a query string added
-// to live.html's address ("static" for none; default "static,resolution=0.5,adaptive=0.05";
-// adaptive=E is skipped for the point light, which has static volumes only). --live-only: no peer.
+// to live.html's address ("static" for none; default "static,resolution=0.5,adaptive=0.05"; the
+// error column is against the reference of build's static volume of the page's map, adaptive
+// rows too). --live-only: no peer.
 // KEEP=1 keeps the work folder (maps, volumes, references and the peer's images as PFM).
 // The peer and its peers (three 0.182.0, postprocessing 6.39.6) are installed with npm into a
 // scratch folder outside the repository (PEER_DIR, default /tmp/lightvol-peer), where its page is
@@ -282,7 +283,6 @@ try {
     // lightvol's live page at each setting: its airlight against the reference of its own map
     // (build's static volume of it), and its times.
     for (const setting of liveSettings) {
-      if (name === 'point' && setting.includes('adaptive')) continue;
       const extra = setting === 'static' ? '' : `&${setting}`;
       const live = await open(url(`/web/live.html?${query}${extra}`), 'lightvol:done');
       const lc = await live.evaluate(() => ({
