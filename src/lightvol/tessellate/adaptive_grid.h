@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -130,17 +131,26 @@ struct AdaptiveGrid {
   std::uint32_t vertex_index(int col, int row) const;
 };
 
-// The pyramid of a refinement measure over one grid, reusable for any number of bounds.
+// The pyramid of a refinement measure over one grid, reusable for any number of bounds up to its
+// cap. A cell's value is its measure where that is at most `cap`; above it, the value is only
+// known to exceed `cap` (a cell whose child already exceeds it is not measured, and a measure
+// stops at the first row past it), which decides every bound ≤ cap as the measure would. One
+// build tessellates at one bound and caps there; `lightvol stats` tabulates many and does not.
 class RefinementPyramid {
  public:
-  RefinementPyramid(TexelDepths texels, Refinement refinement);
+  RefinementPyramid(TexelDepths texels, Refinement refinement,
+                    double cap = std::numeric_limits<double>::infinity());
 
   const TexelDepths& texels() const { return texels_; }
   Refinement refinement() const { return refinement_; }
   double seconds() const { return seconds_; }  // time to build the pyramid
+  double cap() const { return cap_; }
+  // Cells whose own measure was taken (wholly or up to the cap): what the cap saves, for tests
+  // and benchmarks.
+  std::uint64_t cells_measured() const { return cells_measured_; }
 
-  // Tessellates at `bound` (max_error: world units; laplacian: the threshold T). `standard`
-  // chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
+  // Tessellates at `bound` ≤ cap() (max_error: world units; laplacian: the threshold T).
+  // `standard` chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
   AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
   // The same grid by the plain rounds: every fix-up round re-balances and re-tests the whole
   // quadtree (time: rounds × cells). The reference tessellate is tested against.
@@ -156,6 +166,8 @@ class RefinementPyramid {
                                  bool full_rounds) const;
   TexelDepths texels_;
   Refinement refinement_;
+  double cap_;
+  std::uint64_t cells_measured_ = 0;
   int top_ = 0;                            // level of the root cell
   std::vector<std::vector<float>> value_;  // per level ≥ 1, per cell (row-major): the measure
   double seconds_ = 0;

@@ -105,7 +105,8 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   const auto start = std::chrono::steady_clock::now();
   Result<TexelDepths> texels = TexelDepths::create(light, depth, 0, source);
   if (!texels) return texels.error();
-  const RefinementPyramid pyramid(std::move(*texels), options.refinement);
+  // One bound: the pyramid is capped there (cells it splits anyway are not measured).
+  const RefinementPyramid pyramid(std::move(*texels), options.refinement, *bound);
   AdaptiveReport r;
   r.pyramid_seconds = seconds_since(start);
 
