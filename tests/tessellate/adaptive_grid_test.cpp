@@ -128,6 +128,49 @@ TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
   }
 }
 
+// With `borrow`, TexelDepths reads the image's floats in place when each is its own window depth
+// (window encoding within [0, 1]; an orthographic light from 0 to 1 in linear depth, where d is the
+// stored value), and copies otherwise (a window value past 1 is clamped; a spot light's linear
+// depths are converted). Borrowed or copied, the same depths and the same grids.
+TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
+  const std::string box =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  struct Case {
+    std::string light;
+    float lo, hi;
+    bool borrowed;
+  };
+  const Case cases[] = {{test::spot_json("window"), 0.9f, 1.0f, true},
+                        {test::spot_json("window"), 0.9f, 1.02f, false},
+                        {box, 0.05f, 0.95f, true},
+                        {test::spot_json("linear"), 2.0f, 6.0f, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.light + " " + std::to_string(c.hi));
+    const DepthImage depth = make_depth(70, 61, [&](int col, int row) {
+      return c.lo + (c.hi - c.lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
+    });
+    const Light light = light_from_json(c.light);
+    Result<TexelDepths> lent = TexelDepths::create(light, depth, 0, "x", true);
+    Result<TexelDepths> copied = TexelDepths::create(light, depth, 0, "x");
+    ASSERT_TRUE(lent.ok() && copied.ok());
+    EXPECT_EQ(lent->float_depths() && lent->depth_row_as<float>(0) == depth.values.data(),
+              c.borrowed);
+    EXPECT_NE(copied->float_depths() ? static_cast<const void*>(copied->depth_row_as<float>(0))
+                                     : copied->depth_row_as<double>(0),
+              static_cast<const void*>(depth.values.data()));
+    for (int row = 0; row < 61; ++row)
+      for (int col = 0; col < 70; ++col)
+        ASSERT_EQ(lent->window_depth(col, row), copied->window_depth(col, row));
+    const RefinementPyramid a(std::move(*lent), Refinement::max_error),
+        b(std::move(*copied), Refinement::max_error);
+    const AdaptiveGrid ga = a.tessellate(1e-3, true), gb = b.tessellate(1e-3, true);
+    EXPECT_GT(ga.num_triangles(), 2u);
+    EXPECT_EQ(ga.indices, gb.indices);
+    EXPECT_EQ(ga.vertices, gb.vertices);
+  }
+}
+
 // ---- the pyramid capped at the bound
 // -------------------------------------------------------------
 

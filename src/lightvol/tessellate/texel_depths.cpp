@@ -21,7 +21,7 @@ namespace lightvol {
 // the error scale in one pass over the texels (one read of the image, written once), with the
 // projection's constants set up before it.
 Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& image, int face,
-                                        const std::string& source) {
+                                        const std::string& source, bool borrow) {
   const int w = image.width, h = image.height;
   LV_CHECK(w >= 2 && h >= 2);
   TexelDepths t;
@@ -69,7 +69,19 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   // Floats when every depth is one exactly (window: always; linear: checked, stopping at the
   // first that is not).
   t.float_depths_ = window;
-  if (linear_fast) {
+  // Borrowed: every stored value is its own window depth.
+  const bool borrowed = borrow && (window || linear_fast) &&
+                        tbb::parallel_reduce(
+                            tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
+                            [&](const tbb::blocked_range<std::size_t>& r, bool same) {
+                              for (std::size_t v = r.begin(); v != r.end() && same; ++v)
+                                same = fast_depth(image.values[v]) == double{image.values[v]};
+                              return same;
+                            },
+                            [](bool a, bool b) { return a && b; });
+  if (borrowed) {
+    t.float_depths_ = true;
+  } else if (linear_fast) {
     t.float_depths_ = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
         [&](const tbb::blocked_range<std::size_t>& r, bool exact) {
@@ -81,8 +93,11 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         },
         [](bool a, bool b) { return a && b; });
   }
-  if (t.float_depths_) {
+  if (borrowed) {
+    t.depth_fp_ = image.values.data();
+  } else if (t.float_depths_) {
     t.depth_f_ = uninitialized_large<float>(n);
+    t.depth_fp_ = t.depth_f_.get();
   } else {
     t.depth_ = uninitialized_large<double>(n);
   }
@@ -106,7 +121,9 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         const float* in = image.values.data() + t.index(0, r);
 #pragma omp simd
         for (int c = 0; c < w; ++c) d[c] = fast_depth(in[c]);
-        if (t.float_depths_) {
+        if (borrowed) {
+          // The image's floats are the depths.
+        } else if (t.float_depths_) {
           float* out = t.depth_f_.get() + t.index(0, r);
 #pragma omp simd
           for (int c = 0; c < w; ++c) out[c] = static_cast<float>(d[c]);

@@ -90,7 +90,9 @@ Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFace
   const int w = cube.size();
   out.pyramids_.reserve(kOmniFaces);
   for (int f = 0; f < kOmniFaces; ++f) {
-    Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[f], f, cube.sources[f]);
+    // The cube outlives this object (see the class): its floats can serve as the depths.
+    Result<TexelDepths> texels =
+        TexelDepths::create(light, cube.faces[f], f, cube.sources[f], true);
     if (!texels) return texels.error();
     out.pyramids_.emplace_back(std::move(*texels), refinement, cap);
     out.faces_.emplace_back(light, w, w, f, space);
