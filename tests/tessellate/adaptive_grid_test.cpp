@@ -128,6 +128,132 @@ TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
   }
 }
 
+// With `borrow`, TexelDepths reads the image's floats in place when each is its own window depth
+// (window encoding within [0, 1]; an orthographic light from 0 to 1 in linear depth, where d is the
+// stored value), and copies otherwise (a window value past 1 is clamped; a spot light's linear
+// depths are converted). Borrowed or copied, the same depths and the same grids.
+TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
+  const std::string box =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  struct Case {
+    std::string light;
+    float lo, hi;
+    bool borrowed;
+  };
+  const Case cases[] = {{test::spot_json("window"), 0.9f, 1.0f, true},
+                        {test::spot_json("window"), 0.9f, 1.02f, false},
+                        {box, 0.05f, 0.95f, true},
+                        {test::spot_json("linear"), 2.0f, 6.0f, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.light + " " + std::to_string(c.hi));
+    const DepthImage depth = make_depth(70, 61, [&](int col, int row) {
+      return c.lo + (c.hi - c.lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
+    });
+    const Light light = light_from_json(c.light);
+    Result<TexelDepths> lent = TexelDepths::create(light, depth, 0, "x", true);
+    Result<TexelDepths> copied = TexelDepths::create(light, depth, 0, "x");
+    ASSERT_TRUE(lent.ok() && copied.ok());
+    EXPECT_EQ(lent->float_depths() && lent->depth_row_as<float>(0) == depth.values.data(),
+              c.borrowed);
+    EXPECT_NE(copied->float_depths() ? static_cast<const void*>(copied->depth_row_as<float>(0))
+                                     : copied->depth_row_as<double>(0),
+              static_cast<const void*>(depth.values.data()));
+    for (int row = 0; row < 61; ++row)
+      for (int col = 0; col < 70; ++col)
+        ASSERT_EQ(lent->window_depth(col, row), copied->window_depth(col, row));
+    const RefinementPyramid a(std::move(*lent), Refinement::max_error),
+        b(std::move(*copied), Refinement::max_error);
+    const AdaptiveGrid ga = a.tessellate(1e-3, true), gb = b.tessellate(1e-3, true);
+    EXPECT_GT(ga.num_triangles(), 2u);
+    EXPECT_EQ(ga.indices, gb.indices);
+    EXPECT_EQ(ga.vertices, gb.vertices);
+  }
+}
+
+// ---- the pyramid capped at the bound
+// -------------------------------------------------------------
+
+// A build tessellates at one bound and caps its pyramid there: a cell whose child already exceeds
+// the bound is not measured, a measure stops at its first row past it, and a whole cell whose own
+// measure and plane gap bound every descendant's within it does not measure its descendants. The
+// grids must be those of the uncapped pyramid, cell for cell, at every bound and for every kind of
+// projection (spot window and linear: the per-texel error scale; directional: the uniform one,
+// whose leaf test takes a shortcut from the pyramid's values), on maps with smooth curves (leaves
+// of many levels), plateaus with steps (fix-up rounds) and clipped edge cells (sizes not 2^k + 1),
+// with forced border vertices too; and the cap must save measures where leaves are large.
+TEST(Adaptive, PyramidCappedAtTheBoundMakesTheUncappedGrids) {
+  const std::string box =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  struct Case {
+    std::string light;
+    double lo, hi;  // stored values: a smooth surface between lo and hi, plateaus, steps
+  };
+  const Case cases[] = {{test::spot_json("window"), 0.96, 0.995},
+                        {test::spot_json("linear"), 2.0, 6.0},
+                        {directional_json("window"), 0.1, 0.6},
+                        {box, 0.05, 0.95}};
+  std::mt19937 rng(5);
+  std::uint64_t capped_total = 0, uncapped_total = 0;
+  for (const Case& c : cases)
+    for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}}) {
+      SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
+      std::uniform_real_distribution<double> step(0, 0.05 * (c.hi - c.lo));
+      std::vector<double> plateau(64);
+      for (double& p : plateau) p = step(rng);
+      const double span = c.hi - c.lo;
+      const DepthImage depth = make_depth(w, h, [&](int col, int row) {
+        const double smooth =
+            0.5 + 0.25 * std::sin(col / 37.0) * std::cos(row / 29.0) + 0.2 * (col + row) / (w + h);
+        // Plateaus with steps in the lower right quarter, a cliff along one column.
+        const double steps = col > w / 2 && row > h / 2
+                                 ? plateau[static_cast<std::size_t>(row / 5 * 8 + col / 7) % 64]
+                                 : 0.0;
+        const double cliff = col == w / 3 ? 0.2 * span : 0.0;
+        return static_cast<float>(c.lo + span * 0.8 * smooth + steps + cliff);
+      });
+      const Light light = light_from_json(c.light);
+      const auto texels = [&] {
+        Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
+        EXPECT_TRUE(t.ok());
+        return std::move(*t);
+      };
+      const RefinementPyramid uncapped(texels(), Refinement::max_error);
+      BorderSplits forced;
+      forced.side[kTop] = {5, w / 2 + 1};
+      forced.side[kLeft] = {h / 3};
+      for (const double bound : {0.0, 1e-6, 1e-4, 1e-3, 1e-2, 0.1, 10.0}) {
+        SCOPED_TRACE(bound);
+        const RefinementPyramid capped(texels(), Refinement::max_error, bound);
+        EXPECT_EQ(capped.cap(), bound);
+        for (const bool force : {false, true}) {
+          const BorderSplits none;
+          const AdaptiveGrid a = capped.tessellate(bound, true, force ? forced : none),
+                             b = uncapped.tessellate(bound, true, force ? forced : none);
+          ASSERT_EQ(a.vertices, b.vertices);
+          ASSERT_EQ(a.indices, b.indices);
+          EXPECT_EQ(a.leaves, b.leaves);
+          EXPECT_EQ(a.fixup_rounds, b.fixup_rounds);
+        }
+        EXPECT_LE(capped.cells_measured(), uncapped.cells_measured());
+        capped_total += capped.cells_measured();
+        uncapped_total += uncapped.cells_measured();
+      }
+    }
+  // The cap saves: over all cases (bounds 0 and 1e-6 included, where it cannot), fewer than three
+  // quarters of the cells are measured (65 % when this test was written).
+  EXPECT_LT(4 * capped_total, 3 * uncapped_total) << capped_total << " of " << uncapped_total;
+}
+
+TEST(AdaptiveDeathTest, CappedPyramidRefusesABoundAboveItsCap) {
+  const Light light = light_from_json(directional_json("linear"));
+  Result<TexelDepths> t = TexelDepths::create(light, adaptive_scene(20, 20, 7.0), 0, "x");
+  ASSERT_TRUE(t.ok());
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error, 0.01);
+  EXPECT_DEATH(pyramid.tessellate(0.02, true), "bound <= cap_");
+}
+
 // ---- forced border vertices (omni seams) -------------------------------------------------------
 
 TEST(Adaptive, ForcedBorderTexelsBecomeVertices) {

@@ -83,6 +83,30 @@ TEST(OmniAdaptive, RoomWithPillarAndBallIsClosedStarShapedAndWithinItsBound) {
   }
 }
 
+// A build caps the six faces' pyramids at its bound (RefinementPyramid's cap): the same volume as
+// the uncapped pyramids `lightvol stats` uses, through the seam rounds and the collapse.
+TEST(OmniAdaptive, PyramidsCappedAtTheBoundMakeTheUncappedVolume) {
+  const Light light = scene_light();
+  const CubeFaces cube = test::omni_scene(37);
+  Result<OmniRefinement> uncapped =
+      OmniRefinement::create(light, cube, Refinement::max_error, Space::world);
+  ASSERT_TRUE(uncapped.ok());
+  for (const double bound : {0.002, 0.05}) {
+    for (const Tessellation tessellation : {Tessellation::quadtree, Tessellation::collapse}) {
+      SCOPED_TRACE(bound);
+      AdaptiveOptions options;
+      options.max_error = bound;
+      options.tessellation = tessellation;
+      Result<Mesh> capped = build_adaptive_omni_volume(light, cube, {}, options);
+      ASSERT_TRUE(capped.ok());
+      const Mesh plain = uncapped->build(bound, false, nullptr, nullptr, tessellation);
+      EXPECT_GT(plain.num_triangles(), 0u);
+      EXPECT_EQ(capped->positions, plain.positions);
+      EXPECT_EQ(capped->indices, plain.indices);
+    }
+  }
+}
+
 // The faces are coarsened in parallel (their borders locked): the bytes do not depend on the
 // thread count, and the seams still join the same border vertices.
 TEST(OmniAdaptive, CollapseIsDeterministicAndSmallerThanTheQuadtree) {

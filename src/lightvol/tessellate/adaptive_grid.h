@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -36,16 +37,20 @@ namespace lightvol {
 // to the window depth of the light's projection (omni: of face `face`).
 class TexelDepths {
  public:
-  // Errors name `source` and the pixel: a radial depth that a parallel ray never reaches.
+  // Errors name `source` and the pixel: a radial depth that a parallel ray never reaches. With
+  // `borrow`, when every stored value is its own window depth (window encoding within [0, 1]; a
+  // linear one that converts to itself), the texels read the image's floats in place instead of a
+  // copy (a gigabyte of fresh memory at 16384²): `depth` must then outlive this object and its
+  // moves.
   static Result<TexelDepths> create(const Light& light, const DepthImage& depth, int face,
-                                    const std::string& source);
+                                    const std::string& source, bool borrow = false);
 
   int width() const { return width_; }
   int height() const { return height_; }
   // The texel's window depth, clamped to [0, 1] (its vertex lies on the far plane at 1).
   double window_depth(int col, int row) const {
     const std::size_t v = index(col, row);
-    return float_depths_ ? double{depth_f_[v]} : depth_[v];
+    return float_depths_ ? double{depth_fp_[v]} : depth_[v];
   }
   // World distance between the point of texel (col, row)'s ray at window depth `d` and its own
   // point.
@@ -72,7 +77,7 @@ class TexelDepths {
   template <class D>
   const D* depth_row_as(int row) const {
     if constexpr (std::is_same_v<D, float>) {
-      return depth_f_.get() + index(0, row);
+      return depth_fp_ + index(0, row);
     } else {
       return depth_.get() + index(0, row);
     }
@@ -90,7 +95,8 @@ class TexelDepths {
   int width_ = 0, height_ = 0;
   // Per texel, written once in parallel (no serial zero-fill, huge pages where available).
   std::unique_ptr<double[]> depth_;   // window depth, or null when float_depths_
-  std::unique_ptr<float[]> depth_f_;  // window depth when float_depths_, else null
+  std::unique_ptr<float[]> depth_f_;  // window depth when float_depths_ and not borrowed
+  const float* depth_fp_ = nullptr;   // window depth when float_depths_: depth_f_ or the image's
   bool float_depths_ = false;
   std::unique_ptr<double[]> scale_;  // null when uniform
   bool uniform_ = false;
@@ -130,17 +136,26 @@ struct AdaptiveGrid {
   std::uint32_t vertex_index(int col, int row) const;
 };
 
-// The pyramid of a refinement measure over one grid, reusable for any number of bounds.
+// The pyramid of a refinement measure over one grid, reusable for any number of bounds up to its
+// cap. A cell's value is its measure where that is at most `cap`; above it, the value is only
+// known to exceed `cap` (a cell whose child already exceeds it is not measured, and a measure
+// stops at the first row past it), which decides every bound ≤ cap as the measure would. One
+// build tessellates at one bound and caps there; `lightvol stats` tabulates many and does not.
 class RefinementPyramid {
  public:
-  RefinementPyramid(TexelDepths texels, Refinement refinement);
+  RefinementPyramid(TexelDepths texels, Refinement refinement,
+                    double cap = std::numeric_limits<double>::infinity());
 
   const TexelDepths& texels() const { return texels_; }
   Refinement refinement() const { return refinement_; }
   double seconds() const { return seconds_; }  // time to build the pyramid
+  double cap() const { return cap_; }
+  // Cells whose own measure was taken (wholly or up to the cap): what the cap saves, for tests
+  // and benchmarks.
+  std::uint64_t cells_measured() const { return cells_measured_; }
 
-  // Tessellates at `bound` (max_error: world units; laplacian: the threshold T). `standard`
-  // chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
+  // Tessellates at `bound` ≤ cap() (max_error: world units; laplacian: the threshold T).
+  // `standard` chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
   AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
   // The same grid by the plain rounds: every fix-up round re-balances and re-tests the whole
   // quadtree (time: rounds × cells). The reference tessellate is tested against.
@@ -156,6 +171,8 @@ class RefinementPyramid {
                                  bool full_rounds) const;
   TexelDepths texels_;
   Refinement refinement_;
+  double cap_;
+  std::uint64_t cells_measured_ = 0;
   int top_ = 0;                            // level of the root cell
   std::vector<std::vector<float>> value_;  // per level ≥ 1, per cell (row-major): the measure
   double seconds_ = 0;

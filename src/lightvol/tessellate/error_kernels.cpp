@@ -14,6 +14,14 @@
 namespace lightvol::detail {
 namespace {
 
+// A row kernel's largest error in world units (with kUniform the kernels leave out the uniform
+// scale until the end).
+template <bool kUniform>
+double scaled(const TexelDepths& t, double worst) {
+  if constexpr (kUniform) return worst * t.uniform_scale();
+  return worst;
+}
+
 // The largest error over the texels (lattice points) of the closed triangle (a, b, c), rows
 // [y_begin, y_end) only. The triangle's window depth is the plane through its corners' depths:
 // exactly what the emitted flat triangle gives along each texel ray.
@@ -26,21 +34,21 @@ double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, 
     if (!triangle_row_span(plane.v, y, &x0, &x1)) continue;
     worst = std::max(worst, span_error<kUniform, D>(t, y, x0, x1, plane.at(x0, y), plane.gx));
   }
-  if constexpr (kUniform) worst *= t.uniform_scale();
-  return worst;
+  return scaled<kUniform>(t, worst);
 }
 
 // The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
 // triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
 // general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
 template <bool kUniform, class D>
-double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                        double cap, double* depth_gap) {
   const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
                dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
   const double g1x = (db - da) / wx, g1y = (dc - da) / wy;  // a + g1·(p − a)
   const double g2x = (dd - dc) / wx, g2y = (dd - db) / wy;  // d + g2·(p − d)
-  double worst = 0;
+  double worst = 0, gap = 0;
   for (int y = y_begin; y < y_end; ++y) {
     const int s = y - b.y0;
     const int xs =
@@ -59,7 +67,7 @@ double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begi
         const double e = std::abs(base2 + g2x * (x - b.x1) - dt[x]);
         m = m > e ? m : e;
       }
-    } else {
+    } else if (depth_gap == nullptr) {
       const double* k = t.scale_row(y);
       const double w1 = t.w1();
       const double w0y = t.w0(0, y), w0dc = t.w0_dc();
@@ -75,11 +83,36 @@ double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begi
         const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
         m = m > e ? m : e;
       }
+    } else {  // the same, and the largest |d − depth| in window units
+      const double* k = t.scale_row(y);
+      const double w1 = t.w1();
+      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
+      double g = 0;
+#pragma omp simd reduction(max : m, g)
+      for (int x = b.x0; x <= xs; ++x) {
+        const double d = base1 + g1x * (x - b.x0);
+        const double a = std::abs(d - dt[x]);
+        const double e = a * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+        g = g > a ? g : a;
+      }
+#pragma omp simd reduction(max : m, g)
+      for (int x = xs + 1; x <= b.x1; ++x) {
+        const double d = base2 + g2x * (x - b.x1);
+        const double a = std::abs(d - dt[x]);
+        const double e = a * k[x] / std::abs(w0y + w0dc * x + d * w1);
+        m = m > e ? m : e;
+        g = g > a ? g : a;
+      }
+      gap = std::max(gap, g);
     }
+    if constexpr (kUniform) gap = std::max(gap, m);
     worst = std::max(worst, m);
+    // Scaling is monotonic: the rows left can only raise what is already past the cap.
+    if (scaled<kUniform>(t, worst) > cap) break;
   }
-  if constexpr (kUniform) worst *= t.uniform_scale();
-  return worst;
+  if (depth_gap != nullptr) *depth_gap = gap;
+  return scaled<kUniform>(t, worst);
 }
 
 }  // namespace
@@ -108,9 +141,11 @@ float round_up(double e) {
   return f;
 }
 
-double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end) {
+double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                      double cap, double* depth_gap) {
   return with_texel_kind(t, [&](auto uniform, auto depth) {
-    return box_error_rows_t<decltype(uniform)::value, decltype(depth)>(t, b, y_begin, y_end);
+    return box_error_rows_t<decltype(uniform)::value, decltype(depth)>(t, b, y_begin, y_end, cap,
+                                                                       depth_gap);
   });
 }
 

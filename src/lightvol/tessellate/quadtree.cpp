@@ -492,6 +492,7 @@ AdaptiveGrid RefinementPyramid::tessellate_by_full_rounds(double bound, bool sta
 AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
                                                   const BorderSplits& forced,
                                                   bool full_rounds) const {
+  LV_CHECK(bound <= cap_);  // values above the cap only say they exceed it
   const auto start = std::chrono::steady_clock::now();
   AdaptiveGrid grid;
   grid.width = texels_.width();

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -20,7 +21,7 @@ namespace lightvol {
 // the error scale in one pass over the texels (one read of the image, written once), with the
 // projection's constants set up before it.
 Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& image, int face,
-                                        const std::string& source) {
+                                        const std::string& source, bool borrow) {
   const int w = image.width, h = image.height;
   LV_CHECK(w >= 2 && h >= 2);
   TexelDepths t;
@@ -68,7 +69,19 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   // Floats when every depth is one exactly (window: always; linear: checked, stopping at the
   // first that is not).
   t.float_depths_ = window;
-  if (linear_fast) {
+  // Borrowed: every stored value is its own window depth.
+  const bool borrowed = borrow && (window || linear_fast) &&
+                        tbb::parallel_reduce(
+                            tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
+                            [&](const tbb::blocked_range<std::size_t>& r, bool same) {
+                              for (std::size_t v = r.begin(); v != r.end() && same; ++v)
+                                same = fast_depth(image.values[v]) == double{image.values[v]};
+                              return same;
+                            },
+                            [](bool a, bool b) { return a && b; });
+  if (borrowed) {
+    t.float_depths_ = true;
+  } else if (linear_fast) {
     t.float_depths_ = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
         [&](const tbb::blocked_range<std::size_t>& r, bool exact) {
@@ -80,10 +93,51 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         },
         [](bool a, bool b) { return a && b; });
   }
-  if (t.float_depths_) {
+  if (borrowed) {
+    t.depth_fp_ = image.values.data();
+  } else if (t.float_depths_) {
     t.depth_f_ = uninitialized_large<float>(n);
+    t.depth_fp_ = t.depth_f_.get();
   } else {
     t.depth_ = uninitialized_large<double>(n);
+  }
+  // The error scale of a texel of row r, column c at window depth d (the formula below, term for
+  // term: the same doubles whichever loop computes it).
+  const auto scale_at = [&](double x, double y, double d) {
+    double h0[4];
+    for (int k = 0; k < 4; ++k) h0[k] = m(k, 0) * x + m(k, 1) * y - m(k, 2) + m(k, 3);
+    const Vec3d g{h1[0] * h0[3] - h0[0] * h1[3], h1[1] * h0[3] - h0[1] * h1[3],
+                  h1[2] * h0[3] - h0[2] * h1[3]};
+    return length(g) / std::abs(h0[3] + d * h1[3]);
+  };
+  if (window || linear_fast) {
+    // Row by row in two loops that vectorize (-fopenmp-simd, -fno-math-errno for the square
+    // root): the depths, then the error scales from the depths just written.
+    std::vector<double> xs(static_cast<std::size_t>(w));
+    for (int c = 0; c < w; ++c) xs[static_cast<std::size_t>(c)] = xn(c);
+    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+      std::vector<double> d(static_cast<std::size_t>(w));
+      for (int r = rows.begin(); r != rows.end(); ++r) {
+        const float* in = image.values.data() + t.index(0, r);
+#pragma omp simd
+        for (int c = 0; c < w; ++c) d[c] = fast_depth(in[c]);
+        if (borrowed) {
+          // The image's floats are the depths.
+        } else if (t.float_depths_) {
+          float* out = t.depth_f_.get() + t.index(0, r);
+#pragma omp simd
+          for (int c = 0; c < w; ++c) out[c] = static_cast<float>(d[c]);
+        } else {
+          std::copy(d.begin(), d.end(), t.depth_.get() + t.index(0, r));
+        }
+        if (t.uniform_) continue;
+        const double y = yn(r);
+        double* k = t.scale_.get() + t.index(0, r);
+#pragma omp simd
+        for (int c = 0; c < w; ++c) k[c] = scale_at(xs[c], y, d[c]);
+      }
+    });
+    return t;
   }
   const Unprojector unproject(light, w, h, face, Space::world);
   std::atomic<std::size_t> first_bad{std::numeric_limits<std::size_t>::max()};
@@ -114,14 +168,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
         } else {
           t.depth_[v] = d;
         }
-        if (!t.uniform_) {
-          const double x = xn(c), y = yn(r);
-          double h0[4];
-          for (int k = 0; k < 4; ++k) h0[k] = m(k, 0) * x + m(k, 1) * y - m(k, 2) + m(k, 3);
-          const Vec3d g{h1[0] * h0[3] - h0[0] * h1[3], h1[1] * h0[3] - h0[1] * h1[3],
-                        h1[2] * h0[3] - h0[2] * h1[3]};
-          t.scale_[v] = length(g) / std::abs(h0[3] + d * h1[3]);
-        }
+        if (!t.uniform_) t.scale_[v] = scale_at(xn(c), yn(r), d);
       }
     }
   });

@@ -103,9 +103,11 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   const Result<double> bound = adaptive_bound(options);
   if (!bound) return bound.error();
   const auto start = std::chrono::steady_clock::now();
-  Result<TexelDepths> texels = TexelDepths::create(light, depth, 0, source);
+  // `depth` outlives the pyramid: its floats can serve as the texels' depths.
+  Result<TexelDepths> texels = TexelDepths::create(light, depth, 0, source, true);
   if (!texels) return texels.error();
-  const RefinementPyramid pyramid(std::move(*texels), options.refinement);
+  // One bound: the pyramid is capped there (cells it splits anyway are not measured).
+  const RefinementPyramid pyramid(std::move(*texels), options.refinement, *bound);
   AdaptiveReport r;
   r.pyramid_seconds = seconds_since(start);
 

@@ -82,7 +82,7 @@ bool unite_seams(const OmniAdjacency& adjacency, const std::array<AdaptiveGrid, 
 }  // namespace
 
 Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFaces& cube,
-                                              Refinement refinement, Space space) {
+                                              Refinement refinement, Space space, double cap) {
   LV_CHECK(light.type == LightType::omni);
   if (Status s = validate_cube_faces(cube); !s) return s.error();
   const auto start = std::chrono::steady_clock::now();
@@ -90,9 +90,11 @@ Result<OmniRefinement> OmniRefinement::create(const Light& light, const CubeFace
   const int w = cube.size();
   out.pyramids_.reserve(kOmniFaces);
   for (int f = 0; f < kOmniFaces; ++f) {
-    Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[f], f, cube.sources[f]);
+    // The cube outlives this object (see the class): its floats can serve as the depths.
+    Result<TexelDepths> texels =
+        TexelDepths::create(light, cube.faces[f], f, cube.sources[f], true);
     if (!texels) return texels.error();
-    out.pyramids_.emplace_back(std::move(*texels), refinement);
+    out.pyramids_.emplace_back(std::move(*texels), refinement, cap);
     out.faces_.emplace_back(light, w, w, f, space);
   }
   out.seconds_ = seconds_since(start);
@@ -105,7 +107,7 @@ Result<Mesh> build_adaptive_omni_volume(const Light& light, const CubeFaces& cub
   const Result<double> bound = adaptive_bound(options);
   if (!bound) return bound.error();
   Result<OmniRefinement> refinement =
-      OmniRefinement::create(light, cube, options.refinement, volume.space);
+      OmniRefinement::create(light, cube, options.refinement, volume.space, *bound);
   if (!refinement) return refinement.error();
   Status memory;
   Mesh mesh =

@@ -10,6 +10,7 @@
 // edge have the same size along it. Closed, outward, star-shaped from the light.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include <lightvol/core/mesh.h>
@@ -34,8 +35,10 @@ struct OmniAdaptiveDetail {
 // depth.
 class OmniRefinement {
  public:
+  // `cap`: the largest bound build() will be given (RefinementPyramid's cap).
   static Result<OmniRefinement> create(const Light& light, const CubeFaces& cube,
-                                       Refinement refinement, Space space);
+                                       Refinement refinement, Space space,
+                                       double cap = std::numeric_limits<double>::infinity());
   double seconds() const { return seconds_; }  // time to build the six pyramids
 
   // The adaptive omni volume at `bound` (max_error: world units; laplacian: the threshold T).

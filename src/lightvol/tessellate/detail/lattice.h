@@ -122,8 +122,12 @@ class RowSpanWalker {
 double triangle_error(const TexelDepths& t, Pt a, Pt b, Pt c);
 
 // The largest error over the texels of an unsplit cell `b` (both triangles of
-// cell_triangles(config 0)), rows [y_begin, y_end) only.
-double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end);
+// cell_triangles(config 0)), rows [y_begin, y_end) only. The rows stop as soon as the error so far
+// exceeds `cap`: a result above `cap` is then only known to be at most the cell's error. With
+// `depth_gap`, also the largest |plane − depth| over those rows in window depth (unscaled).
+double box_error_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                      double cap = std::numeric_limits<double>::infinity(),
+                      double* depth_gap = nullptr);
 
 // `e` rounded up to a float (a pyramid value never understates the error it stands for).
 float round_up(double e);
