@@ -237,12 +237,14 @@ TEST(BuildFile, AVolumeWrittenWhileItIsCheckedHasTheBytesOfOneWrittenUnchecked) 
       }
       o.out_path = dir.file(std::string("unchecked.") + ext);
       o.check = false;
+      o.make_report = true;
       StageLog unchecked_log;
       const BuildFileResult unchecked = build_volume_file(o, unchecked_log);
       ASSERT_TRUE(unchecked.status.ok()) << unchecked.status.error().message;
       o.out_path = dir.file(std::string("checked.") + ext);
       o.report_path = dir.file("checked.report.json");
       o.check = true;
+      o.keep_mesh = true;
       StageLog log;
       std::vector<std::string> begun;
       bool staged_while_checking = false;
@@ -255,7 +257,12 @@ TEST(BuildFile, AVolumeWrittenWhileItIsCheckedHasTheBytesOfOneWrittenUnchecked) 
       EXPECT_TRUE(staged_while_checking);
       EXPECT_TRUE(r.check.valid());
       EXPECT_EQ(slurp(o.out_path), slurp(dir.file(std::string("unchecked.") + ext)));
+      // The report's bounds and volume, taken from the check's report, are bounding_box's and
+      // signed_volume's (which the unchecked build measures) to the bit.
       EXPECT_EQ(r.volume, unchecked.volume);
+      EXPECT_EQ(nlohmann::json::parse(r.report)["bounds"],
+                nlohmann::json::parse(unchecked.report)["bounds"]);
+      EXPECT_EQ(r.volume, signed_volume(r.mesh));
       EXPECT_EQ(dir.entries(), 3);  // the two volumes and the report: no temporary left
       EXPECT_EQ(begun.back(), "writing " + o.out_path);
       ASSERT_EQ(log.stages().size(), 3u);

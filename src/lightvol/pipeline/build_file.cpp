@@ -320,6 +320,9 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
                    ErrorKind::unsound};
     log.end("valid");
     r.seconds.check = log.last_seconds();
+    // The check found the bounds and the signed volume: bounding_box's and signed_volume's to the
+    // bit (the same minima and maxima; the same sums in the same order), not measured again.
+    summary = {mesh->num_vertices(), mesh->num_triangles(), r.check.bounds, r.check.volume};
     return {};
   };
   // A writer that streams the held mesh to the file writes while the check runs (write_outputs);
@@ -328,8 +331,6 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   const bool write_while_checking =
       o.check && *format != MeshFormat::drc && *format != MeshFormat::glb;
   if (o.check && hooks.before_check) hooks.before_check(*mesh);
-  if (o.check && !write_while_checking)
-    if (Status s = check(); !s) return failed(s.error());
 
   // ---- write
   // -------------------------------------------------------------------------------------
@@ -342,14 +343,14 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
     return build_report(o, *light, *maps, summary, adaptive ? &adaptive_report : nullptr, log,
                         r.warnings, hooks.extra_report);
   };
-  const auto write = [&]() -> Status {
-    if (Status s = write_mesh(o.out_path, *mesh, eo); !s) return s;
+  if (!o.check)
     summary = {mesh->num_vertices(), mesh->num_triangles(), bounding_box(*mesh),
                signed_volume(*mesh)};
-    return {};
-  };
-  if (Status s = write_outputs(o, "writing " + o.out_path, write, log, report_of, hooks, r,
-                               write_while_checking ? std::function<Status()>(check) : nullptr);
+  else if (!write_while_checking)
+    if (Status s = check(); !s) return failed(s.error());
+  if (Status s = write_outputs(
+          o, "writing " + o.out_path, [&] { return write_mesh(o.out_path, *mesh, eo); }, log,
+          report_of, hooks, r, write_while_checking ? std::function<Status()>(check) : nullptr);
       !s)
     return failed(s.error());
   r.vertices = summary.vertices;
