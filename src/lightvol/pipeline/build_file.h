@@ -71,10 +71,11 @@ struct BuildFileResult {
 // light (options.check), writes it atomically (a lossy encoding decoded again and checked, a GLB
 // with its light in the volume's frame and the medium) and the report, both or neither. A checked
 // PLY, OBJ, OFF or STL volume is written to its temporary (or spool) on a thread of its own while
-// the check runs, and committed only once it has passed: a failing check leaves nothing behind. Each step
-// is timed in `log` (its listeners may show them). Refused before anything is read: a path holding
-// a control character, an output that is also an input (core/path.h file_identity), an output
-// extension of no format. Errors name the file, and the BuildFileOptions member that names it.
+// the check runs, and committed only once it has passed: a failing check leaves nothing behind.
+// Each step is timed in `log` (its listeners may show them). Refused before anything is read: a
+// path holding a control character, an output that is also an input (core/path.h file_identity), an
+// output extension of no format. Errors name the file, and the BuildFileOptions member that names
+// it.
 BuildFileResult build_volume_file(const BuildFileOptions& options, StageLog& log);
 
 }  // namespace lightvol
