@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -289,6 +290,44 @@ TEST(AtomicFile, TransactionCommitsAllOrNothing) {
   EXPECT_EQ(slurp(a), "new a");
   EXPECT_EQ(slurp(dir.file("b.json")), "b");
   EXPECT_EQ(dir.entries(), 2);
+}
+
+// OutputTransaction::Writer: another thread's writes are staged in the transaction (not renamed
+// into place, and not in a transaction of that thread's own), committed or discarded with it; the
+// thread's own state is restored when the Writer ends.
+TEST(AtomicFile, AWriterThreadStagesInTheTransaction) {
+  test::TempDir dir;
+  const std::string a = dir.write("a.ply", "old a");
+  for (const bool commit : {false, true}) {
+    OutputTransaction tx;
+    Status written, after;
+    std::thread writer([&] {
+      {
+        const OutputTransaction::Writer staged(tx);
+        written = write_bytes_atomically(a, "new a");
+      }
+      // Without the Writer, this thread writes straight through again.
+      after = write_bytes_atomically(dir.file("own.txt"), "own");
+    });
+    writer.join();
+    ASSERT_TRUE(written.ok());
+    ASSERT_TRUE(after.ok());
+    EXPECT_EQ(slurp(dir.file("own.txt")), "own");
+    EXPECT_EQ(slurp(a), "old a");  // staged, not yet in place
+    EXPECT_FALSE(tx.staged_file(a).empty());
+    EXPECT_EQ(slurp(tx.staged_file(a)), "new a");
+    if (commit) {
+      ASSERT_TRUE(tx.commit().ok());
+    }
+    std::filesystem::remove(dir.file("own.txt"));
+    if (!commit) {
+      const std::string staged = tx.staged_file(a);
+      // Destroyed uncommitted below: the file stays as it was, the temporary goes.
+      EXPECT_TRUE(std::filesystem::exists(staged));
+    }
+  }
+  EXPECT_EQ(slurp(a), "new a");
+  EXPECT_EQ(dir.entries(), 1);
 }
 
 TEST(AtomicFile, TransactionRefusesOneFileNamedTwice) {

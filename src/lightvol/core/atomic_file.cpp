@@ -354,6 +354,12 @@ OutputTransaction::~OutputTransaction() {
   t_transaction = previous_;
 }
 
+OutputTransaction::Writer::Writer(OutputTransaction& transaction) : previous_(t_transaction) {
+  t_transaction = transaction.impl_.get();
+}
+
+OutputTransaction::Writer::~Writer() { t_transaction = previous_; }
+
 std::string OutputTransaction::staged_file(const std::string& path) const {
   const std::string identity = file_identity(path);
   for (const Impl::Staged& s : impl_->staged)

@@ -66,6 +66,22 @@ class OutputTransaction {
 
   struct Impl;
 
+  // Stages another thread's outputs in this transaction: while a Writer made from it lives on a
+  // thread, write_file_atomically on that thread stages its files here, as it would on the
+  // transaction's own thread. One writer thread at a time, while the transaction's own thread
+  // writes nothing and neither commits nor destroys it; join the writer thread first (a build
+  // writes its volume this way while its check runs, pipeline/build_file.cpp).
+  class Writer {
+   public:
+    explicit Writer(OutputTransaction& transaction);
+    ~Writer();
+    Writer(const Writer&) = delete;
+    Writer& operator=(const Writer&) = delete;
+
+   private:
+    Impl* previous_;
+  };
+
  private:
   Status commit_files();  // renames the staged files into place, all or nothing
   std::unique_ptr<Impl> impl_;

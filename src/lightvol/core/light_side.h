@@ -19,7 +19,9 @@ inline double corner_motion(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const auto largest = [](const Vec3d& p) {
     return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   };
-  return 8 * std::ldexp(std::max({largest(a), largest(b), largest(c)}), -23);
+  // × 2^-23 as a product: what std::ldexp(x, -23) gives, to the bit (both round x · 2^-23 once,
+  // to nearest), without ldexp's call into libm on every face.
+  return 8 * (std::max({largest(a), largest(b), largest(c)}) * 0x1p-23);
 }
 
 // How far the arithmetic that places a point relative to the light (differences from the eye or
@@ -27,7 +29,7 @@ inline double corner_motion(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
 // of `p`, the light's position or origin. Negligible beside float rounding unless the light is
 // far larger than the faces' coordinates.
 inline double frame_motion(const Vec3d& p) {
-  return std::ldexp(std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}), -48);
+  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) * 0x1p-48;  // ldexp(x, -48)
 }
 
 // A point light: `a`, `b`, `c` are the face's corners relative to the eye, `bc` = b × c and

@@ -1,5 +1,8 @@
 #include <chrono>
 #include <functional>
+#include <new>
+#include <system_error>
+#include <thread>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -136,13 +139,54 @@ BuildMemory memory_mode(const BuildFileOptions& o, bool adaptive, bool streamed)
 // Every file a build writes is written here, and only here: the volume (by `write_volume`, timed
 // as the step `step`), then the report, made by `report_of` once the volume is written (it records
 // that step's time). Both are committed together, or neither is.
+//
+// With `check` (a checked build whose writer streams the held mesh to its file), the volume is
+// written on a thread of its own while `check` runs on this one (it times itself as the stage
+// "checking"); the step `step` then times only the part of the write left when the check ends.
+// Both only read the mesh. A check that fails returns its error once the writer has finished: the
+// transaction removes what it staged (a file's temporary, a stream's spool), nothing is written,
+// as when the check ran first.
 Status write_outputs(const BuildFileOptions& o, const std::string& step,
                      const std::function<Status()>& write_volume, StageLog& log,
                      const std::function<nlohmann::json()>& report_of,
-                     const detail::BuildFileHooks& hooks, BuildFileResult& r) {
+                     const detail::BuildFileHooks& hooks, BuildFileResult& r,
+                     const std::function<Status()>& check = nullptr) {
   OutputTransaction outputs;
-  log.begin(step);
-  if (Status s = write_volume(); !s) return s;
+  if (check) {
+    Status written;
+    bool writing = false;
+    {
+      // Joined before this scope ends, however it ends (a check that throws unwinds through it).
+      struct Joined {
+        std::thread thread;
+        ~Joined() {
+          if (thread.joinable()) thread.join();
+        }
+      } writer;
+      try {
+        writer.thread = std::thread([&] {
+          const OutputTransaction::Writer staged(outputs);
+          try {
+            written = write_volume();
+          } catch (const std::bad_alloc&) {
+            written = Error{o.out_path + ": out of memory while writing", ErrorKind::io};
+          } catch (const std::exception& e) {
+            written = Error{o.out_path + ": " + e.what(), ErrorKind::io};
+          }
+        });
+        writing = true;
+      } catch (const std::system_error&) {
+        // No thread to be had: the volume is written after the check, on this one.
+      }
+      if (Status checked = check(); !checked) return checked;
+      log.begin(step);
+    }
+    if (!writing) written = write_volume();
+    if (!written) return written;
+  } else {
+    log.begin(step);
+    if (Status s = write_volume(); !s) return s;
+  }
   log.end();
   r.seconds.write = log.last_seconds();
   nlohmann::json report = report_of();
@@ -267,16 +311,26 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   r.seconds.build = log.last_seconds();
 
   const Light frame_light = light_in_space(*light, options.space);
-  if (o.check) {
+  const auto check = [&]() -> Status {
     log.begin("checking");
     r.check = check_volume_linear(*mesh, &frame_light);
     if (!r.check.valid())
-      return failed(Error{o.out_path + ": the built volume fails its checks, nothing written: " +
-                              r.check.first_failure(),
-                          ErrorKind::unsound});
+      return Error{o.out_path + ": the built volume fails its checks, nothing written: " +
+                       r.check.first_failure(),
+                   ErrorKind::unsound};
     log.end("valid");
     r.seconds.check = log.last_seconds();
-  }
+    // The check found the bounds and the signed volume: bounding_box's and signed_volume's to the
+    // bit (the same minima and maxima; the same sums in the same order), not measured again.
+    summary = {mesh->num_vertices(), mesh->num_triangles(), r.check.bounds, r.check.volume};
+    return {};
+  };
+  // A writer that streams the held mesh to the file writes while the check runs (write_outputs);
+  // a Draco or GLB encoding is made whole in memory (and a lossy one checked again), so it waits
+  // for the check rather than add its bytes to the check's memory and its CPU to the check's.
+  const bool write_while_checking =
+      o.check && *format != MeshFormat::drc && *format != MeshFormat::glb;
+  if (o.check && hooks.before_check) hooks.before_check(*mesh);
 
   // ---- write
   // -------------------------------------------------------------------------------------
@@ -285,15 +339,18 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   if (o.check) eo.light = &frame_light;  // a lossy encoding must stay sound seen from the light
   eo.glb.light = &frame_light;           // a GLB carries its light, in the volume's frame
   eo.glb.medium_json = medium;
-  summary = {mesh->num_vertices(), mesh->num_triangles(), bounding_box(*mesh),
-             signed_volume(*mesh)};
   const auto report_of = [&] {
     return build_report(o, *light, *maps, summary, adaptive ? &adaptive_report : nullptr, log,
                         r.warnings, hooks.extra_report);
   };
+  if (!o.check)
+    summary = {mesh->num_vertices(), mesh->num_triangles(), bounding_box(*mesh),
+               signed_volume(*mesh)};
+  else if (!write_while_checking)
+    if (Status s = check(); !s) return failed(s.error());
   if (Status s = write_outputs(
           o, "writing " + o.out_path, [&] { return write_mesh(o.out_path, *mesh, eo); }, log,
-          report_of, hooks, r);
+          report_of, hooks, r, write_while_checking ? std::function<Status()>(check) : nullptr);
       !s)
     return failed(s.error());
   r.vertices = summary.vertices;

@@ -49,7 +49,9 @@ struct BuildStepSeconds {
   double wait = 0;   // admission (pipeline/build_job.h: until the build's memory fits)
   double build = 0;  // the volume
   double check = 0;  // the linear-time checks
-  double write = 0;  // the outputs, committed together
+  // The outputs, committed together; of a volume written while it was checked (a checked PLY, OBJ,
+  // OFF or STL), the part of the write left when the check ended.
+  double write = 0;
 };
 
 // What a build_volume_file call did.
@@ -67,10 +69,13 @@ struct BuildFileResult {
 // Reads the light and its depth input, builds the volume (build_volume; a static volume written
 // unchecked to PLY is streamed into the file row by row, never held whole), checks it from the
 // light (options.check), writes it atomically (a lossy encoding decoded again and checked, a GLB
-// with its light in the volume's frame and the medium) and the report, both or neither. Each step
-// is timed in `log` (its listeners may show them). Refused before anything is read: a path holding
-// a control character, an output that is also an input (core/path.h file_identity), an output
-// extension of no format. Errors name the file, and the BuildFileOptions member that names it.
+// with its light in the volume's frame and the medium) and the report, both or neither. A checked
+// PLY, OBJ, OFF or STL volume is written to its temporary (or spool) on a thread of its own while
+// the check runs, and committed only once it has passed: a failing check leaves nothing behind.
+// Each step is timed in `log` (its listeners may show them). Refused before anything is read: a
+// path holding a control character, an output that is also an input (core/path.h file_identity), an
+// output extension of no format. Errors name the file, and the BuildFileOptions member that names
+// it.
 BuildFileResult build_volume_file(const BuildFileOptions& options, StageLog& log);
 
 }  // namespace lightvol

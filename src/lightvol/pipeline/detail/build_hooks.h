@@ -21,6 +21,9 @@ struct BuildFileHooks {
   // (core/limits.h build_memory_bytes); may block (batch: until the build's memory fits under the
   // budget beside the jobs already running). Its time is BuildStepSeconds::wait.
   std::function<void(const ShadowMaps& maps, BuildMemory mode)> before_build;
+  // Called with the built volume before it is checked (options.check; tests: a volume broken so
+  // that it fails its checks, while its file is written).
+  std::function<void(Mesh& volume)> before_check;
   // Keys added to the report (batch: the job's content hash).
   nlohmann::json extra_report = nlohmann::json::object();
   // Called with the volume's file once it is written (the temporary that becomes out_path when the
