@@ -15,7 +15,9 @@
 
 namespace {
 
-double seconds(const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); }
+double seconds(const timeval& t) {
+  return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+}
 
 // User and system seconds of this process's children (the running lightvol-image server).
 void children_cpu(double* user, double* system) {
