@@ -124,7 +124,7 @@ class FloatBuffer {
   }
 
   std::vector<float> to_vector() const { return {begin(), end()}; }
-  operator std::vector<float>() const { return to_vector(); }  // NOLINT: implicit
+  explicit operator std::vector<float>() const { return to_vector(); }
 
   friend bool operator==(const FloatBuffer& a, const FloatBuffer& b) {
     return std::equal(a.begin(), a.end(), b.begin(), b.end());

@@ -296,10 +296,16 @@ class SharedFloats {
     if (::fcntl(fd_, F_ADD_SEALS, F_SEAL_WRITE) != 0)
       return Error{"the image reader kept its shared memory writable (" +
                    std::string(std::strerror(errno)) + ")"};
-    void* mapped =
-        ::mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_POPULATE, fd_, 0);
-    if (mapped != MAP_FAILED)
+    // Private: a write (none of the library's) copies the page it writes. Populated for reading
+    // (the page tables of the child's pages filled in one call, not one fault per 4 KiB page):
+    // MAP_POPULATE on a writable private mapping would instead copy every page.
+    void* mapped = ::mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE, fd_, 0);
+    if (mapped != MAP_FAILED) {
+#ifdef MADV_POPULATE_READ
+      ::madvise(mapped, bytes_, MADV_POPULATE_READ);  // advice: where it fails, faults fill them
+#endif
       return FloatBuffer::adopt_mapping(static_cast<float*>(mapped), texels, bytes_);
+    }
     std::vector<float> values(texels);
     std::size_t done = 0;
     auto* out = reinterpret_cast<char*>(values.data());
