@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -273,9 +274,12 @@ Status check_pfm_scale(const std::string& path, const std::string& magic) {
 // sealed against writes too (which fails while the child still has it mapped writable), then
 // mapped private (copy on write) as the image's storage. Not available (fd() -1) where the kernel
 // has no memfd_create or refuses its size: the floats then come through the channel.
+std::atomic<bool> shared_memory_offered{true};
+
 class SharedFloats {
  public:
   explicit SharedFloats(std::size_t bytes) : bytes_(bytes) {
+    if (!shared_memory_offered.load()) return;
     fd_ = ::memfd_create("lightvol-image", MFD_CLOEXEC | MFD_ALLOW_SEALING);
     if (fd_ < 0) return;
     if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0 ||
@@ -326,6 +330,8 @@ class SharedFloats {
 };
 
 }  // namespace
+
+void offer_shared_memory(bool offer) { shared_memory_offered.store(offer); }
 
 Result<ImageFile> check_image_file(const std::string& path) {
   std::error_code ec;
