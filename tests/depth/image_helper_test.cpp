@@ -9,6 +9,7 @@
 
 #include <lightvol/core/detail/image_helper.h>
 #include <lightvol/depth/depth_image.h>
+#include <lightvol/depth/detail/image_file.h>
 
 #include "support/test_support.h"
 
@@ -86,6 +87,25 @@ TEST(ImageHelper, ACrashingDecoderIsAnErrorNamingTheFileAndTheNextReadWorks) {
   const Result<DepthImage> read = read_depth_image(fine);
   ASSERT_TRUE(read.ok()) << read.error().message;
   EXPECT_EQ(read->values, image.values);
+  // Decoded into the memfd this process offered, and used where it lies.
+  EXPECT_TRUE(read->values.mapped());
+}
+
+TEST(ImageHelper, WithoutSharedMemoryTheFloatsComeThroughTheChannel) {
+  test::TempDir dir;
+  const DepthImage image = ramp(64, 48, 1);
+  const std::string path = dir.file("ramp.exr");
+  ASSERT_TRUE(write_depth_image(path, image).ok());
+  detail::offer_shared_memory(false);
+  const Result<DepthImage> through_channel = read_depth_image(path);
+  detail::offer_shared_memory(true);
+  ASSERT_TRUE(through_channel.ok()) << through_channel.error().message;
+  EXPECT_FALSE(through_channel->values.mapped());
+  EXPECT_EQ(through_channel->values, image.values);
+  const Result<DepthImage> shared = read_depth_image(path);
+  ASSERT_TRUE(shared.ok()) << shared.error().message;
+  EXPECT_TRUE(shared->values.mapped());
+  EXPECT_EQ(shared->values, image.values);
 }
 
 // A read request for `path`, whose answer the fake helper may withhold: OK when a verdict came

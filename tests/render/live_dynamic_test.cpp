@@ -176,7 +176,7 @@ TEST(LiveDynamic, ABoxMovingThroughTheLightOfSponza) {
       EXPECT_GT(moved, 0.01);
       EXPECT_GT(moved_adaptive, 0.01);
     }
-    previous_map = map.values;
+    previous_map = map.values.to_vector();
     previous_box = box;
     previous = airlight;
     previous_adaptive = airlight_adaptive;

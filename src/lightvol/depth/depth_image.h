@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <lightvol/core/float_buffer.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/result.h>
 
@@ -15,7 +16,7 @@ namespace lightvol {
 struct DepthImage {
   int width = 0;
   int height = 0;
-  std::vector<float> values;  // width × height
+  FloatBuffer values;  // width × height: heap memory, or the pages lightvol-image decoded into
 
   float at(int col, int row) const {
     return values[static_cast<std::size_t>(row) * static_cast<std::size_t>(width) + col];

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include <lightvol/core/float_buffer.h>
 #include <lightvol/core/result.h>
 
 namespace lightvol {
@@ -14,7 +15,7 @@ namespace lightvol {
 struct ImageChannel {
   int width = 0;
   int height = 0;
-  std::vector<float> values;  // width × height
+  FloatBuffer values;  // width × height
 };
 
 struct ChannelReadOptions {

@@ -65,7 +65,7 @@ Ray pixel_ray(const Camera& camera, int col, int row) {
   return ray;
 }
 
-Result<std::vector<double>> surface_distances(const Camera& camera, const std::vector<float>& depth,
+Result<std::vector<double>> surface_distances(const Camera& camera, const FloatBuffer& depth,
                                               int width, int height, const std::string& source) {
   if (width != camera.width || height != camera.height)
     return Error{source + ": camera depth image is " + std::to_string(width) + "x" +

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include <lightvol/core/float_buffer.h>
 #include <lightvol/core/math.h>
 #include <lightvol/core/result.h>
 #include <lightvol/light/light.h>
@@ -37,7 +38,7 @@ Ray pixel_ray(const Camera& camera, int col, int row);
 // Distance along each pixel's ray to the visible surface, from the camera's depth image (its size
 // must be the camera's). Depths at or beyond the far plane ("nothing hit") give +infinity. The
 // result is row-major, first row first. Errors name `source` and the size mismatch.
-Result<std::vector<double>> surface_distances(const Camera& camera, const std::vector<float>& depth,
+Result<std::vector<double>> surface_distances(const Camera& camera, const FloatBuffer& depth,
                                               int width, int height, const std::string& source);
 
 }  // namespace lightvol

@@ -134,7 +134,56 @@ ssize_t send_some(int fd, const void* data, std::size_t bytes) {
   return ::send(fd, data, bytes, MSG_NOSIGNAL);
 }
 
+// Sends with a copy of descriptor `attach` riding on the first byte (SCM_RIGHTS).
+ssize_t send_with_fd(int fd, const void* data, std::size_t bytes, int attach) {
+  iovec part{const_cast<void*>(data), bytes};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(int))] = {};
+  msghdr message{};
+  message.msg_iov = &part;
+  message.msg_iovlen = 1;
+  message.msg_control = control;
+  message.msg_controllen = sizeof control;
+  cmsghdr* header = CMSG_FIRSTHDR(&message);
+  header->cmsg_level = SOL_SOCKET;
+  header->cmsg_type = SCM_RIGHTS;
+  header->cmsg_len = CMSG_LEN(sizeof(int));
+  std::memcpy(CMSG_DATA(header), &attach, sizeof(int));
+  return ::sendmsg(fd, &message, MSG_NOSIGNAL);
+}
+
 }  // namespace
+
+bool ChildOutput::read_with_fd(std::uint8_t* byte, int* fd) {
+  *fd = -1;
+  iovec part{byte, 1};
+  alignas(cmsghdr) char control[CMSG_SPACE(4 * sizeof(int))] = {};
+  msghdr message{};
+  message.msg_iov = &part;
+  message.msg_iovlen = 1;
+  message.msg_control = control;
+  message.msg_controllen = sizeof control;
+  ssize_t n = 0;
+  do n = ::recvmsg(fd_, &message, MSG_CMSG_CLOEXEC);
+  while (n < 0 && errno == EINTR);
+  // Every descriptor that came is taken (the first kept, any others closed).
+  for (cmsghdr* header = CMSG_FIRSTHDR(&message); header != nullptr;
+       header = CMSG_NXTHDR(&message, header)) {
+    if (header->cmsg_level != SOL_SOCKET || header->cmsg_type != SCM_RIGHTS) continue;
+    const std::size_t count = (header->cmsg_len - CMSG_LEN(0)) / sizeof(int);
+    for (std::size_t i = 0; i < count; ++i) {
+      int received = -1;
+      std::memcpy(&received, CMSG_DATA(header) + i * sizeof(int), sizeof(int));
+      if (*fd < 0)
+        *fd = received;
+      else
+        ::close(received);
+    }
+  }
+  if (n == 1) return true;
+  if (*fd >= 0) ::close(*fd);
+  *fd = -1;
+  return false;
+}
 
 void ChildOutput::write(const void* data, std::size_t bytes) {
   const char* p = static_cast<const char*>(data);
@@ -166,7 +215,7 @@ bool ChildOutput::read_string(std::string* text) {
   return read(text->data(), length);
 }
 
-bool ChildInput::transfer(char* data, std::size_t bytes, bool sending) {
+bool ChildInput::transfer(char* data, std::size_t bytes, bool sending, int attach) {
   while (bytes > 0) {
     const double left = deadline_ - now_seconds();
     if (left <= 0) {
@@ -182,8 +231,11 @@ bool ChildInput::transfer(char* data, std::size_t bytes, bool sending) {
     if (polled < 0 && errno == EINTR) continue;
     if (polled < 0) return false;
     if (ready[0].revents != 0) {
-      const ssize_t n = sending ? send_some(fd_, data, bytes) : ::read(fd_, data, bytes);
+      const ssize_t n = attach >= 0 ? send_with_fd(fd_, data, bytes, attach)
+                        : sending   ? send_some(fd_, data, bytes)
+                                    : ::read(fd_, data, bytes);
       if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+      attach = -1;   // sent with the first byte
       if (n <= 0) {  // the child ended or broke off
         closed_ = true;
         return false;
@@ -198,6 +250,10 @@ bool ChildInput::transfer(char* data, std::size_t bytes, bool sending) {
     if (pidfd_ >= 0 ? ready[1].revents != 0 : has_ended(pid_)) ended_ = true;
   }
   return true;
+}
+
+bool ChildInput::write_with_fd(std::uint8_t byte, int fd) {
+  return transfer(reinterpret_cast<char*>(&byte), 1, true, fd);
 }
 
 bool ChildInput::write(const void* data, std::size_t bytes) {

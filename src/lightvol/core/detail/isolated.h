@@ -37,6 +37,9 @@ class ChildOutput {
   }
   // A string as ChildInput::write_string sends it (at most kMaxString bytes).
   bool read_string(std::string* text);
+  // One byte as ChildInput::write_with_fd sends it, and the descriptor that came with it (-1:
+  // none; it is then the caller's to close). False when the parent closed its end first.
+  bool read_with_fd(std::uint8_t* byte, int* fd);
   template <class T>
   void write_value(const T& value) {
     write(&value, sizeof(value));
@@ -79,6 +82,10 @@ class ChildInput {
     return write(&value, sizeof(value));
   }
   bool write_string(const std::string& text);
+  // Sends one byte with a copy of descriptor `fd` (SCM_RIGHTS; -1: the byte alone), before the
+  // deadline; false if the child ended or stopped reading first, or the kernel refused the
+  // descriptor.
+  bool write_with_fd(std::uint8_t byte, int fd);
   // A mesh as ChildOutput::write_mesh sends it, checked: whole triangles, every index naming a
   // vertex, fewer than 2^32 vertices, the arrays within the memory budget (an Error naming
   // `source` if not). False if the answer breaks off or does not hold together.
@@ -116,7 +123,7 @@ class ChildInput {
 
  private:
   // Reads (or sends) all `bytes` before the deadline, polling the channel; false as read() says.
-  bool transfer(char* data, std::size_t bytes, bool sending);
+  bool transfer(char* data, std::size_t bytes, bool sending, int attach = -1);
 
   int fd_;
   int pid_;

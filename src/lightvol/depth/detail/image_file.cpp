@@ -1,4 +1,10 @@
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -263,7 +269,69 @@ Status check_pfm_scale(const std::string& path, const std::string& magic) {
   return {};
 }
 
+// A memfd the child decodes an image's floats into: created sized and sealed against resizing,
+// so that the child can neither shrink it under our mapping nor grow it; after the child's answer
+// sealed against writes too (which fails while the child still has it mapped writable), then
+// mapped private (copy on write) as the image's storage. Not available (fd() -1) where the kernel
+// has no memfd_create or refuses its size: the floats then come through the channel.
+std::atomic<bool> shared_memory_offered{true};
+
+class SharedFloats {
+ public:
+  explicit SharedFloats(std::size_t bytes) : bytes_(bytes) {
+    if (!shared_memory_offered.load()) return;
+    fd_ = ::memfd_create("lightvol-image", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    if (fd_ < 0) return;
+    if (::ftruncate(fd_, static_cast<off_t>(bytes)) != 0 ||
+        ::fcntl(fd_, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
+  }
+  ~SharedFloats() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  SharedFloats(const SharedFloats&) = delete;
+  SharedFloats& operator=(const SharedFloats&) = delete;
+  int fd() const { return fd_; }
+  // The `texels` floats the child wrote, as this process's own pages (or, where they cannot be
+  // mapped, a copy read from the memfd); an Error if the child kept them writable.
+  Result<FloatBuffer> take(std::size_t texels) {
+    if (::fcntl(fd_, F_ADD_SEALS, F_SEAL_WRITE) != 0)
+      return Error{"the image reader kept its shared memory writable (" +
+                   std::string(std::strerror(errno)) + ")"};
+    // Private: a write (none of the library's) copies the page it writes. Populated for reading
+    // (the page tables of the child's pages filled in one call, not one fault per 4 KiB page):
+    // MAP_POPULATE on a writable private mapping would instead copy every page.
+    void* mapped = ::mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_PRIVATE, fd_, 0);
+    if (mapped != MAP_FAILED) {
+#ifdef MADV_POPULATE_READ
+      ::madvise(mapped, bytes_, MADV_POPULATE_READ);  // advice: where it fails, faults fill them
+#endif
+      return FloatBuffer::adopt_mapping(static_cast<float*>(mapped), texels, bytes_);
+    }
+    std::vector<float> values(texels);
+    std::size_t done = 0;
+    auto* out = reinterpret_cast<char*>(values.data());
+    while (done < bytes_) {
+      const ssize_t n = ::pread(fd_, out + done, bytes_ - done, static_cast<off_t>(done));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0)
+        return Error{"cannot read the image reader's shared memory (" +
+                     std::string(n < 0 ? std::strerror(errno) : "it ended early") + ")"};
+      done += static_cast<std::size_t>(n);
+    }
+    return FloatBuffer(std::move(values));
+  }
+
+ private:
+  int fd_ = -1;
+  std::size_t bytes_;
+};
+
 }  // namespace
+
+void offer_shared_memory(bool offer) { shared_memory_offered.store(offer); }
 
 Result<ImageFile> check_image_file(const std::string& path) {
   std::error_code ec;
@@ -333,14 +401,29 @@ Result<ImageChannel> read_image_channel(
       return stop(s.error());
     in.allow_more(2 + 200e-9 * static_cast<double>(texels));
     if (!in.write_value(std::int32_t{*channel})) return broken;
+    // Shared memory for the floats, offered with the next byte; without it (no memfd here), the
+    // floats come through the channel.
+    const std::size_t bytes = texels * sizeof(float);
+    SharedFloats shared(bytes);
+    if (!in.write_with_fd(std::uint8_t{shared.fd() >= 0}, shared.fd())) return broken;
     if (!in.read_go_on(&result, broken, &answer)) return answer;
+    std::uint8_t where = 0;
+    if (!in.read_value(&where) || where > 1 || (where == 1 && shared.fd() < 0)) return broken;
     ImageChannel image;
     image.width = header.width;
     image.height = header.height;
-    // On huge pages: the zeroing resize then faults 2 MiB at a time (512 faults a GiB).
-    reserve_large(image.values, texels);
-    image.values.resize(texels);
-    if (!in.read(image.values.data(), texels * sizeof(float))) return broken;
+    if (where == 1) {
+      Result<FloatBuffer> floats = shared.take(texels);
+      if (!floats) return Error{path + ": " + floats.error().message};
+      image.values = std::move(*floats);
+    } else {
+      // On huge pages: the zeroing resize then faults 2 MiB at a time (512 faults a GiB).
+      std::vector<float> values;
+      reserve_large(values, texels);
+      values.resize(texels);
+      if (!in.read(values.data(), bytes)) return broken;
+      image.values = std::move(values);
+    }
     result = std::move(image);
     return {};
   };

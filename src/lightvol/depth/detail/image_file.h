@@ -50,6 +50,11 @@ Result<ImageChannel> read_image_channel(
     const std::string& path, const std::function<Status(const ImageHeader&)>& within_budget,
     const std::function<Result<int>(const ImageHeader&)>& select, const std::string& read_failure);
 
+// Whether reads offer lightvol-image a memfd to decode into (the default; read_image_channel falls
+// back to the channel where memfd_create fails): off, the floats come through the channel, as
+// where the kernel has no memfd. For tests of that path.
+void offer_shared_memory(bool offer);
+
 // OpenImageIO's error queue as one line.
 std::string oiio_message(const std::string& message);
 
