@@ -33,6 +33,13 @@ using test::make_depth;
 using test::ray_errors;
 using test::RayErrors;
 
+// An orthographic light over the unit square from depth 0 to 1, linear: the window depth is the
+// stored value, so the depths are floats and can be the image's own.
+std::string unit_box_json() {
+  return R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+         R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+}
+
 TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
   const Light light = light_from_json(directional_json("linear"));
   const DepthImage depth = adaptive_scene(50, 40, 7.0);
@@ -62,9 +69,7 @@ TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
 // doubles (both projections: the uniform error scale and the per-texel one). A spot light with
 // linear depth (d = a rational function of the stored value) keeps doubles.
 TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
-  const std::string box =
-      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
-      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  const std::string box = unit_box_json();
   struct Case {
     std::string light;
     double lo, hi;  // stored values, drawn in [lo, hi] on plateaus with steps and slopes
@@ -133,9 +138,7 @@ TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
 // stored value), and copies otherwise (a window value past 1 is clamped; a spot light's linear
 // depths are converted). Borrowed or copied, the same depths and the same grids.
 TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
-  const std::string box =
-      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
-      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  const std::string box = unit_box_json();
   struct Case {
     std::string light;
     float lo, hi;
@@ -183,9 +186,7 @@ TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
 // of many levels), plateaus with steps (fix-up rounds) and clipped edge cells (sizes not 2^k + 1),
 // with forced border vertices too; and the cap must save measures where leaves are large.
 TEST(Adaptive, PyramidCappedAtTheBoundMakesTheUncappedGrids) {
-  const std::string box =
-      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
-      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  const std::string box = unit_box_json();
   struct Case {
     std::string light;
     double lo, hi;  // stored values: a smooth surface between lo and hi, plateaus, steps

@@ -37,6 +37,28 @@ double triangle_error_rows(const TexelDepths& t, Pt a, Pt b, Pt c, int y_begin, 
   return scaled<kUniform>(t, worst);
 }
 
+// One span of a row of box_error_rows_t with the per-texel error scale: raises `m` to the largest
+// error over texels [x0, x1] of the plane whose depth is base + gx·(x − xr), and with kGap `g` to
+// the largest |plane − depth| (window depth, unscaled).
+template <bool kGap, class D>
+void scaled_span(const TexelDepths& t, const D* dt, int y, int x0, int x1, int xr, double base,
+                 double gx, double& m, double& g) {
+  const double* k = t.scale_row(y);
+  const double w1 = t.w1();
+  const double w0y = t.w0(0, y), w0dc = t.w0_dc();
+  double mm = m, gg = g;
+#pragma omp simd reduction(max : mm, gg)
+  for (int x = x0; x <= x1; ++x) {
+    const double d = base + gx * (x - xr);
+    const double a = std::abs(d - dt[x]);
+    const double e = a * k[x] / std::abs(w0y + w0dc * x + d * w1);
+    mm = mm > e ? mm : e;
+    if constexpr (kGap) gg = gg > a ? gg : a;
+  }
+  m = mm;
+  g = gg;
+}
+
 // The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
 // triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
 // general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
@@ -68,43 +90,11 @@ double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begi
         m = m > e ? m : e;
       }
     } else if (depth_gap == nullptr) {
-      const double* k = t.scale_row(y);
-      const double w1 = t.w1();
-      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
-#pragma omp simd reduction(max : m)
-      for (int x = b.x0; x <= xs; ++x) {
-        const double d = base1 + g1x * (x - b.x0);
-        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
-        m = m > e ? m : e;
-      }
-#pragma omp simd reduction(max : m)
-      for (int x = xs + 1; x <= b.x1; ++x) {
-        const double d = base2 + g2x * (x - b.x1);
-        const double e = std::abs(d - dt[x]) * k[x] / std::abs(w0y + w0dc * x + d * w1);
-        m = m > e ? m : e;
-      }
+      scaled_span<false>(t, dt, y, b.x0, xs, b.x0, base1, g1x, m, gap);
+      scaled_span<false>(t, dt, y, xs + 1, b.x1, b.x1, base2, g2x, m, gap);
     } else {  // the same, and the largest |d − depth| in window units
-      const double* k = t.scale_row(y);
-      const double w1 = t.w1();
-      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
-      double g = 0;
-#pragma omp simd reduction(max : m, g)
-      for (int x = b.x0; x <= xs; ++x) {
-        const double d = base1 + g1x * (x - b.x0);
-        const double a = std::abs(d - dt[x]);
-        const double e = a * k[x] / std::abs(w0y + w0dc * x + d * w1);
-        m = m > e ? m : e;
-        g = g > a ? g : a;
-      }
-#pragma omp simd reduction(max : m, g)
-      for (int x = xs + 1; x <= b.x1; ++x) {
-        const double d = base2 + g2x * (x - b.x1);
-        const double a = std::abs(d - dt[x]);
-        const double e = a * k[x] / std::abs(w0y + w0dc * x + d * w1);
-        m = m > e ? m : e;
-        g = g > a ? g : a;
-      }
-      gap = std::max(gap, g);
+      scaled_span<true>(t, dt, y, b.x0, xs, b.x0, base1, g1x, m, gap);
+      scaled_span<true>(t, dt, y, xs + 1, b.x1, b.x1, base2, g2x, m, gap);
     }
     if constexpr (kUniform) gap = std::max(gap, m);
     worst = std::max(worst, m);

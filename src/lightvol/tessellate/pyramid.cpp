@@ -68,9 +68,9 @@ class PyramidBuilder {
   void upper_maxima(int tile);
 
  private:
-  // One cell: the max of its children's values, then (unless that exceeds the cap) with its own
-  // measure (max_error: over both triangles of its unsplit configuration; laplacian, level 1: the
-  // edge map over its texels).
+  // One cell: its own measure (max_error: over both triangles of its unsplit configuration, up to
+  // the cap; laplacian, level 1: the edge map over its texels), then the max with its children.
+  // max_error calls it for level 1 only (descend does the levels above).
   void compute(int level, int i, int j);
 
   // max_error, one cell of a tile's sub-pyramid from the top down: its own measure, then its
@@ -117,19 +117,6 @@ void PyramidBuilder::edge_map() {
 }
 
 void PyramidBuilder::compute(int level, int i, int j) {
-  float& out = value_[level][static_cast<std::size_t>(j) * q_.nx(level) + i];
-  float below = 0;
-  if (level > 1) {
-    const std::vector<float>& child = value_[level - 1];
-    const int nxb = q_.nx(level - 1), nyb = q_.ny(level - 1);
-    for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
-      for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
-        below = std::max(below, child[static_cast<std::size_t>(cj) * nxb + ci]);
-    if (below > cap_) {
-      out = below;
-      return;
-    }
-  }
   const Quadtree::Box b = q_.box(level, i, j);
   float v = 0;
   if (refinement_ == Refinement::max_error && level == 1 && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
@@ -150,7 +137,14 @@ void PyramidBuilder::compute(int level, int i, int j) {
       for (int x = b.x0; x <= b.x1; ++x)
         v = std::max(v, edges_[static_cast<std::size_t>(y) * w + x]);
   }
-  out = std::max(v, below);
+  if (level > 1) {
+    const std::vector<float>& below = value_[level - 1];
+    const int nxb = q_.nx(level - 1), nyb = q_.ny(level - 1);
+    for (int cj = 2 * j; cj < std::min(2 * j + 2, nyb); ++cj)
+      for (int ci = 2 * i; ci < std::min(2 * i + 2, nxb); ++ci)
+        v = std::max(v, below[static_cast<std::size_t>(cj) * nxb + ci]);
+  }
+  value_[level][static_cast<std::size_t>(j) * q_.nx(level) + i] = v;
 }
 
 bool PyramidBuilder::descendants_within(const Quadtree::Box& b, double own, double gap,
