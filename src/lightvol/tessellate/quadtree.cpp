@@ -16,11 +16,13 @@
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/detail/depth_bounds.h>
 #include <lightvol/tessellate/detail/lattice.h>
 
 namespace lightvol {
 
 using detail::cell_triangles;
+using detail::DepthBounds;
 using detail::kSplitBottom;
 using detail::kSplitLeft;
 using detail::kSplitRight;
@@ -29,6 +31,7 @@ using detail::Pt;
 using detail::Quadtree;
 using detail::seconds_since;
 using detail::triangle_error;
+using detail::within_by_bounds;
 
 std::uint32_t AdaptiveGrid::vertex_index(int col, int row) const {
   const std::uint32_t id = static_cast<std::uint32_t>(row) * static_cast<std::uint32_t>(width) +
@@ -44,8 +47,15 @@ namespace {
 // leaves. The steps run in the order tessellate calls them.
 class Refiner {
  public:
-  Refiner(const TexelDepths& texels, const std::vector<std::vector<float>>& value, double bound)
-      : texels_(texels), value_(value), bound_(bound), q_(texels.width(), texels.height()) {}
+  // `bounds`: the texels' depth bounds for leaf_fails' shortcut, or null (every tested leaf's
+  // texels measured).
+  Refiner(const TexelDepths& texels, const std::vector<std::vector<float>>& value, double bound,
+          const DepthBounds* bounds)
+      : texels_(texels),
+        value_(value),
+        bound_(bound),
+        bounds_(bounds),
+        q_(texels.width(), texels.height()) {}
 
   // A cell splits where its pyramid value exceeds the bound.
   void threshold();
@@ -128,6 +138,7 @@ class Refiner {
   const TexelDepths& texels_;
   const std::vector<std::vector<float>>& value_;
   const double bound_;
+  const DepthBounds* bounds_;
   const Quadtree q_;
   // split_[L][cell]: the cell (level ≥ 1) is divided into its children.
   std::vector<std::vector<std::uint8_t>> split_;
@@ -274,8 +285,13 @@ bool Refiner::leaf_fails(int level, int i, int j) const {
   if (texels_.uniform() && 2 * v * (1 + 1e-9) <= bound_) return false;
   std::array<Pt, 3> tri[6];
   const int n = cell_triangles(b, 1 << (level - 1), config, tri);
-  for (int t = 0; t < n; ++t)
+  // A triangle the depth bounds prove within the bound needs no measure (within_by_bounds: never
+  // a triangle triangle_error would find beyond it).
+  for (int t = 0; t < n; ++t) {
+    if (bounds_ && within_by_bounds(texels_, *bounds_, tri[t][0], tri[t][1], tri[t][2], bound_))
+      continue;
     if (triangle_error(texels_, tri[t][0], tri[t][1], tri[t][2]) > bound_) return true;
+  }
   return false;
 }
 
@@ -497,7 +513,12 @@ AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
   AdaptiveGrid grid;
   grid.width = texels_.width();
   grid.height = texels_.height();
-  Refiner refiner(texels_, value_, bound);
+  // The depth bounds of leaf_fails' shortcut (uniform error scales; the plain full rounds measure
+  // every leaf they test).
+  DepthBounds bounds;
+  if (refinement_ == Refinement::max_error && texels_.uniform() && !full_rounds)
+    bounds.build(texels_);
+  Refiner refiner(texels_, value_, bound, bounds.empty() ? nullptr : &bounds);
   refiner.threshold();
   refiner.force_border(forced);
   // Balance, then (max_error) split the leaves that break the bound, until none does. The first
