@@ -47,15 +47,8 @@ namespace {
 // leaves. The steps run in the order tessellate calls them.
 class Refiner {
  public:
-  // `bounds`: the texels' depth bounds for leaf_fails' shortcut, or null (every tested leaf's
-  // texels measured).
-  Refiner(const TexelDepths& texels, const std::vector<std::vector<float>>& value, double bound,
-          const DepthBounds* bounds)
-      : texels_(texels),
-        value_(value),
-        bound_(bound),
-        bounds_(bounds),
-        q_(texels.width(), texels.height()) {}
+  Refiner(const TexelDepths& texels, const std::vector<std::vector<float>>& value, double bound)
+      : texels_(texels), value_(value), bound_(bound), q_(texels.width(), texels.height()) {}
 
   // A cell splits where its pyramid value exceeds the bound.
   void threshold();
@@ -76,6 +69,9 @@ class Refiner {
   // children and same-level neighbours of the cells in changed_ (a leaf whose own cell, parent and
   // neighbours kept their state has the configuration it passed with). Clears changed_ first.
   bool split_failing_changed_leaves();
+  // The texels' depth bounds for leaf_fails' shortcut from now on (null: every tested leaf's texels
+  // measured).
+  void use_bounds(const DepthBounds* bounds) { bounds_ = bounds; }
   // Cells the balance and fix-up visited (sweeps: every cell of the levels swept).
   std::uint64_t visits() const { return visits_; }
   // Emission: the vertex bitmap and triangle counts, the vertices ranked in texel order, the
@@ -138,7 +134,7 @@ class Refiner {
   const TexelDepths& texels_;
   const std::vector<std::vector<float>>& value_;
   const double bound_;
-  const DepthBounds* bounds_;
+  const DepthBounds* bounds_ = nullptr;
   const Quadtree q_;
   // split_[L][cell]: the cell (level ≥ 1) is divided into its children.
   std::vector<std::vector<std::uint8_t>> split_;
@@ -513,12 +509,7 @@ AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
   AdaptiveGrid grid;
   grid.width = texels_.width();
   grid.height = texels_.height();
-  // The depth bounds of leaf_fails' shortcut (uniform error scales; the plain full rounds measure
-  // every leaf they test).
-  DepthBounds bounds;
-  if (refinement_ == Refinement::max_error && texels_.uniform() && !full_rounds)
-    bounds.build(texels_);
-  Refiner refiner(texels_, value_, bound, bounds.empty() ? nullptr : &bounds);
+  Refiner refiner(texels_, value_, bound);
   refiner.threshold();
   refiner.force_border(forced);
   // Balance, then (max_error) split the leaves that break the bound, until none does. The first
@@ -526,12 +517,20 @@ AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
   // splits of the round before and re-tests the leaves they touched: the same rounds, the same
   // splits, in time linear in the quadtree's size however many rounds a map takes.
   refiner.balance();
+  DepthBounds bounds;
   if (refinement_ == Refinement::max_error) {
     for (bool first = true;; first = false) {
       const bool split = first || full_rounds ? refiner.split_failing_leaves()
                                               : refiner.split_failing_changed_leaves();
       if (!split) break;
       ++grid.fixup_rounds;
+      // Once a round split leaves (rounds may cascade), the later rounds' leaf tests first try
+      // the texels' depth bounds (uniform error scales; the plain full rounds measure every leaf
+      // they test); a map whose first round splits nothing never builds them.
+      if (first && !full_rounds && texels_.uniform()) {
+        bounds.build(texels_);
+        refiner.use_bounds(&bounds);
+      }
       if (full_rounds) {
         refiner.balance();
       } else {

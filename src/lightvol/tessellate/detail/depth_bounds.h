@@ -70,23 +70,33 @@ class DepthBounds {
     Level& first = levels_.back();
     resize_large(first.lo, static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
     resize_large(first.hi, first.lo.size());
+    // Each block row: the columns' least and greatest depth over its rows (element-wise, in D),
+    // then each block's over its columns, rounded outwards to float once.
     tbb::parallel_for(0, ny, [&](int by) {
-      float* lo = first.lo.data() + static_cast<std::size_t>(by) * static_cast<std::size_t>(nx);
-      float* hi = first.hi.data() + static_cast<std::size_t>(by) * static_cast<std::size_t>(nx);
-      for (int bx = 0; bx < nx; ++bx) {
-        lo[bx] = std::numeric_limits<float>::infinity();
-        hi[bx] = -std::numeric_limits<float>::infinity();
-      }
-      for (int y = by << kFirst; y < std::min((by + 1) << kFirst, h); ++y) {
+      std::vector<D> col_lo(t.depth_row_as<D>(by << kFirst), t.depth_row_as<D>(by << kFirst) + w);
+      std::vector<D> col_hi = col_lo;
+      for (int y = (by << kFirst) + 1; y < std::min((by + 1) << kFirst, h); ++y) {
         const D* row = t.depth_row_as<D>(y);
-        for (int x = 0; x < w; ++x) {
-          const D d = row[x];
-          float down = static_cast<float>(d), up = down;
-          if (static_cast<D>(down) > d) down = std::nextafter(down, -1.0f);
-          if (static_cast<D>(up) < d) up = std::nextafter(up, 2.0f);
-          lo[x >> kFirst] = std::min(lo[x >> kFirst], down);
-          hi[x >> kFirst] = std::max(hi[x >> kFirst], up);
+        D* cl = col_lo.data();
+        D* ch = col_hi.data();
+        for (int x = 0; x < w; ++x) {  // vectorizes: x < y ? x : y is the min instruction
+          cl[x] = row[x] < cl[x] ? row[x] : cl[x];
+          ch[x] = row[x] > ch[x] ? row[x] : ch[x];
         }
+      }
+      const std::size_t at = static_cast<std::size_t>(by) * static_cast<std::size_t>(nx);
+      for (int bx = 0; bx < nx; ++bx) {
+        D a = col_lo[static_cast<std::size_t>(bx) << kFirst],
+          b = col_hi[static_cast<std::size_t>(bx) << kFirst];
+        for (int x = (bx << kFirst) + 1; x < std::min((bx + 1) << kFirst, w); ++x) {
+          a = std::min(a, col_lo[static_cast<std::size_t>(x)]);
+          b = std::max(b, col_hi[static_cast<std::size_t>(x)]);
+        }
+        float down = static_cast<float>(a), up = static_cast<float>(b);
+        if (static_cast<D>(down) > a) down = std::nextafter(down, -1.0f);
+        if (static_cast<D>(up) < b) up = std::nextafter(up, 2.0f);
+        first.lo[at + static_cast<std::size_t>(bx)] = down;
+        first.hi[at + static_cast<std::size_t>(bx)] = up;
       }
     });
     while (nx > 1 || ny > 1) {
