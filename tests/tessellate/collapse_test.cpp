@@ -288,6 +288,44 @@ TEST(Collapse, FastFlipsMakeTheReferenceFlips) {
   EXPECT_GE(compared, 6);  // flips were made, so the comparison says something
 }
 
+TEST(Collapse, TexelTestsByDepthBoundsMakeTheMeasuredGrid) {
+  // The texel tests first try the depth bounds (uniform error scales): the same collapses and
+  // flips as measuring every new triangle's texels, on every case (a spot light's varying scale
+  // takes the plain path in both) and bound, and on plateaus with steps where the bounds prove
+  // most floor triangles.
+  std::vector<Case> all = cases(97, 131);
+  all.push_back({"directional steps", light_from_json(directional_json("linear")),
+                 make_depth(130, 97, [](int c, int r) {
+                   const int pc = c / 2 * 2, pr = r % 16 / 2 * 2;
+                   if (pc < 2) return 0.7f;
+                   if (pc % 8 == 0 && pr == 4) return 0.5009f;
+                   if (pc % 8 == 2 && pr == 2) return 0.4996f;
+                   return 0.5f;
+                 })});
+  int collapses = 0;
+  for (const Case& c : all) {
+    const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+    const double e0 = pyramid.measure(pyramid.tessellate(1e30, true));
+    for (const double f : {0.003, 0.01, 0.05, 0.5}) {
+      const double e = c.name == "directional steps" ? 0.001 * f / 0.05 : e0 * f;
+      const AdaptiveGrid quadtree = pyramid.tessellate(e, true);
+      CollapseOptions fast, reference;
+      reference.reference_texel_tests = true;
+      CollapseReport rf, rr;
+      const AdaptiveGrid a = collapse_grid(pyramid.texels(), quadtree, e, fast, &rf);
+      const AdaptiveGrid b = collapse_grid(pyramid.texels(), quadtree, e, reference, &rr);
+      EXPECT_EQ(rf.collapses, rr.collapses) << c.name << " " << f;
+      EXPECT_EQ(rf.attempts, rr.attempts) << c.name << " " << f;
+      EXPECT_EQ(rf.flips, rr.flips) << c.name << " " << f;
+      EXPECT_EQ(a.vertices, b.vertices) << c.name << " " << f;
+      EXPECT_EQ(a.indices, b.indices) << c.name << " " << f;
+      EXPECT_LE(brute_force(pyramid.texels(), a).max_error, e * (1 + 1e-9)) << c.name << " " << f;
+      collapses += static_cast<int>(rf.collapses);
+    }
+  }
+  EXPECT_GT(collapses, 1000);  // collapses were made, so the comparison says something
+}
+
 TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
   const Case c = cases(65, 65)[2];
   const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);

@@ -158,7 +158,9 @@ class RefinementPyramid {
   // `standard` chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
   AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
   // The same grid by the plain rounds: every fix-up round re-balances and re-tests the whole
-  // quadtree (time: rounds × cells). The reference tessellate is tested against.
+  // quadtree (time: rounds × cells), measuring the texels of every leaf it tests (tessellate
+  // skips the leaves whose corners and the texels' depth bounds prove them within the bound).
+  // The reference tessellate is tested against.
   AdaptiveGrid tessellate_by_full_rounds(double bound, bool standard,
                                          const BorderSplits& forced = {}) const;
 

@@ -14,6 +14,7 @@
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/collapse_grid.h>
+#include <lightvol/tessellate/detail/depth_bounds.h>
 #include <lightvol/tessellate/detail/lattice.h>
 #include <lightvol/tessellate/detail/plane_error.h>
 
@@ -21,12 +22,14 @@ namespace lightvol {
 
 namespace {
 
+using detail::DepthBounds;
 using detail::Pt;
 using detail::RowSpanWalker;
 using detail::span_error;
 using detail::triangle_plane;
 using detail::TrianglePlane;
 using detail::with_texel_kind;
+using detail::within_by_bounds;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -181,6 +184,7 @@ class Collapser {
       for (int c = 0; c < 3; ++c) star_.push(tri_[k][c], static_cast<std::uint32_t>(k));
     assign_large(vertex_alive_, nv, std::uint8_t{1});
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
+    if (texels.uniform() && !options.reference_texel_tests) bounds_.build(texels);
   }
 
   // Sweeps. Each sweep visits its vertices in texel order, in horizontal stripes of kStripe rows:
@@ -289,6 +293,7 @@ class Collapser {
 
  private:
   bool within(Pt a, Pt b, Pt c) const {
+    if (!bounds_.empty() && within_by_bounds(t_, bounds_, a, b, c, bound_)) return true;
     return with_texel_kind(t_, [&](auto uniform, auto depth) {
       return triangle_within<decltype(uniform)::value, decltype(depth)>(t_, a, b, c, bound_);
     });
@@ -578,6 +583,9 @@ class Collapser {
   // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
   std::vector<std::uint8_t> untried_;
   bool exact_angles_ = false;
+  // within_by_bounds' blocks (empty, as for non-uniform error scales: every texel test measures
+  // the texels).
+  DepthBounds bounds_;
 };
 
 }  // namespace

@@ -52,6 +52,12 @@ struct CollapseOptions {
   // comparison on atan2 values. The default skips the tries that cannot succeed and compares the
   // angles exactly first (collapse_grid.cpp); the result is the same.
   bool reference_flips = false;
+  // Every texel test made the plain way (for tests): each texel of a new triangle measured. The
+  // default first bounds the triangle's error by its corners' depths against the least and
+  // greatest depth of aligned blocks covering its bounding box (uniform error scales only), and
+  // measures the texels only when that bound exceeds the error bound (collapse_grid.cpp); the
+  // result is the same.
+  bool reference_texel_tests = false;
 };
 
 struct CollapseReport {

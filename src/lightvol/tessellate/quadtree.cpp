@@ -16,11 +16,13 @@
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
 #include <lightvol/tessellate/adaptive_grid.h>
+#include <lightvol/tessellate/detail/depth_bounds.h>
 #include <lightvol/tessellate/detail/lattice.h>
 
 namespace lightvol {
 
 using detail::cell_triangles;
+using detail::DepthBounds;
 using detail::kSplitBottom;
 using detail::kSplitLeft;
 using detail::kSplitRight;
@@ -29,6 +31,7 @@ using detail::Pt;
 using detail::Quadtree;
 using detail::seconds_since;
 using detail::triangle_error;
+using detail::within_by_bounds;
 
 std::uint32_t AdaptiveGrid::vertex_index(int col, int row) const {
   const std::uint32_t id = static_cast<std::uint32_t>(row) * static_cast<std::uint32_t>(width) +
@@ -66,6 +69,9 @@ class Refiner {
   // children and same-level neighbours of the cells in changed_ (a leaf whose own cell, parent and
   // neighbours kept their state has the configuration it passed with). Clears changed_ first.
   bool split_failing_changed_leaves();
+  // The texels' depth bounds for leaf_fails' shortcut from now on (null: every tested leaf's texels
+  // measured).
+  void use_bounds(const DepthBounds* bounds) { bounds_ = bounds; }
   // Cells the balance and fix-up visited (sweeps: every cell of the levels swept).
   std::uint64_t visits() const { return visits_; }
   // Emission: the vertex bitmap and triangle counts, the vertices ranked in texel order, the
@@ -128,6 +134,7 @@ class Refiner {
   const TexelDepths& texels_;
   const std::vector<std::vector<float>>& value_;
   const double bound_;
+  const DepthBounds* bounds_ = nullptr;
   const Quadtree q_;
   // split_[L][cell]: the cell (level ≥ 1) is divided into its children.
   std::vector<std::vector<std::uint8_t>> split_;
@@ -274,8 +281,13 @@ bool Refiner::leaf_fails(int level, int i, int j) const {
   if (texels_.uniform() && 2 * v * (1 + 1e-9) <= bound_) return false;
   std::array<Pt, 3> tri[6];
   const int n = cell_triangles(b, 1 << (level - 1), config, tri);
-  for (int t = 0; t < n; ++t)
+  // A triangle the depth bounds prove within the bound needs no measure (within_by_bounds: never
+  // a triangle triangle_error would find beyond it).
+  for (int t = 0; t < n; ++t) {
+    if (bounds_ && within_by_bounds(texels_, *bounds_, tri[t][0], tri[t][1], tri[t][2], bound_))
+      continue;
     if (triangle_error(texels_, tri[t][0], tri[t][1], tri[t][2]) > bound_) return true;
+  }
   return false;
 }
 
@@ -505,12 +517,20 @@ AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
   // splits of the round before and re-tests the leaves they touched: the same rounds, the same
   // splits, in time linear in the quadtree's size however many rounds a map takes.
   refiner.balance();
+  DepthBounds bounds;
   if (refinement_ == Refinement::max_error) {
     for (bool first = true;; first = false) {
       const bool split = first || full_rounds ? refiner.split_failing_leaves()
                                               : refiner.split_failing_changed_leaves();
       if (!split) break;
       ++grid.fixup_rounds;
+      // Once a round split leaves (rounds may cascade), the later rounds' leaf tests first try
+      // the texels' depth bounds (uniform error scales; the plain full rounds measure every leaf
+      // they test); a map whose first round splits nothing never builds them.
+      if (first && !full_rounds && texels_.uniform()) {
+        bounds.build(texels_);
+        refiner.use_bounds(&bounds);
+      }
       if (full_rounds) {
         refiner.balance();
       } else {
