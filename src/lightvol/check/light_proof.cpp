@@ -240,7 +240,7 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
         if (tri[k] == view.apex) apex_link->emplace_back(tri[(k + 1) % 3], tri[(k + 2) % 3]);
     }
   };
-  if (near.distance) {
+  if (near.distance && view.lanes) {
     // Every vertex the faces name has its distance: the faces kLanes at a time.
     const auto lanes = std::make_unique_for_overwrite<FaceLanes>();
     FaceLanes& f = *lanes;

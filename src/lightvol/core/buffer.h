@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace lightvol {
@@ -22,6 +24,12 @@ inline void advise_huge_pages(const void* data, std::size_t bytes) {
   const std::uintptr_t end = (begin + bytes) & ~(kHuge - 1);
   if (end > aligned) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
 }
+
+// Maps the pages of each (start, bytes) range in blocks of 32 MiB, in parallel, before they are
+// first written (MADV_POPULATE_WRITE, Linux 5.14; advice only: without it the first write maps
+// them, in one thread). The kernel zeroes fresh pages as it maps them, and on a virtual machine
+// that is the slowest part of filling a large buffer: both threads share it (buffer.cpp).
+void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges);
 
 // Reserves room for `capacity` elements (so later appends never copy the buffer), on huge pages
 // when large.

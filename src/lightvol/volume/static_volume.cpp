@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/buffer.h>
@@ -138,10 +139,17 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
 
   Mesh mesh;
   const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  // Huge pages, mapped in parallel blocks first (the kernel zeroes each as it maps it, the
+  // slowest part of the build on a virtual machine), then zeroed again by the vectors.
   reserve_large(mesh.positions, 3 * counts.vertices);
   reserve_large(mesh.indices, 3 * counts.triangles);
-  mesh.positions.resize(3 * grid_vertices);
-  mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
+  populate_in_parallel({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
+                        {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
+  tbb::parallel_invoke([&] { mesh.positions.resize(3 * grid_vertices); },
+                       [&] {
+                         mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) *
+                                             static_cast<std::size_t>(h - 1));
+                       });
 
   if (Status s = grid_rows(unproject, depth, 0, h, mesh.positions.data(), source); !s)
     return s.error();

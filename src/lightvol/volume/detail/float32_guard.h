@@ -186,6 +186,11 @@ struct FaceTally {
   }
 };
 
+// The second pass over a held mesh, in parallel: point lights' faces are first settled in
+// vectorized lanes (collapsed, or facing away), the rest judged one by one; with `lanes` false,
+// every face one by one (the same counts: the tests compare the two) (float32_guard.cpp).
+FaceTally tally_faces(const Mesh& mesh, const FaceJudge& judge, bool lanes = true);
+
 // Refusals the vertices decide alone: not finite, too large, too small.
 Status vertex_verdict(const VertexTally& vertices, const Light& light,
                       const std::string& light_source);
