@@ -68,9 +68,8 @@ int main(int argc, char** argv) {
                 (void)lightvol::check_representable(mesh, light, lightvol::Space::world, "bench");
               }));
   lightvol::CheckReport report;
-  std::printf("check     %.3f\n", best(repeats, one, [&] {
-                report = lightvol::check_volume_linear(mesh, &light);
-              }));
+  std::printf("check     %.3f\n",
+              best(repeats, one, [&] { report = lightvol::check_volume_linear(mesh, &light); }));
   std::printf("sums det %a positive %a negative %a zeroed %a wrong %llu degenerate %llu\n",
               sums.det, sums.light.positive, sums.light.negative, sums.light.zeroed,
               static_cast<unsigned long long>(sums.light.wrong),

@@ -688,7 +688,8 @@ std::vector<std::pair<std::string, Mesh>> face_pass_variants() {
     const std::uint32_t a = m.indices[3 * mid], b = m.indices[3 * mid + 1],
                         c = m.indices[3 * mid + 2];
     for (int k = 0; k < 3; ++k)
-      m.positions[3 * c + k] = m.positions[3 * a + k] + 2 * (m.positions[3 * b + k] - m.positions[3 * a + k]);
+      m.positions[3 * c + k] =
+          m.positions[3 * a + k] + 2 * (m.positions[3 * b + k] - m.positions[3 * a + k]);
   });
   add("a NaN coordinate", [&](Mesh& m) {
     m.positions[3 * m.indices[3 * mid] + 1] = std::numeric_limits<float>::quiet_NaN();
@@ -716,9 +717,7 @@ TEST(LightProof, FacesDecidedInLanesSumToTheSameBitsAsOneByOne) {
     one_by_one.lanes = false;
     const detail::FaceSums a = detail::face_pass(mesh, lanes);
     const detail::FaceSums b = detail::face_pass(mesh, one_by_one);
-    const auto same_bits = [](double x, double y) {
-      return std::memcmp(&x, &y, sizeof x) == 0;
-    };
+    const auto same_bits = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
     EXPECT_TRUE(same_bits(a.det, b.det)) << a.det << " " << b.det;
     EXPECT_EQ(a.degenerate, b.degenerate);
     EXPECT_TRUE(same_bits(a.light.positive, b.light.positive))
@@ -754,8 +753,7 @@ TEST(LightProof, FacesDecidedInLanesSumToTheSameBitsAsOneByOne) {
   for (const auto& [name, mesh] : face_pass_variants()) {
     SCOPED_TRACE(name);
     const CheckReport all = check_volume_linear(mesh, &light);
-    EXPECT_EQ(all.valid(), name == "sound" || name.rfind("edge-on", 0) == 0)
-        << all.first_failure();
+    EXPECT_EQ(all.valid(), name == "sound" || name.rfind("edge-on", 0) == 0) << all.first_failure();
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
     const CheckReport serial = check_volume_linear(mesh, &light);
     if (std::isnan(all.volume))

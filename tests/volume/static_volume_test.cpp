@@ -291,6 +291,33 @@ TEST(StaticVolume, GuardSettlesFacesInLanesAsItJudgesThemOneByOne) {
   }
 }
 
+TEST(StaticVolume, ReservedStorageGivesTheSameVolume) {
+  // reserve_static_volume's buffers (made while the map is read) are filled in place when they
+  // have room: the same positions and triangles, in the storage's own memory; storage for a
+  // smaller map is dropped and the volume is the same.
+  const Light spot = test::light_from_json(test::spot_json("linear"));
+  const Light directional = test::light_from_json(test::directional_json("linear"));
+  for (const Light* light : {&spot, &directional}) {
+    const DepthImage depth = occluded(40, 30);
+    const Mesh plain = build(*light, depth);
+    Mesh storage = reserve_static_volume(light->type, 40, 30);
+    EXPECT_EQ(storage.num_vertices(), 0u);
+    EXPECT_EQ(storage.num_triangles(), 0u);
+    EXPECT_EQ(storage.indices.capacity(), plain.indices.size());
+    const float* reserved = storage.positions.data();
+    Result<Mesh> filled = build_static_volume(*light, depth, {}, "depth.exr", std::move(storage));
+    ASSERT_TRUE(filled.ok());
+    EXPECT_EQ(filled->positions.data(), reserved);
+    EXPECT_EQ(filled->positions, plain.positions);
+    EXPECT_EQ(filled->indices, plain.indices);
+    Result<Mesh> too_small = build_static_volume(*light, depth, {}, "depth.exr",
+                                                 reserve_static_volume(light->type, 40, 29));
+    ASSERT_TRUE(too_small.ok());
+    EXPECT_EQ(too_small->positions, plain.positions);
+    EXPECT_EQ(too_small->indices, plain.indices);
+  }
+}
+
 TEST(StaticVolume, SpotOverFlatFloorIsThePyramid) {
   // Floor at eye distance 4 (world y = 0): the grid is the rectangle through the texel centres,
   // the volume the pyramid over it with height 4.

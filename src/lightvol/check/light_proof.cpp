@@ -143,9 +143,9 @@ struct FaceLanes {
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 [[gnu::target_clones("avx512f", "avx2", "default")]]
 #endif
-[[gnu::noinline]] void decide_lanes(const std::uint32_t* tri, const float* p,
-                                    const double* distance, std::uint32_t first, std::size_t n,
-                                    Vec3d eye, double extra, FaceLanes& f) {
+[[gnu::noinline]] void
+decide_lanes(const std::uint32_t* tri, const float* p, const double* distance, std::uint32_t first,
+             std::size_t n, Vec3d eye, double extra, FaceLanes& f) {
 #pragma omp simd
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint32_t ia = tri[3 * i], ib = tri[3 * i + 1], ic = tri[3 * i + 2];

@@ -27,4 +27,18 @@ void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size
 #endif
 }
 
+void populate(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
+#ifdef MADV_POPULATE_WRITE
+  constexpr std::uintptr_t kPage = 4096;
+  for (const auto& [start, bytes] : ranges) {
+    const auto begin = reinterpret_cast<std::uintptr_t>(start);
+    const std::uintptr_t first = (begin + kPage - 1) & ~(kPage - 1);
+    const std::uintptr_t end = (begin + bytes) & ~(kPage - 1);
+    if (end > first) ::madvise(reinterpret_cast<void*>(first), end - first, MADV_POPULATE_WRITE);
+  }
+#else
+  (void)ranges;
+#endif
+}
+
 }  // namespace lightvol

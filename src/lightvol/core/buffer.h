@@ -30,6 +30,9 @@ inline void advise_huge_pages(const void* data, std::size_t bytes) {
 // them, in one thread). The kernel zeroes fresh pages as it maps them, and on a virtual machine
 // that is the slowest part of filling a large buffer: both threads share it (buffer.cpp).
 void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges);
+// The same in this thread alone (one madvise per range), for a thread that maps pages while the
+// other cores have other work.
+void populate(std::initializer_list<std::pair<const void*, std::size_t>> ranges);
 
 // Reserves room for `capacity` elements (so later appends never copy the buffer), on huge pages
 // when large.

@@ -166,8 +166,9 @@ constexpr std::size_t kLanes = 256;
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 [[gnu::target_clones("avx512f", "avx2", "default")]]
 #endif
-[[gnu::noinline]] void settle_lanes(const std::uint32_t* tri, const float* p, std::size_t n,
-                                    Vec3d eye, double* collapsed, double* away) {
+[[gnu::noinline]] void
+settle_lanes(const std::uint32_t* tri, const float* p, std::size_t n, Vec3d eye, double* collapsed,
+             double* away) {
 #pragma omp simd
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t ia = 3 * std::size_t{tri[3 * i]}, ib = 3 * std::size_t{tri[3 * i + 1]},
@@ -209,9 +210,8 @@ FaceTally tally_faces(const Mesh& mesh, const FaceJudge& judge, bool lanes) {
             if (collapsed[i] != 0) {
               ++c;
             } else if (away[i] == 0) {
-              const FaceFinding found =
-                  judge_face(corners(lane0 + i, 0), corners(lane0 + i, 1), corners(lane0 + i, 2),
-                             judge);
+              const FaceFinding found = judge_face(corners(lane0 + i, 0), corners(lane0 + i, 1),
+                                                   corners(lane0 + i, 2), judge);
               c += found == FaceFinding::collapsed;
               turned += found == FaceFinding::turned;
             }

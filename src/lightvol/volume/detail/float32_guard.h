@@ -199,8 +199,9 @@ Status representable_verdict(const VertexTally& vertices, const FaceTally& faces
                              const Light& light, Space space, const std::string& light_source);
 
 // build_static_volume without the guard: the volume as the grid and closing make it, for what
-// judges it (the guard's tests need the volumes it refuses).
+// judges it (the guard's tests need the volumes it refuses). `storage`: as build_static_volume's.
 Result<Mesh> assemble_static_volume(const Light& light, const DepthImage& depth,
-                                    const VolumeOptions& options, const std::string& source);
+                                    const VolumeOptions& options, const std::string& source,
+                                    Mesh storage = {});
 
 }  // namespace lightvol::detail
