@@ -13,6 +13,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/check/detail/linear_checks.h>
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/light_side.h>
 
 namespace lightvol {
@@ -240,7 +241,7 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
         if (tri[k] == view.apex) apex_link->emplace_back(tri[(k + 1) % 3], tri[(k + 2) % 3]);
     }
   };
-  if (near.distance && view.lanes) {
+  if (near.distance && view.lanes && vector_lanes()) {
     // Every vertex the faces name has its distance: the faces kLanes at a time.
     const auto lanes = std::make_unique_for_overwrite<FaceLanes>();
     FaceLanes& f = *lanes;

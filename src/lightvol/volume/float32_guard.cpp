@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/volume/detail/float32_guard.h>
 #include <lightvol/volume/float32_guard.h>
 
@@ -197,7 +198,7 @@ FaceTally tally_faces(const Mesh& mesh, const FaceJudge& judge, bool lanes) {
         const auto corners = [&](std::size_t t, int k) {
           return p + 3 * std::size_t{first[3 * t + k]};
         };
-        if (!point || !lanes) {
+        if (!point || !lanes || !vector_lanes()) {
           acc.add(r.size(), corners, judge);
           return acc;
         }

@@ -187,8 +187,9 @@ struct FaceTally {
 };
 
 // The second pass over a held mesh, in parallel: point lights' faces are first settled in
-// vectorized lanes (collapsed, or facing away), the rest judged one by one; with `lanes` false,
-// every face one by one (the same counts: the tests compare the two) (float32_guard.cpp).
+// vectorized lanes (collapsed, or facing away) where vector_lanes() (core/buffer.h), the rest
+// judged one by one; with `lanes` false, every face one by one (the same counts: the tests compare
+// the two) (float32_guard.cpp).
 FaceTally tally_faces(const Mesh& mesh, const FaceJudge& judge, bool lanes = true);
 
 // Refusals the vertices decide alone: not finite, too large, too small.
