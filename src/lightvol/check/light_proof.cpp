@@ -163,7 +163,7 @@ decide_lanes(const std::uint32_t* tri, const float* p, const double* distance, s
     const double ux = pbx - pax, uy = pby - pay, uz = pbz - paz;
     const double vx = pcx - pax, vy = pcy - pay, vz = pcz - paz;
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    f.flat[i] = (nx == 0) & (ny == 0) & (nz == 0) ? 1.0 : 0.0;
+    f.flat[i] = ((nx == 0) & (ny == 0) & (nz == 0)) ? 1.0 : 0.0;
     // corner_motion + extra
     const double big_a = std::max(std::max(std::abs(pax), std::abs(pay)), std::abs(paz));
     const double big_b = std::max(std::max(std::abs(pbx), std::abs(pby)), std::abs(pbz));
@@ -191,7 +191,7 @@ decide_lanes(const std::uint32_t* tri, const float* p, const double* distance, s
                                  std::sqrt(abx * abx + aby * aby + abz * abz));
     const bool series = (denom > 0) & (std::abs(det) <= 1e-3 * denom);
     const bool quick = det > motion * (lb * lc + lc * la + la * lb) * (1 + 1e-12);
-    f.decided[i] = series & (quick | (det > tol)) ? 1.0 : 0.0;
+    f.decided[i] = (series & (quick | (det > tol))) ? 1.0 : 0.0;
   }
 }
 

@@ -180,9 +180,9 @@ settle_lanes(const std::uint32_t* tri, const float* p, std::size_t n, Vec3d eye,
     const double ux = bx - ax, uy = by - ay, uz = bz - az;
     const double vx = cx - ax, vy = cy - ay, vz = cz - az;
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-    collapsed[i] = (nx == 0) & (ny == 0) & (nz == 0) ? 1.0 : 0.0;
+    collapsed[i] = ((nx == 0) & (ny == 0) & (nz == 0)) ? 1.0 : 0.0;
     const double ex = ax - eye.x, ey = ay - eye.y, ez = az - eye.z;
-    away[i] = ex * nx + ey * ny + ez * nz >= 0 ? 1.0 : 0.0;
+    away[i] = (ex * nx + ey * ny + ez * nz >= 0) ? 1.0 : 0.0;
   }
 }
 
