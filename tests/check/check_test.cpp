@@ -2,14 +2,20 @@
 // volume is rejected with its own named failure, with and without the light.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numbers>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <lightvol/check/check.h>
 #include <lightvol/check/detail/cgal_checks.h>
+#include <lightvol/check/detail/linear_checks.h>
 #include <lightvol/check/topology.h>
 #include <lightvol/export/export.h>
 #include <lightvol/volume/static_volume.h>
@@ -645,6 +651,116 @@ TEST(LightProof, DistancesPerBlockOfFacesSumToTheSameBitsAsPerFace) {
   EXPECT_EQ(a.light_sum, b.light_sum);
   EXPECT_EQ(a.volume, b.volume);
   EXPECT_NEAR(a.light_expected, b.light_expected, 1e-12);
+}
+
+// The variants of the large spot volume that the face pass's two ways must agree on: sound, and
+// broken so that faces leave the vectorized lanes for classify_from_point in each of its ways.
+std::vector<std::pair<std::string, Mesh>> face_pass_variants() {
+  const Mesh sound = large_spot_volume();
+  std::vector<std::pair<std::string, Mesh>> out;
+  out.emplace_back("sound", sound);
+  const std::size_t mid = sound.num_triangles() / 2;
+  const auto add = [&](std::string name, const auto& change) {
+    Mesh m = sound;
+    change(m);
+    out.emplace_back(std::move(name), std::move(m));
+  };
+  add("faces flipped", [&](Mesh& m) {
+    for (const std::size_t t : {std::size_t{7}, mid, mid + 1, m.num_triangles() - 9})
+      std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+  });
+  add("a vertex pulled towards the light", [&](Mesh& m) {
+    const std::uint32_t v = m.indices[3 * mid];
+    for (int k = 0; k < 3; ++k) m.positions[3 * v + k] *= 0.3f;
+  });
+  const float eye[3] = {0, 4, 0};  // spot_light()'s position
+  add("a vertex close to the light (large angles)", [&](Mesh& m) {
+    const std::uint32_t v = m.indices[3 * mid + 1];
+    for (int k = 0; k < 3; ++k) m.positions[3 * v + k] = eye[k] + 1e-3f * (k == 1 ? -1.0f : 0.5f);
+  });
+  add("edge-on faces (a vertex on its neighbour's ray)", [&](Mesh& m) {
+    const std::uint32_t v = m.indices[3 * mid], w = m.indices[3 * mid + 1];
+    for (int k = 0; k < 3; ++k)
+      m.positions[3 * v + k] = eye[k] + 0.9f * (m.positions[3 * w + k] - eye[k]);
+  });
+  add("degenerate faces (a repeated vertex, zero area)", [&](Mesh& m) {
+    m.indices[3 * 100 + 1] = m.indices[3 * 100];
+    const std::uint32_t a = m.indices[3 * mid], b = m.indices[3 * mid + 1],
+                        c = m.indices[3 * mid + 2];
+    for (int k = 0; k < 3; ++k)
+      m.positions[3 * c + k] =
+          m.positions[3 * a + k] + 2 * (m.positions[3 * b + k] - m.positions[3 * a + k]);
+  });
+  add("a NaN coordinate", [&](Mesh& m) {
+    m.positions[3 * m.indices[3 * mid] + 1] = std::numeric_limits<float>::quiet_NaN();
+  });
+  add("an infinite and a huge coordinate", [&](Mesh& m) {
+    m.positions[3 * m.indices[3 * mid]] = std::numeric_limits<float>::infinity();
+    m.positions[3 * m.indices[3 * (mid + 4000)] + 2] = 1e30f;
+  });
+  return out;
+}
+
+TEST(LightProof, FacesDecidedInLanesSumToTheSameBitsAsOneByOne) {
+  // The face pass decides most faces from a point light in vectorized lanes (when a block's faces
+  // name a narrow range of vertices, as build writes them) and sends the others to
+  // classify_from_point; with LightView::lanes false every face goes there. On the sound volume
+  // and on each break, the two must give the same sums to the bit, the same counts and the same
+  // faces around the apex, and each break must show in them.
+  const Light light = spot_light();
+  for (const auto& [name, mesh] : face_pass_variants()) {
+    SCOPED_TRACE(name);
+    const detail::VertexScan scan = detail::scan_vertices(mesh, &light, 0);
+    ASSERT_EQ(scan.at_light.size(), 1u);
+    detail::LightView lanes = detail::point_view(mesh, light, scan, 0);
+    detail::LightView one_by_one = lanes;
+    one_by_one.lanes = false;
+    const detail::FaceSums a = detail::face_pass(mesh, lanes);
+    const detail::FaceSums b = detail::face_pass(mesh, one_by_one);
+    const auto same_bits = [](double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; };
+    EXPECT_TRUE(same_bits(a.det, b.det)) << a.det << " " << b.det;
+    EXPECT_EQ(a.degenerate, b.degenerate);
+    EXPECT_TRUE(same_bits(a.light.positive, b.light.positive))
+        << a.light.positive << " " << b.light.positive;
+    EXPECT_TRUE(same_bits(a.light.negative, b.light.negative));
+    EXPECT_TRUE(same_bits(a.light.zeroed, b.light.zeroed));
+    EXPECT_TRUE(same_bits(a.light.source, b.light.source));
+    EXPECT_EQ(a.light.wrong, b.light.wrong);
+    EXPECT_EQ(a.apex_link, b.apex_link);
+    if (name == "sound") {
+      EXPECT_EQ(a.light.wrong, 0u);
+      EXPECT_EQ(a.degenerate, 0u);
+      EXPECT_GT(a.apex_link.size(), 0u);
+    }
+    if (name == "faces flipped") {
+      EXPECT_GE(a.light.wrong, 3u);  // the fourth is a face of the apex's fan: left out
+    }
+    if (name == "a vertex pulled towards the light") {
+      EXPECT_GT(a.light.wrong, 0u);
+    }
+    if (name.rfind("degenerate", 0) == 0) {
+      EXPECT_GE(a.degenerate, 2u);
+    }
+    if (name.rfind("edge-on", 0) == 0) {
+      EXPECT_GT(a.light.zeroed + double(a.light.wrong), 0.0);
+    }
+    if (name == "a NaN coordinate") {
+      EXPECT_TRUE(std::isnan(a.det));
+    }
+  }
+  // The whole check, lanes and all, rejects each break (the edge-on faces count zero and leave a
+  // sound volume), with the same report on one thread as on two.
+  for (const auto& [name, mesh] : face_pass_variants()) {
+    SCOPED_TRACE(name);
+    const CheckReport all = check_volume_linear(mesh, &light);
+    EXPECT_EQ(all.valid(), name == "sound" || name.rfind("edge-on", 0) == 0) << all.first_failure();
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    const CheckReport serial = check_volume_linear(mesh, &light);
+    if (std::isnan(all.volume))
+      EXPECT_EQ(all.first_failure(), serial.first_failure());
+    else
+      expect_same_report(all, serial);
+  }
 }
 
 TEST_F(BrokenVolume, DuplicatedFace) {

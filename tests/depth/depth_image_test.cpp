@@ -1,7 +1,12 @@
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -46,6 +51,46 @@ TEST(DepthImage, FloatFormatsRoundTripExactly) {
     EXPECT_EQ(out->height, 5);
     EXPECT_EQ(out->values, in.values) << name;
   }
+}
+
+TEST(DepthImage, PeekedSizeIsTheReadImagesForEveryExrAndNothingElse) {
+  // lightvol's own look at an EXR header (the static build's buffers are made from it while the
+  // map is read): the size the read finds, whatever the data window's origin, compression or
+  // tiling; nothing for other formats, truncated headers and junk.
+  test::TempDir dir;
+  ASSERT_TRUE(write_depth_image(dir.file("d.exr"), ramp(7, 5)).ok());
+  const std::optional<std::array<int, 2>> peeked = peek_image_size(dir.file("d.exr"));
+  ASSERT_TRUE(peeked.has_value());
+  EXPECT_EQ((*peeked)[0], 7);
+  EXPECT_EQ((*peeked)[1], 5);
+  {
+    auto out = OIIO::ImageOutput::create(dir.file("w.exr"));
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(33, 17, 1, OIIO::TypeDesc::FLOAT);
+    spec.x = spec.full_x = -4, spec.y = spec.full_y = 9;  // windows away from the origin
+    spec.tile_width = spec.tile_height = 16;
+    spec.attribute("compression", "piz");
+    ASSERT_TRUE(out->open(dir.file("w.exr"), spec));
+    const std::vector<float> pixels(33 * 17, 0.5f);
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+    ASSERT_TRUE(out->close());
+  }
+  const Result<DepthImage> read = read_depth_image(dir.file("w.exr"));
+  ASSERT_TRUE(read.ok()) << read.error().message;
+  const std::optional<std::array<int, 2>> window = peek_image_size(dir.file("w.exr"));
+  ASSERT_TRUE(window.has_value());
+  EXPECT_EQ((*window)[0], read->width);
+  EXPECT_EQ((*window)[1], read->height);
+  ASSERT_TRUE(write_depth_image(dir.file("d.tif"), ramp(7, 5)).ok());
+  EXPECT_FALSE(peek_image_size(dir.file("d.tif")).has_value());
+  EXPECT_FALSE(peek_image_size(dir.file("missing.exr")).has_value());
+  // The header cut before its data window: nothing.
+  std::ifstream in(dir.file("d.exr"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t window_at = bytes.find("dataWindow");
+  ASSERT_NE(window_at, std::string::npos);
+  std::ofstream(dir.file("cut.exr"), std::ios::binary) << bytes.substr(0, window_at + 12);
+  EXPECT_FALSE(peek_image_size(dir.file("cut.exr")).has_value());
 }
 
 TEST(DepthImage, Png16IsNormalizedWindowDepth) {

@@ -1,5 +1,9 @@
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -241,6 +245,77 @@ TEST(StaticVolume, GuardCountsFacesTurnedTowardsTheLight) {
         EXPECT_FALSE(check_volume_linear(turned, &frame_light).valid());
       }
     }
+}
+
+TEST(StaticVolume, GuardSettlesFacesInLanesAsItJudgesThemOneByOne) {
+  // The guard's face pass settles a point light's faces in vectorized lanes (collapsed, or facing
+  // away) and judges the rest one by one; with lanes off it judges every face one by one. Sound,
+  // with faces turned, collapsed, or a NaN corner: the same counts, and each break counted.
+  const Light spot = test::light_from_json(test::spot_json("linear", 1.3));
+  const Mesh sound = build(spot, occluded(300, 200));
+  const std::size_t mid = sound.num_triangles() / 2;
+  std::vector<std::pair<std::string, Mesh>> variants{{"sound", sound}};
+  Mesh turned = sound;
+  for (const std::size_t t : {std::size_t{10}, mid, mid + 7})
+    std::swap(turned.indices[3 * t + 1], turned.indices[3 * t + 2]);
+  variants.emplace_back("turned", turned);
+  Mesh collapsed = sound;
+  collapsed.indices[3 * 20 + 1] = collapsed.indices[3 * 20];
+  const std::uint32_t v = collapsed.indices[3 * mid], w = collapsed.indices[3 * mid + 1];
+  for (int k = 0; k < 3; ++k) collapsed.positions[3 * v + k] = collapsed.positions[3 * w + k];
+  variants.emplace_back("collapsed", collapsed);
+  Mesh nan = sound;
+  nan.positions[3 * nan.indices[3 * mid] + 2] = std::numeric_limits<float>::quiet_NaN();
+  variants.emplace_back("nan", nan);
+  for (const auto& [name, mesh] : variants) {
+    SCOPED_TRACE(name);
+    const detail::GuardLight guard = detail::guard_light(spot, Space::world);
+    const detail::VertexTally vertices =
+        detail::tally_vertices(mesh.positions.data(), mesh.num_vertices(), guard);
+    const detail::FaceJudge judge(vertices, guard);
+    const detail::FaceTally a = detail::tally_faces(mesh, judge, true);
+    const detail::FaceTally b = detail::tally_faces(mesh, judge, false);
+    EXPECT_EQ(a.triangles, mesh.num_triangles());
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(a.collapsed, b.collapsed);
+    EXPECT_EQ(a.turned, b.turned);
+    if (name == "sound") {
+      EXPECT_EQ(a.collapsed + a.turned, 0u);
+    }
+    if (name == "turned") {
+      EXPECT_EQ(a.turned, 3u);
+    }
+    if (name == "collapsed") {
+      EXPECT_GE(a.collapsed, 3u);  // face 20 and v's faces with w
+    }
+  }
+}
+
+TEST(StaticVolume, ReservedStorageGivesTheSameVolume) {
+  // reserve_static_volume's buffers (made while the map is read) are filled in place when they
+  // have room: the same positions and triangles, in the storage's own memory; storage for a
+  // smaller map is dropped and the volume is the same.
+  const Light spot = test::light_from_json(test::spot_json("linear"));
+  const Light directional = test::light_from_json(test::directional_json("linear"));
+  for (const Light* light : {&spot, &directional}) {
+    const DepthImage depth = occluded(40, 30);
+    const Mesh plain = build(*light, depth);
+    Mesh storage = reserve_static_volume(light->type, 40, 30);
+    EXPECT_EQ(storage.num_vertices(), 0u);
+    EXPECT_EQ(storage.num_triangles(), 0u);
+    EXPECT_EQ(storage.indices.capacity(), plain.indices.size());
+    const float* reserved = storage.positions.data();
+    Result<Mesh> filled = build_static_volume(*light, depth, {}, "depth.exr", std::move(storage));
+    ASSERT_TRUE(filled.ok());
+    EXPECT_EQ(filled->positions.data(), reserved);
+    EXPECT_EQ(filled->positions, plain.positions);
+    EXPECT_EQ(filled->indices, plain.indices);
+    Result<Mesh> too_small = build_static_volume(*light, depth, {}, "depth.exr",
+                                                 reserve_static_volume(light->type, 40, 29));
+    ASSERT_TRUE(too_small.ok());
+    EXPECT_EQ(too_small->positions, plain.positions);
+    EXPECT_EQ(too_small->indices, plain.indices);
+  }
 }
 
 TEST(StaticVolume, SpotOverFlatFloorIsThePyramid) {

@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace lightvol {
@@ -21,6 +23,27 @@ inline void advise_huge_pages(const void* data, std::size_t bytes) {
   const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
   const std::uintptr_t end = (begin + bytes) & ~(kHuge - 1);
   if (end > aligned) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
+}
+
+// Maps the pages of each (start, bytes) range in blocks of 32 MiB, in parallel, before they are
+// first written (MADV_POPULATE_WRITE, Linux 5.14; advice only: without it the first write maps
+// them, in one thread). The kernel zeroes fresh pages as it maps them, and on a virtual machine
+// that is the slowest part of filling a large buffer: both threads share it (buffer.cpp).
+void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges);
+// The same in this thread alone (one madvise per range), for a thread that maps pages while the
+// other cores have other work.
+void populate(std::initializer_list<std::pair<const void*, std::size_t>> ranges);
+
+// Whether loops written for vectorized lanes (the check's face pass, the float32 guard's) run
+// vectorized here: their AVX2 or AVX-512 versions (GCC's target_clones on x86-64). Elsewhere
+// they would run one lane at a time, slower than the code they replace, which then runs instead.
+inline bool vector_lanes() {
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2;
+#else
+  return false;
+#endif
 }
 
 // Reserves room for `capacity` elements (so later appends never copy the buffer), on huge pages

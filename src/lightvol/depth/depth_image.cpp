@@ -68,6 +68,10 @@ Status validate_depths(const DepthImage& image, const std::string& source) {
   return {};
 }
 
+std::optional<std::array<int, 2>> peek_image_size(const std::string& path) {
+  return detail::exr_data_window_size(path);
+}
+
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options) {
   const auto within_budget = [&](const detail::ImageHeader& spec) {
     return check_memory(

@@ -1,7 +1,9 @@
 // Depth images: what a shadow-map render wrote, read through OpenImageIO.
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,12 @@ struct DepthReadOptions {
 // Errors name the file: unreadable or truncated data, 8-bit or unknown channels, fewer than 2×2
 // texels, and the first NaN, infinite or negative depth, by pixel (column, row as stored).
 Result<DepthImage> read_depth_image(const std::string& path, const DepthReadOptions& options = {});
+
+// The width and height of the image at `path` as its header gives them, read by lightvol itself
+// without decoding anything (EXR files only, for now); nothing when it cannot tell. A hint for
+// work that can start before the image is read (the static build's buffers), never a check:
+// read_depth_image's own header decides.
+std::optional<std::array<int, 2>> peek_image_size(const std::string& path);
 
 // Writes a single-channel float image (EXR, TIFF, PFM; 16-bit for PNG), atomically.
 Status write_depth_image(const std::string& path, const DepthImage& image);

@@ -1,6 +1,9 @@
+#include <array>
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <new>
+#include <optional>
 #include <system_error>
 #include <thread>
 #include <utility>
@@ -10,11 +13,13 @@
 #include <lightvol/airlight/airlight.h>
 #include <lightvol/check/check.h>
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
 #include <lightvol/core/path.h>
 #include <lightvol/core/text.h>
 #include <lightvol/core/text_file.h>
 #include <lightvol/depth/cube_faces.h>
+#include <lightvol/depth/depth_image.h>
 #include <lightvol/export/export.h>
 #include <lightvol/io/mesh_format.h>
 #include <lightvol/light/light.h>
@@ -250,6 +255,37 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   DepthReadOptions read_options;
   read_options.channel = o.channel;
   read_options.memory = memory_mode(o, adaptive, streamed);
+  // A static volume held whole: its buffers reserved and mapped on a thread of their own while the
+  // map is read (lightvol-image's start and decoding), when lightvol's own look at the header
+  // tells the map's size and the budget allows the build (the read checks it again from the
+  // decoder's header). Not in a batch, whose jobs wait for memory before they build.
+  Mesh storage;
+  std::thread reserving;
+  struct Joined {
+    std::thread& thread;
+    ~Joined() {
+      if (thread.joinable()) thread.join();
+    }
+  } joined{reserving};
+  if (!adaptive && !omni && !streamed && !o.maps && o.depth_paths.size() == 1 &&
+      !hooks.before_build) {
+    const std::optional<std::array<int, 2>> size = peek_image_size(o.depth_paths.front());
+    if (size && (*size)[0] >= 2 && (*size)[1] >= 2 &&
+        std::int64_t{(*size)[0]} * (*size)[1] < (std::int64_t{1} << 31) &&
+        build_memory_bytes(read_options.memory, (*size)[0], (*size)[1]) <= memory_budget()) {
+      try {
+        reserving = std::thread([&storage, type = light->type, w = (*size)[0], h = (*size)[1]] {
+          try {
+            storage = reserve_static_volume(type, w, h);
+          } catch (const std::bad_alloc&) {
+            storage = Mesh{};  // the build allocates (and reports) as it would have
+          }
+        });
+      } catch (const std::system_error&) {
+        // No thread to be had: the build maps its buffers itself.
+      }
+    }
+  }
   Result<ShadowMaps> read = Error{};
   if (!o.maps) {
     log.begin(omni ? "reading omni faces" : "reading " + o.depth_paths.front());
@@ -305,7 +341,8 @@ BuildFileResult detail::build_volume_file(const BuildFileOptions& o, StageLog& l
   log.begin(std::string("building ") + (adaptive ? "adaptive " : "static ") +
             (omni ? "omni " : "") + "volume");
   AdaptiveReport adaptive_report;
-  Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report);
+  if (reserving.joinable()) reserving.join();
+  Result<Mesh> mesh = build_volume(*light, *maps, options, &adaptive_report, std::move(storage));
   if (!mesh) return failed(mesh.error());
   log.end(thousands(mesh->num_triangles()) + " triangles");
   r.seconds.build = log.last_seconds();

@@ -1,3 +1,5 @@
+#include <utility>
+
 #include <lightvol/core/check.h>
 #include <lightvol/volume/build_volume.h>
 #include <lightvol/volume/omni_adaptive.h>
@@ -7,7 +9,7 @@
 namespace lightvol {
 
 Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
-                          const BuildVolumeOptions& options, AdaptiveReport* report) {
+                          const BuildVolumeOptions& options, AdaptiveReport* report, Mesh storage) {
   LV_CHECK(maps.omni == (light.type == LightType::omni));
   VolumeOptions volume;
   volume.space = options.space;
@@ -18,7 +20,8 @@ Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
                     : build_adaptive_volume(light, maps.image, volume, options.adaptive,
                                             maps.source, report))
              : (maps.omni ? build_omni_volume(light, maps.cube, volume)
-                          : build_static_volume(light, maps.image, volume, maps.source));
+                          : build_static_volume(light, maps.image, volume, maps.source,
+                                                std::move(storage)));
 }
 
 }  // namespace lightvol

@@ -33,7 +33,10 @@ struct BuildVolumeOptions {
 // pixel (a radial depth no ray reaches), or the face (unequal omni faces); a valid light whose
 // volume float32 cannot hold is refused with check_representable's Error, naming
 // `options.light_source` and its keys.
+// `storage` (optional): a static spot or directional build's buffers, made in advance
+// (reserve_static_volume, volume/static_volume.h); other builds drop it.
 Result<Mesh> build_volume(const Light& light, const ShadowMaps& maps,
-                          const BuildVolumeOptions& options, AdaptiveReport* report = nullptr);
+                          const BuildVolumeOptions& options, AdaptiveReport* report = nullptr,
+                          Mesh storage = {});
 
 }  // namespace lightvol

@@ -3,10 +3,12 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/buffer.h>
@@ -126,9 +128,21 @@ std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
 
 }  // namespace
 
+Mesh reserve_static_volume(LightType type, int width, int height) {
+  LV_CHECK(type != LightType::omni);
+  LV_CHECK(width >= 2 && height >= 2);
+  const VolumeCounts counts = static_volume_counts(type, width, height);
+  Mesh mesh;
+  reserve_large(mesh.positions, 3 * counts.vertices);
+  reserve_large(mesh.indices, 3 * counts.triangles);
+  populate({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
+            {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
+  return mesh;
+}
+
 Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage& depth,
-                                            const VolumeOptions& options,
-                                            const std::string& source) {
+                                            const VolumeOptions& options, const std::string& source,
+                                            Mesh storage) {
   LV_CHECK(light.type != LightType::omni);
   const int w = depth.width, h = depth.height;
   LV_CHECK(w >= 2 && h >= 2);
@@ -136,12 +150,28 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
   const VolumeCounts counts = static_volume_counts(light.type, w, h);
   LV_CHECK_LT(counts.vertices, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});
 
-  Mesh mesh;
   const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  reserve_large(mesh.positions, 3 * counts.vertices);
-  reserve_large(mesh.indices, 3 * counts.triangles);
-  mesh.positions.resize(3 * grid_vertices);
-  mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
+  // Huge pages, mapped first (the kernel zeroes each as it maps it, the slowest part of the build
+  // on a virtual machine): by reserve_static_volume while the map was read, else here in parallel
+  // blocks; then zeroed again by the vectors.
+  Mesh mesh;
+  if (storage.positions.capacity() >= 3 * counts.vertices &&
+      storage.indices.capacity() >= 3 * counts.triangles) {
+    mesh = std::move(storage);
+    mesh.positions.clear();
+    mesh.indices.clear();
+  } else {
+    storage = Mesh{};
+    reserve_large(mesh.positions, 3 * counts.vertices);
+    reserve_large(mesh.indices, 3 * counts.triangles);
+    populate_in_parallel({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
+                          {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
+  }
+  tbb::parallel_invoke(
+      [&] { mesh.positions.resize(3 * grid_vertices); },
+      [&] {
+        mesh.indices.resize(6 * static_cast<std::size_t>(w - 1) * static_cast<std::size_t>(h - 1));
+      });
 
   if (Status s = grid_rows(unproject, depth, 0, h, mesh.positions.data(), source); !s)
     return s.error();
@@ -155,8 +185,10 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
 }
 
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
-                                 const VolumeOptions& options, const std::string& source) {
-  Result<Mesh> mesh = detail::assemble_static_volume(light, depth, options, source);
+                                 const VolumeOptions& options, const std::string& source,
+                                 Mesh storage) {
+  Result<Mesh> mesh =
+      detail::assemble_static_volume(light, depth, options, source, std::move(storage));
   if (!mesh) return mesh;
   if (Status s = check_representable(*mesh, light, options.space, options.light_source); !s)
     return s.error();

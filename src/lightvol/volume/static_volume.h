@@ -46,8 +46,18 @@ std::vector<std::uint32_t> static_volume_indices(const Light& light, int width, 
 // `source` names the depth image in errors (a radial depth no parallel ray reaches); a volume
 // float32 cannot hold is refused with check_representable's Error (volume/float32_guard.h),
 // naming options.light_source.
+// `storage` (optional): reserve_static_volume's buffers, filled when they have room for this
+// volume (else dropped): the same mesh, without the page faults.
 Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
-                                 const VolumeOptions& options, const std::string& source);
+                                 const VolumeOptions& options, const std::string& source,
+                                 Mesh storage = {});
+
+// Room for the static volume of a W×H map of a spot or directional light (`type`): a mesh with no
+// vertices and no triangles whose buffers are reserved for them on huge pages and already mapped
+// (MADV_POPULATE_WRITE, in this thread only: the kernel zeroes fresh pages as it maps them, which
+// on a virtual machine is the slowest part of a large build). Made on a thread of its own while
+// the map is read, then handed to build_static_volume (pipeline/build_file.cpp).
+Mesh reserve_static_volume(LightType type, int width, int height);
 
 // The static volume of build_static_volume as a stream (core/mesh_stream.h): produced in blocks of
 // rows and never held whole (memory: a few rows and the border), with the same vertices and

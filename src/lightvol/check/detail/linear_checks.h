@@ -125,6 +125,10 @@ struct LightView {
   // Directional: the unit direction and the near plane's origin (a face's corners lie in the
   // plane within the face's motion).
   Vec3d f, origin;
+  // Point: most faces decided in vectorized lanes (light_proof.cpp; where vector_lanes(),
+  // core/buffer.h), the others one by one; false: every face one by one (the same sums to the
+  // bit: the tests compare the two).
+  bool lanes = true;
 };
 LightView point_view(const Mesh& mesh, const Light& light, const VertexScan& scan, double quantum);
 LightView directional_view(const Light& light, double quantum);

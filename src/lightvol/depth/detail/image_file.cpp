@@ -333,6 +333,34 @@ class SharedFloats {
 
 void offer_shared_memory(bool offer) { shared_memory_offered.store(offer); }
 
+std::optional<std::array<int, 2>> exr_data_window_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string head = file_prefix(in, 1 << 16);
+  if (head.size() < 8 || head.compare(0, 4, "\x76\x2f\x31\x01") != 0) return {};  // not EXR
+  if ((static_cast<unsigned char>(head[5]) & 0x18) != 0) return {};  // multi-part or deep
+  std::size_t at = 8;
+  for (;;) {
+    const std::size_t name_end = head.find('\0', at);
+    if (name_end == std::string::npos || name_end == at) return {};  // past the prefix, or the end
+    const std::size_t type_end = head.find('\0', name_end + 1);
+    if (type_end == std::string::npos || type_end + 5 > head.size()) return {};
+    std::int32_t size = 0;
+    std::memcpy(&size, head.data() + type_end + 1, sizeof size);
+    const std::size_t value = type_end + 5;
+    if (size < 0 || value + static_cast<std::size_t>(size) > head.size()) return {};
+    if (head.compare(at, name_end - at, "dataWindow") == 0 &&
+        head.compare(name_end + 1, type_end - name_end - 1, "box2i") == 0 && size == 16) {
+      std::int32_t box[4];
+      std::memcpy(box, head.data() + value, sizeof box);
+      const std::int64_t w = std::int64_t{box[2]} - box[0] + 1,
+                         h = std::int64_t{box[3]} - box[1] + 1;
+      if (w < 1 || h < 1 || w > (1 << 20) || h > (1 << 20)) return {};
+      return std::array<int, 2>{static_cast<int>(w), static_cast<int>(h)};
+    }
+    at = value + static_cast<std::size_t>(size);
+  }
+}
+
 Result<ImageFile> check_image_file(const std::string& path) {
   std::error_code ec;
   const std::filesystem::file_status status = std::filesystem::status(path, ec);

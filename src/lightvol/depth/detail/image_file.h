@@ -4,8 +4,10 @@
 // (core/detail/image_helper.h), whose side of the conversation is image_codec.h.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,11 @@ struct ImageFile {
   std::string magic;   // the file's first bytes
 };
 Result<ImageFile> check_image_file(const std::string& path);
+
+// The size an EXR file's header gives (its data window), by lightvol's own reading of the header
+// (single-part scanline or tiled files, the attribute within the first 64 KiB); nothing when the
+// file is not such an EXR or the attribute is not found. A hint only (peek_image_size).
+std::optional<std::array<int, 2>> exr_data_window_size(const std::string& path);
 
 // Opens the image at `path` (check_image_file, then OpenImageIO's open and the checks of the
 // header it read, image_codec.h), lets `within_budget(header)` refuse it (the caller's memory

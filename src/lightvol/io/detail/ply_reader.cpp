@@ -1,5 +1,4 @@
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -332,28 +331,6 @@ double decode(const unsigned char* p, Type t, bool swap) {
       return load<double>(p, swap);
   }
   return 0;
-}
-
-// Maps the pages of each (start, bytes) range in blocks of 32 MiB, in parallel, before they are
-// first written (MADV_POPULATE_WRITE, Linux 5.14; advice only: without it the first write maps
-// them, in one thread).
-void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
-#ifdef MADV_POPULATE_WRITE
-  constexpr std::uintptr_t kPage = 4096, kBlock = std::uintptr_t{32} << 20;
-  std::vector<std::pair<std::uintptr_t, std::uintptr_t>> blocks;
-  for (const auto& [start, bytes] : ranges) {
-    const auto begin = reinterpret_cast<std::uintptr_t>(start);
-    const std::uintptr_t first = (begin + kPage - 1) & ~(kPage - 1);
-    const std::uintptr_t end = (begin + bytes) & ~(kPage - 1);
-    for (std::uintptr_t at = first; at < end; at += kBlock)
-      blocks.emplace_back(at, std::min(kBlock, end - at));
-  }
-  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
-    ::madvise(reinterpret_cast<void*>(blocks[i].first), blocks[i].second, MADV_POPULATE_WRITE);
-  });
-#else
-  (void)ranges;
-#endif
 }
 
 // The mesh as it fills: positions by vertex number, faces fan-triangulated as they come.

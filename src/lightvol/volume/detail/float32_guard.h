@@ -186,6 +186,12 @@ struct FaceTally {
   }
 };
 
+// The second pass over a held mesh, in parallel: point lights' faces are first settled in
+// vectorized lanes (collapsed, or facing away) where vector_lanes() (core/buffer.h), the rest
+// judged one by one; with `lanes` false, every face one by one (the same counts: the tests compare
+// the two) (float32_guard.cpp).
+FaceTally tally_faces(const Mesh& mesh, const FaceJudge& judge, bool lanes = true);
+
 // Refusals the vertices decide alone: not finite, too large, too small.
 Status vertex_verdict(const VertexTally& vertices, const Light& light,
                       const std::string& light_source);
@@ -194,8 +200,9 @@ Status representable_verdict(const VertexTally& vertices, const FaceTally& faces
                              const Light& light, Space space, const std::string& light_source);
 
 // build_static_volume without the guard: the volume as the grid and closing make it, for what
-// judges it (the guard's tests need the volumes it refuses).
+// judges it (the guard's tests need the volumes it refuses). `storage`: as build_static_volume's.
 Result<Mesh> assemble_static_volume(const Light& light, const DepthImage& depth,
-                                    const VolumeOptions& options, const std::string& source);
+                                    const VolumeOptions& options, const std::string& source,
+                                    Mesh storage = {});
 
 }  // namespace lightvol::detail
