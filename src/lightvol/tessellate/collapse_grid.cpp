@@ -9,6 +9,7 @@
 #include <span>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <lightvol/core/buffer.h>
@@ -183,13 +184,16 @@ class Collapser {
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
   }
 
-  // Sweeps. Each sweep visits its vertices in texel order, in horizontal stripes of kStripe rows:
-  // first the even stripes in parallel, then the odd ones, each stripe in order, touching only
-  // vertices whose whole star lies inside the stripe (so two stripes of one phase, a stripe
-  // apart, share no vertex and no triangle). The vertices whose star crossed a stripe's edge are
-  // then visited the same way in stripes shifted by half a stripe (most stars that cross one
-  // stripe edge are inside a shifted stripe), and only those that cross both sequentially, in
-  // texel order. The schedule depends on the grid alone, never on the threads: same bytes.
+  // Sweeps. Each sweep visits its vertices in texel order, in horizontal stripes of kStripe rows,
+  // each stripe in order, touching only vertices whose whole star lies inside the stripe. Such a
+  // collapse changes only the triangles of that star and the stars, flags and triangles of
+  // vertices inside the stripe, and a vertex's test and collapse read only its own star, so the
+  // stripes are independent of each other and all run in parallel (the result is that of the
+  // even stripes first, then the odd ones, as this schedule was first written). The vertices
+  // whose star crossed a stripe's edge are then visited the same way in stripes shifted by half a
+  // stripe (most stars that cross one stripe edge are inside a shifted stripe), and only those
+  // that cross both in texel order (visit_in_order). The schedule depends on the grid alone,
+  // never on the threads: same bytes.
   CollapseReport run() {
     CollapseReport r;
     const std::size_t nv = pt_.size();
@@ -208,8 +212,12 @@ class Collapser {
       left.clear();
       sweep_stripes(crossing, kStripe / 2, &work, &left);
       Scratch scratch;
-      for (const std::uint32_t u : left)
-        if (vertex_alive_[u] && !queued_[u]) visit(u, &scratch, &r, &next);
+      if (options_.reference_order) {
+        for (const std::uint32_t u : left)
+          if (vertex_alive_[u] && !queued_[u]) visit(u, &scratch, &r, &next);
+      } else {
+        visit_in_order(left, &scratch, &r, &next);
+      }
       for (Work& wk : work) {
         next.insert(next.end(), wk.next.begin(), wk.next.end());
         wk.next.clear();
@@ -234,24 +242,59 @@ class Collapser {
   std::uint64_t flip() {
     std::uint64_t flips = 0;
     assign_large(untried_, tri_.size(), std::uint8_t{1});
+    const bool decided = !options_.reference_flips && !options_.reference_order;
+    if (decided) assign_large(changed_, tri_.size(), std::uint8_t{0});
     for (int sweep = 0; sweep < options_.flip_sweeps; ++sweep) {
       std::uint64_t made = 0;
-      for (std::size_t k = 0; k < tri_.size(); ++k) {
-        if (!alive_[k] || (!options_.reference_flips && !untried_[k])) continue;
-        bool flipped = false;
-        for (int e = 0; e < 3 && !flipped; ++e)
-          flipped = try_flip(static_cast<std::uint32_t>(k), e);
-        if (flipped) {
-          ++made;
-        } else {
-          untried_[k] = 0;
+      std::size_t from = 0;
+      while (from < tri_.size()) {
+        const std::size_t to = decided ? decide_flips(from) : tri_.size();
+        std::size_t at = 0;  // decisions_[at]: the next triangle decided
+        for (std::size_t k = from; k < to; ++k) {
+          if (!alive_[k] || (!options_.reference_flips && !untried_[k])) continue;
+          const FlipDecision* dk = nullptr;
+          if (decided && at < decisions_.size() && decisions_[at].k == k) dk = &decisions_[at++];
+          const bool ahead = dk != nullptr;
+          if (dk && changed_[k]) dk = nullptr;
+          bool flipped = false;
+          for (int e = 0; e < 3 && !flipped; ++e) {
+            // The decision holds while neither triangle it read has changed (k unchanged and the
+            // triangle across unchanged: still across; a border edge stays one).
+            std::uint32_t m = dk ? dk->across[e] : kNone;
+            bool allowed = false;
+            if (dk && (m == kNone || !changed_[m])) {
+              allowed = (dk->allowed >> e & 1) != 0;
+            } else {
+              m = across(static_cast<std::uint32_t>(k), e);
+              allowed = flip_allowed(static_cast<std::uint32_t>(k), e, m);
+              flips_redecided_ += ahead;
+            }
+            if (!allowed) continue;
+            flip_edge(static_cast<std::uint32_t>(k), e, m);
+            if (decided) {
+              changed_[k] = changed_[m] = 1;
+              changed_list_.push_back(static_cast<std::uint32_t>(k));
+              changed_list_.push_back(m);
+            }
+            flipped = true;
+          }
+          if (flipped) {
+            ++made;
+          } else {
+            untried_[k] = 0;
+          }
         }
+        for (const std::uint32_t k : changed_list_) changed_[k] = 0;
+        changed_list_.clear();
+        from = to;
       }
       flips += made;
       if (made == 0) break;
     }
     return flips;
   }
+
+  std::uint64_t flips_redecided() const { return flips_redecided_; }
 
   AdaptiveGrid result() const {
     AdaptiveGrid out;
@@ -308,9 +351,8 @@ class Collapser {
     std::size_t begin = 0, end = 0;  // range of the sweep's list
   };
 
-  // One pass over `list` (ascending: texel order) in stripes offset by `offset` rows, even
-  // stripes in parallel, then odd ones; appends to `crossing`, in order, the vertices whose star
-  // leaves their stripe.
+  // One pass over `list` (ascending: texel order) in stripes offset by `offset` rows, all in
+  // parallel; appends to `crossing`, in order, the vertices whose star leaves their stripe.
   void sweep_stripes(const std::vector<std::uint32_t>& list, int offset, std::vector<Work>* work,
                      std::vector<std::uint32_t>* crossing) {
     const int stripes = static_cast<int>(work->size());
@@ -323,21 +365,24 @@ class Collapser {
       wk.end = at;
     }
     LV_CHECK_EQ(at, list.size());
-    for (int phase = 0; phase < 2; ++phase) {
-      tbb::parallel_for(0, (stripes + 1 - phase) / 2, [&](int k) {
-        const int s = 2 * k + phase;
-        Work& wk = (*work)[static_cast<std::size_t>(s)];
-        const int y0 = s * kStripe - offset, y1 = y0 + kStripe;
-        for (std::size_t i = wk.begin; i < wk.end; ++i) {
-          const std::uint32_t u = list[i];
-          if (!vertex_alive_[u] || queued_[u]) continue;
-          if (!star_within_rows(u, y0, y1)) {
-            wk.crossing.push_back(u);
-            continue;
-          }
-          visit(u, &wk.scratch, &wk.report, &wk.next);
+    const auto sweep = [&](int s) {
+      Work& wk = (*work)[static_cast<std::size_t>(s)];
+      const int y0 = s * kStripe - offset, y1 = y0 + kStripe;
+      for (std::size_t i = wk.begin; i < wk.end; ++i) {
+        const std::uint32_t u = list[i];
+        if (!vertex_alive_[u] || queued_[u]) continue;
+        if (!star_within_rows(u, y0, y1)) {
+          wk.crossing.push_back(u);
+          continue;
         }
-      });
+        visit(u, &wk.scratch, &wk.report, &wk.next);
+      }
+    };
+    if (options_.reference_order) {  // even stripes, then odd ones
+      for (int phase = 0; phase < 2; ++phase)
+        tbb::parallel_for(0, (stripes + 1 - phase) / 2, [&](int k) { sweep(2 * k + phase); });
+    } else {
+      tbb::parallel_for(0, stripes, sweep);
     }
     for (const Work& wk : *work)
       crossing->insert(crossing->end(), wk.crossing.begin(), wk.crossing.end());
@@ -357,29 +402,69 @@ class Collapser {
   // star texel by texel, which would scan a chain of n vertices n²/2 times.
   void visit(std::uint32_t u, Scratch* scratch, CollapseReport* r,
              std::vector<std::uint32_t>* next) {
-    if (!try_collapse(u, scratch, r)) return;
+    const std::uint32_t v = collapse_target(u, scratch, &r->attempts);
+    if (v != kNone) collapse(u, v, scratch, r, next);
+  }
+
+  // Merges u into v (collapse_target's choice) and queues the vertices whose star changed.
+  void collapse(std::uint32_t u, std::uint32_t v, Scratch* scratch, CollapseReport* r,
+                std::vector<std::uint32_t>* next) {
+    apply(u, v, &scratch->touched);
+    ++r->collapses;
     for (const std::uint32_t n : scratch->touched)
       if (!queued_[n]) queued_[n] = 1, next->push_back(n);
   }
 
-  // Tries to merge u into one of its neighbours, the nearest first; on success `touched` holds
-  // the vertices whose star changed.
-  bool try_collapse(std::uint32_t u, Scratch* scratch, CollapseReport* r) {
+  // The vertices of `list` whose star crosses both kinds of stripe edge, visited in order (run()'s
+  // last step). A visited vertex's star is the one it had when the round's stripes ended: any
+  // collapse that changes a star queues its vertex, and a queued vertex waits for the next round.
+  // So collapse_target, which reads u's star alone, is computed for all of them first, in
+  // parallel; then the collapses are made in order, each vertex still alive and not queued by
+  // then taking its verdict (and its attempts) from there: the same visits as one at a time.
+  void visit_in_order(const std::vector<std::uint32_t>& list, Scratch* scratch, CollapseReport* r,
+                      std::vector<std::uint32_t>* next) {
+    target_.resize(list.size());
+    tries_.resize(list.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size(), 32),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        Scratch local;
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          const std::uint32_t u = list[i];
+                          tries_[i] = 0;
+                          target_[i] = vertex_alive_[u] && !queued_[u]
+                                           ? collapse_target(u, &local, &tries_[i])
+                                           : kNone;
+                        }
+                      });
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::uint32_t u = list[i];
+      if (!vertex_alive_[u] || queued_[u]) continue;
+      r->attempts += tries_[i];
+      if (target_[i] == kNone) continue;
+      collapse(u, target_[i], scratch, r, next);
+      ++r->in_order_collapses;
+    }
+  }
+
+  // The neighbour to merge u into (the nearest first that keeps the triangulation conforming and
+  // the bound), or kNone; adds to `attempts` the candidates whose texels were evaluated. Reads u's
+  // star and writes only `scratch`: safe to call for many vertices at once.
+  std::uint32_t collapse_target(std::uint32_t u, Scratch* scratch, std::uint64_t* attempts) const {
     std::vector<std::uint32_t>& candidates_ = scratch->candidates;
     const std::uint8_t su = sides_[u];
-    if (std::popcount(su) >= 2) return false;  // a corner
+    if (std::popcount(su) >= 2) return kNone;  // a corner
     int side = -1;
     if (su != 0) {
       side = std::countr_zero(su);
-      if (options_.locked[side]) return false;
+      if (options_.locked[side]) return kNone;
       const std::vector<int>& keep = options_.keep[side];
       const int along = side == kTop || side == kBottom ? pt_[u].x : pt_[u].y;
-      if (std::binary_search(keep.begin(), keep.end(), along)) return false;
+      if (std::binary_search(keep.begin(), keep.end(), along)) return kNone;
     }
     std::int64_t star2 = 0;
     for (const std::uint32_t k : star_[u])
       star2 += std::abs(cross(pt_[tri_[k][0]], pt_[tri_[k][1]], pt_[tri_[k][2]]));
-    if (0.5 * static_cast<double>(star2) > options_.max_star_area) return false;
+    if (0.5 * static_cast<double>(star2) > options_.max_star_area) return kNone;
     // Neighbours of u, nearest first (ties by index: deterministic): sorted as one key each,
     // squared distance (below 2^32 for any grid an index can address) above the index.
     std::vector<std::uint64_t>& keys = scratch->keys;
@@ -423,7 +508,7 @@ class Collapser {
         }
       }
       if (!ok) continue;
-      ++r->attempts;
+      ++*attempts;
       for (const std::uint32_t k : star_[u]) {
         const std::array<std::uint32_t, 3>& tr = tri_[k];
         if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
@@ -434,12 +519,9 @@ class Collapser {
           break;
         }
       }
-      if (!ok) continue;
-      apply(u, v, &scratch->touched);
-      ++r->collapses;
-      return true;
+      if (ok) return v;
     }
-    return false;
+    return kNone;
   }
 
   // The smallest interior angle (radians) of triangle p, q, r (texel space).
@@ -467,21 +549,25 @@ class Collapser {
     return a * a < options_.min_height * options_.min_height * longest2;
   }
 
-  // Flips the edge of triangle k from corner e to corner e + 1 if CollapseOptions::flip_sweeps
-  // allows it (see there).
-  bool try_flip(std::uint32_t k, int e) {
-    const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3], c = tri_[k][(e + 2) % 3];
-    // The other triangle on edge a–b: (b, a, d) in the same winding.
-    std::uint32_t m = kNone;
+  // The triangle across the edge of triangle k from corner e to corner e + 1 (kNone: a border
+  // edge).
+  std::uint32_t across(std::uint32_t k, int e) const {
+    const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3];
     for (const std::uint32_t n : star_[a]) {
       if (n == k) continue;
       const std::array<std::uint32_t, 3>& t = tri_[n];
-      if (t[0] == b || t[1] == b || t[2] == b) {
-        m = n;
-        break;
-      }
+      if (t[0] == b || t[1] == b || t[2] == b) return n;
     }
+    return kNone;
+  }
+
+  // Whether CollapseOptions::flip_sweeps allows flipping the edge of triangle k from corner e to
+  // corner e + 1, shared with triangle m = across(k, e) (see there). Reads triangles k and m
+  // alone: safe to call for many triangles at once.
+  bool flip_allowed(std::uint32_t k, int e, std::uint32_t m) const {
     if (m == kNone) return false;  // a border edge
+    const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3], c = tri_[k][(e + 2) % 3];
+    // The other triangle on edge a–b: (b, a, d) in the same winding.
     std::uint32_t d = kNone;
     for (const std::uint32_t x : tri_[m])
       if (x != a && x != b) d = x;
@@ -497,7 +583,15 @@ class Collapser {
     const double after = std::min(min_angle(pc, pa, pd), min_angle(pc, pd, pb));
     if (!(after > before * (1 + 1e-9))) return false;
     if (thin(pc, pa, pd) || thin(pc, pd, pb)) return false;
-    if (!within(pc, pa, pd) || !within(pc, pd, pb)) return false;
+    return within(pc, pa, pd) && within(pc, pd, pb);
+  }
+
+  // Flips the edge of triangle k from corner e to corner e + 1, shared with m = across(k, e).
+  void flip_edge(std::uint32_t k, int e, std::uint32_t m) {
+    const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3], c = tri_[k][(e + 2) % 3];
+    std::uint32_t d = kNone;
+    for (const std::uint32_t x : tri_[m])
+      if (x != a && x != b) d = x;
     tri_[k] = {c, a, d};
     tri_[m] = {c, d, b};
     star_.erase(a, m);
@@ -506,7 +600,38 @@ class Collapser {
     star_.push(d, k);
     for (const std::uint32_t v : {a, b, c, d})
       for (const std::uint32_t n : star_[v]) untried_[n] = 1;
-    return true;
+  }
+
+  // A flip decision made ahead: for triangle k, the triangle across each edge and whether
+  // flip_allowed (bit e).
+  struct FlipDecision {
+    std::uint32_t k = 0;
+    std::uint32_t across[3] = {kNone, kNone, kNone};
+    std::uint8_t allowed = 0;
+  };
+
+  // Decides in parallel, on the mesh as it stands, the tries of the next triangles to try from
+  // `from` on (alive, untried; up to kDecided of them) into decisions_, in triangle order; returns
+  // the end of the range they cover. flip() then makes the flips in order, deciding again only
+  // where a flip before changed one of the two triangles a decision read (changed_).
+  std::size_t decide_flips(std::size_t from) {
+    constexpr std::size_t kDecided = 16384;
+    decisions_.clear();
+    std::size_t k = from;
+    for (; k < tri_.size() && decisions_.size() < kDecided; ++k)
+      if (alive_[k] && (options_.reference_flips || untried_[k]))
+        decisions_.push_back({static_cast<std::uint32_t>(k)});
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, decisions_.size(), 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          FlipDecision& d = decisions_[i];
+                          for (int e = 0; e < 3; ++e) {
+                            d.across[e] = across(d.k, e);
+                            if (flip_allowed(d.k, e, d.across[e])) d.allowed |= 1u << e;
+                          }
+                        }
+                      });
+    return k;
   }
 
   // The sine² of a triangle's smallest angle, as a fraction: twice its area, squared, over the
@@ -574,9 +699,18 @@ class Collapser {
   std::vector<std::uint8_t> alive_, vertex_alive_;
   StarTable star_;
   std::vector<std::uint8_t> queued_;
+  // visit_in_order(): each listed vertex's collapse_target and attempts.
+  std::vector<std::uint32_t> target_;
+  std::vector<std::uint64_t> tries_;
   // flip(): 1 for a triangle not tried since it or a triangle around it last changed (a byte a
   // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
   std::vector<std::uint8_t> untried_;
+  // flip(): the decisions made ahead, and the triangles flipped since (a byte a triangle, and the
+  // list of those set).
+  std::vector<FlipDecision> decisions_;
+  std::vector<std::uint8_t> changed_;
+  std::vector<std::uint32_t> changed_list_;
+  std::uint64_t flips_redecided_ = 0;
   bool exact_angles_ = false;
 };
 
@@ -591,6 +725,7 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
   Collapser collapser(texels, grid, bound, options);
   CollapseReport r = collapser.run();
   r.flips = collapser.flip();
+  r.flips_redecided = collapser.flips_redecided();
   AdaptiveGrid out = collapser.result();
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   out.emit_seconds = grid.emit_seconds;

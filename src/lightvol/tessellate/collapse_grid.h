@@ -52,12 +52,23 @@ struct CollapseOptions {
   // comparison on atan2 values. The default skips the tries that cannot succeed and compares the
   // angles exactly first (collapse_grid.cpp); the result is the same.
   bool reference_flips = false;
+  // The schedule as first written (for tests): the even stripes of a sweep, then the odd ones;
+  // the collapses of the vertices that cross both kinds of stripe edge one at a time; each flip
+  // decided when its turn comes. The default runs all stripes at once, and decides those
+  // collapses and flips in parallel ahead of making them in order, deciding again where a step
+  // before changed what a decision read (collapse_grid.cpp); the result is the same.
+  bool reference_order = false;
 };
 
 struct CollapseReport {
   std::uint64_t attempts = 0;   // collapses whose error was evaluated
   std::uint64_t collapses = 0;  // collapses made
   std::uint64_t flips = 0;      // edge flips made
+  // The default schedule's bookkeeping (0 with CollapseOptions::reference_order): collapses made
+  // in the in-order step (vertices whose star crosses both kinds of stripe edge), and flip tries
+  // decided again because a flip before changed a triangle their decision made ahead had read.
+  std::uint64_t in_order_collapses = 0;
+  std::uint64_t flips_redecided = 0;
   int rounds = 0;
   double seconds = 0;
 };
