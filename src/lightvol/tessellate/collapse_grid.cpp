@@ -11,6 +11,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
@@ -151,35 +152,56 @@ class Collapser {
     const std::size_t nv = grid.vertices.size(), nt = grid.num_triangles();
     resize_large(pt_, nv);
     resize_large(sides_, nv);
-    for (std::size_t v = 0; v < nv; ++v) {
-      const std::uint32_t id = grid.vertices[v];
-      const Pt p{static_cast<int>(id % static_cast<std::uint32_t>(w)),
-                 static_cast<int>(id / static_cast<std::uint32_t>(w))};
-      pt_[v] = p;
-      std::uint8_t s = 0;
-      if (p.y == 0) s |= 1u << kTop;
-      if (p.x == w - 1) s |= 1u << kRight;
-      if (p.y == h - 1) s |= 1u << kBottom;
-      if (p.x == 0) s |= 1u << kLeft;
-      sides_[v] = s;
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t v = range.begin(); v != range.end(); ++v) {
+                          const std::uint32_t id = grid.vertices[v];
+                          const Pt p{static_cast<int>(id % static_cast<std::uint32_t>(w)),
+                                     static_cast<int>(id / static_cast<std::uint32_t>(w))};
+                          pt_[v] = p;
+                          std::uint8_t s = 0;
+                          if (p.y == 0) s |= 1u << kTop;
+                          if (p.x == w - 1) s |= 1u << kRight;
+                          if (p.y == h - 1) s |= 1u << kBottom;
+                          if (p.x == 0) s |= 1u << kLeft;
+                          sides_[v] = s;
+                        }
+                      });
     resize_large(tri_, nt);
     assign_large(alive_, nt, std::uint8_t{1});
+    // Every triangle turns the way the first one does (the winding kept).
+    const auto area2 = [&](std::size_t k) {
+      const std::uint32_t* c = &grid.indices[3 * k];
+      return cross(pt_[c[0]], pt_[c[1]], pt_[c[2]]);
+    };
+    sign_ = area2(0) > 0 ? 1 : -1;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t k = range.begin(); k != range.end(); ++k) {
+                          for (int c = 0; c < 3; ++c) tri_[k][c] = grid.indices[3 * k + c];
+                          const std::int64_t a = area2(k);
+                          LV_CHECK(a != 0);
+                          LV_CHECK((a > 0) == (sign_ > 0));
+                        }
+                      });
     std::vector<std::uint32_t> degree;
     assign_large(degree, nv + 1, std::uint32_t{0});
-    for (std::size_t k = 0; k < nt; ++k) {
-      for (int c = 0; c < 3; ++c) {
-        tri_[k][c] = grid.indices[3 * k + c];
-        ++degree[tri_[k][c]];
-      }
-      const std::int64_t a = cross(pt_[tri_[k][0]], pt_[tri_[k][1]], pt_[tri_[k][2]]);
-      LV_CHECK(a != 0);
-      if (k == 0) sign_ = a > 0 ? 1 : -1;
-      LV_CHECK((a > 0) == (sign_ > 0));
-    }
-    star_.init(degree, nv);
     for (std::size_t k = 0; k < nt; ++k)
-      for (int c = 0; c < 3; ++c) star_.push(tri_[k][c], static_cast<std::uint32_t>(k));
+      for (int c = 0; c < 3; ++c) ++degree[tri_[k][c]];
+    star_.init(degree, nv);
+    // Each star in triangle order; blocks of vertices in parallel, each block reading every
+    // triangle and filling only its own vertices' stars.
+    const std::size_t blocks =
+        static_cast<std::size_t>(std::clamp(tbb::this_task_arena::max_concurrency(), 1, 8));
+    const std::size_t block = nv / blocks + 1;
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+      const std::uint32_t lo = static_cast<std::uint32_t>(b * block),
+                          hi = static_cast<std::uint32_t>(std::min(nv, (b + 1) * block));
+      for (std::size_t k = 0; k < nt; ++k)
+        for (int c = 0; c < 3; ++c)
+          if (tri_[k][c] >= lo && tri_[k][c] < hi)
+            star_.push(tri_[k][c], static_cast<std::uint32_t>(k));
+    });
     assign_large(vertex_alive_, nv, std::uint8_t{1});
     exact_angles_ = std::max(w, h) <= 32768 && !options.reference_flips;
   }
@@ -218,19 +240,55 @@ class Collapser {
       } else {
         visit_in_order(left, &scratch, &r, &next);
       }
+      std::size_t queued = next.size();
+      for (const Work& wk : work) queued += wk.next.size();
+      // The next sweep's vertices: the queued ones, in texel order (each queued once). Many: read
+      // off the flags in parallel; few: sorted.
+      const bool many = !options_.reference_order && queued > nv / 32;
       for (Work& wk : work) {
-        next.insert(next.end(), wk.next.begin(), wk.next.end());
+        if (!many) next.insert(next.end(), wk.next.begin(), wk.next.end());
         wk.next.clear();
         r.attempts += wk.report.attempts;
         r.collapses += wk.report.collapses;
         wk.report = {};
       }
-      std::sort(next.begin(), next.end());
-      for (const std::uint32_t n : next) queued_[n] = 0;
+      if (many) {
+        take_queued(&next);
+      } else {
+        std::sort(next.begin(), next.end());
+        for (const std::uint32_t n : next) queued_[n] = 0;
+      }
+      LV_CHECK_EQ(next.size(), queued);
       todo.swap(next);
       next.clear();
     }
     return r;
+  }
+
+  // Sets *out to the queued vertices in ascending order and clears their flags (blocks of
+  // vertices in parallel, a word of flags at a time).
+  void take_queued(std::vector<std::uint32_t>* out) {
+    constexpr std::size_t kBlock = std::size_t{1} << 16;
+    const std::size_t nv = queued_.size(), blocks = (nv + kBlock - 1) / kBlock;
+    taken_.resize(blocks);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+      std::vector<std::uint32_t>& part = taken_[b];
+      part.clear();
+      const std::size_t end = std::min(nv, (b + 1) * kBlock);
+      std::size_t v = b * kBlock;
+      for (; v + 8 <= end; v += 8) {
+        std::uint64_t word = 0;
+        std::memcpy(&word, &queued_[v], sizeof word);
+        if (word == 0) continue;
+        for (std::size_t i = v; i < v + 8; ++i)
+          if (queued_[i]) part.push_back(static_cast<std::uint32_t>(i)), queued_[i] = 0;
+      }
+      for (; v < end; ++v)
+        if (queued_[v]) part.push_back(static_cast<std::uint32_t>(v)), queued_[v] = 0;
+    });
+    out->clear();
+    for (const std::vector<std::uint32_t>& part : taken_)
+      out->insert(out->end(), part.begin(), part.end());
   }
 
   // Edge flips (CollapseOptions::flip_sweeps), in triangle order, sweep after sweep until one
@@ -699,6 +757,7 @@ class Collapser {
   std::vector<std::uint8_t> alive_, vertex_alive_;
   StarTable star_;
   std::vector<std::uint8_t> queued_;
+  std::vector<std::vector<std::uint32_t>> taken_;  // take_queued(): per block of vertices
   // visit_in_order(): each listed vertex's collapse_target and attempts.
   std::vector<std::uint32_t> target_;
   std::vector<std::uint64_t> tries_;
