@@ -14,10 +14,10 @@
 // Border vertices move only along their side (a corner never), and not at all on a locked side:
 // locked sides keep exactly the border vertices of the input (fixed closures). On an unlocked side,
 // the positions listed in `keep` stay too (omni seams: the vertices the neighbouring face keeps).
-// In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, alternate stripes in
+// In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, the stripes in
 // parallel; vertices whose star crosses a stripe's edge then in stripes shifted by 32 rows; those
-// that cross both afterwards in order): the same input gives the same bytes on any machine and
-// any thread count.
+// that cross both afterwards in order; the flips in triangle order): the same input gives the same
+// bytes on any machine and any thread count.
 #pragma once
 
 #include <cstdint>
