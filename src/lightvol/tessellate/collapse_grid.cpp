@@ -474,29 +474,97 @@ class Collapser {
   }
 
   // The vertices of `list` whose star crosses both kinds of stripe edge, visited in order (run()'s
-  // last step). A visited vertex's star is the one it had when the round's stripes ended: any
-  // collapse that changes a star queues its vertex, and a queued vertex waits for the next round.
-  // So collapse_target, which reads u's star alone, is computed for all of them first, in
-  // parallel; then the collapses are made in order, each vertex still alive and not queued by
-  // then taking its verdict (and its attempts) from there: the same visits as one at a time.
+  // last step), deciding their collapses in parallel first. A collapse changes only the stars of
+  // the vertices of the collapsing vertex's star, and queues them all (a queued vertex waits for
+  // the next round). So a vertex x visited here still has the star it had when the step began,
+  // and x is queued by its turn exactly when a listed vertex before it that shares a triangle with
+  // it then (an earlier neighbour) collapsed: the first collapse to reach x's star must come from
+  // one. The listed vertices are therefore resolved in layers (a vertex one layer after its
+  // deepest earlier neighbour), in batches of whole layers: a batch's targets (collapse_target on
+  // the step's mesh) decided in parallel, then the batch resolved layer by layer, a vertex whose
+  // earlier neighbour collapses found queued and its target dropped (8 % of the targets decided,
+  // Sibenik 4097²). Then the collapses are made in order: the same visits as one at a time.
   void visit_in_order(const std::vector<std::uint32_t>& list, Scratch* scratch, CollapseReport* r,
                       std::vector<std::uint32_t>* next) {
-    target_.resize(list.size());
-    tries_.resize(list.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size(), 32),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        Scratch local;
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          const std::uint32_t u = list[i];
-                          tries_[i] = 0;
-                          target_[i] = vertex_alive_[u] && !queued_[u]
-                                           ? collapse_target(u, &local, &tries_[i])
-                                           : kNone;
-                        }
-                      });
-    for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::size_t n = list.size();
+    LV_CHECK(std::is_sorted(list.begin(), list.end()));
+    target_.assign(n, kNone);
+    tries_.assign(n, 0);
+    state_.assign(n, kPassive);
+    // Each active vertex's earlier neighbours (positions in `list`, ascending: texel order), as
+    // one flat table: counted, then written.
+    const auto earlier = [&](std::size_t i, auto&& f) {
       const std::uint32_t u = list[i];
-      if (!vertex_alive_[u] || queued_[u]) continue;
+      for (const std::uint32_t k : star_[u])
+        for (int c = 0; c < 3; ++c) {
+          const std::uint32_t x = tri_[k][c];
+          if (x >= u) continue;
+          const auto at =
+              std::lower_bound(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(i), x);
+          if (at != list.begin() + static_cast<std::ptrdiff_t>(i) && *at == x)
+            f(static_cast<std::uint32_t>(at - list.begin()));
+        }
+    };
+    first_.assign(n + 1, 0);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      const std::uint32_t u = list[i];
+      if (!vertex_alive_[u] || queued_[u]) return;
+      state_[i] = kActive;
+      earlier(i, [&](std::uint32_t) { ++first_[i + 1]; });
+    });
+    for (std::size_t i = 0; i < n; ++i) first_[i + 1] += first_[i];
+    neighbours_.resize(first_[n]);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      if (state_[i] != kActive) return;
+      std::uint32_t at = first_[i];
+      earlier(i, [&](std::uint32_t j) { neighbours_[at++] = j; });
+    });
+    // Layers, in order; each vertex's after all of its earlier neighbours'.
+    layer_.assign(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (state_[i] != kActive) continue;
+      for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a)
+        layer_[i] = std::max(layer_[i], layer_[neighbours_[a]] + 1);
+    }
+    by_layer_.clear();
+    for (std::size_t i = 0; i < n; ++i)
+      if (state_[i] == kActive) by_layer_.push_back(static_cast<std::uint32_t>(i));
+    std::stable_sort(by_layer_.begin(), by_layer_.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return layer_[a] < layer_[b]; });
+    // Batches of whole layers, at least kBatch vertices each: the targets of a batch's vertices
+    // not yet known to be queued decided in parallel, then the batch resolved layer by layer (a
+    // vertex whose earlier neighbour collapses is queued, its target dropped).
+    constexpr std::size_t kBatch = 64;
+    const auto queued_by_earlier = [&](std::uint32_t i) {
+      for (std::uint32_t a = first_[i]; a < first_[i + 1]; ++a)
+        if (state_[neighbours_[a]] == kCollapses) return true;
+      return false;
+    };
+    for (std::size_t from = 0; from < by_layer_.size();) {
+      std::size_t to = from;
+      while (to < by_layer_.size() &&
+             (to - from < kBatch || layer_[by_layer_[to]] == layer_[by_layer_[to - 1]]))
+        ++to;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(from, to, 8),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          Scratch local;
+                          for (std::size_t b = range.begin(); b != range.end(); ++b) {
+                            const std::uint32_t i = by_layer_[b];
+                            if (!queued_by_earlier(i))
+                              target_[i] = collapse_target(list[i], &local, &tries_[i]);
+                          }
+                        });
+      for (std::size_t b = from; b < to; ++b) {
+        const std::uint32_t i = by_layer_[b];
+        state_[i] = queued_by_earlier(i) ? kQueued : target_[i] == kNone ? kKept : kCollapses;
+      }
+      from = to;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t u = list[i];
+      const bool visited = vertex_alive_[u] && !queued_[u];
+      LV_CHECK_EQ(visited, state_[i] == kKept || state_[i] == kCollapses);
+      if (!visited) continue;
       r->attempts += tries_[i];
       if (target_[i] == kNone) continue;
       collapse(u, target_[i], scratch, r, next);
@@ -758,9 +826,13 @@ class Collapser {
   StarTable star_;
   std::vector<std::uint8_t> queued_;
   std::vector<std::vector<std::uint32_t>> taken_;  // take_queued(): per block of vertices
-  // visit_in_order(): each listed vertex's collapse_target and attempts.
+  // visit_in_order(): per listed vertex its collapse_target, attempts, state and layer; its
+  // earlier neighbours (neighbours_[first_[i]], ... up to first_[i + 1]); the active ones by layer.
+  enum : std::uint8_t { kPassive, kActive, kQueued, kKept, kCollapses };
   std::vector<std::uint32_t> target_;
   std::vector<std::uint64_t> tries_;
+  std::vector<std::uint8_t> state_;
+  std::vector<std::uint32_t> first_, neighbours_, layer_, by_layer_;
   // flip(): 1 for a triangle not tried since it or a triangle around it last changed (a byte a
   // triangle: the worst case's tables are bounded by core/limits.cpp's estimate).
   std::vector<std::uint8_t> untried_;
