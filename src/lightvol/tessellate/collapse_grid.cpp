@@ -39,7 +39,7 @@ std::int64_t cross(Pt a, Pt b, Pt c) {
 // Rows are walked with RowSpanWalker (no division per row: most triangles here are a few texels
 // wide, so the per-row work is most of the cost).
 template <bool kUniform, class D>
-bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
+[[gnu::flatten]] bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
   const TrianglePlane plane = triangle_plane(t, a, b, c);
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
   RowSpanWalker walk(plane.v, y0);
