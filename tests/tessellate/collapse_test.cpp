@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -326,6 +327,46 @@ TEST(Collapse, TexelTestsByDepthBoundsMakeTheMeasuredGrid) {
   EXPECT_GT(collapses, 1000);  // collapses were made, so the comparison says something
 }
 
+TEST(Collapse, TheParallelScheduleMakesTheReferenceSchedulesGrids) {
+  // All stripes at once (the reference: even ones, then odd ones), the in-order step's collapses
+  // and the flips decided ahead in parallel and made in order (the reference: each decided when
+  // its turn comes): the same collapses, flips and grids, on every case and bound, with one
+  // thread and many. 300 rows: five stripes; the scene's one-texel bar and steps make stars tall
+  // enough to cross both kinds of stripe edge.
+  std::uint64_t in_order = 0, redecided = 0;
+  for (const int threads : {1, 0}) {
+    std::optional<tbb::global_control> limit;
+    if (threads > 0) limit.emplace(tbb::global_control::max_allowed_parallelism, threads);
+    for (const Case& c : cases(97, 300)) {
+      const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
+      const double e0 = pyramid.measure(pyramid.tessellate(1e30, true));
+      for (const double f : {0.002, 0.01, 0.05}) {
+        SCOPED_TRACE(c.name + " " + std::to_string(f) + " threads " + std::to_string(threads));
+        const AdaptiveGrid quadtree = pyramid.tessellate(e0 * f, true);
+        CollapseOptions reference;
+        reference.reference_order = true;
+        CollapseReport rp, rr;
+        const AdaptiveGrid a = collapse_grid(pyramid.texels(), quadtree, e0 * f, {}, &rp);
+        const AdaptiveGrid b = collapse_grid(pyramid.texels(), quadtree, e0 * f, reference, &rr);
+        EXPECT_EQ(rp.attempts, rr.attempts);
+        EXPECT_EQ(rp.collapses, rr.collapses);
+        EXPECT_EQ(rp.flips, rr.flips);
+        EXPECT_EQ(rp.rounds, rr.rounds);
+        EXPECT_EQ(a.vertices, b.vertices);
+        EXPECT_EQ(a.indices, b.indices);
+        EXPECT_EQ(rr.in_order_collapses, 0u);
+        EXPECT_EQ(rr.flips_redecided, 0u);
+        in_order += rp.in_order_collapses;
+        redecided += rp.flips_redecided;
+      }
+    }
+  }
+  // Both kinds of work decided ahead were made, and decisions were overturned by flips before
+  // them: the comparison covers all three parts of the schedule.
+  EXPECT_GT(in_order, 0u);
+  EXPECT_GT(redecided, 0u);
+}
+
 TEST(Collapse, LockedSidesKeepExactlyTheirBorderVertices) {
   const Case c = cases(65, 65)[2];
   const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
@@ -381,8 +422,8 @@ TEST(Collapse, KeptBorderPositionsStayAndTheRestOfTheSideCoarsens) {
 }
 
 TEST(Collapse, SameBytesWithOneThreadAndMany) {
-  // 300 rows: five stripes of 64 (and six shifted by 32), coarsened in parallel two phases at a
-  // time.
+  // 300 rows: five stripes of 64 (and six shifted by 32), coarsened in parallel; the in-order
+  // step's collapses and the flips decided ahead in parallel too.
   const Case c = cases(97, 300)[1];
   const RefinementPyramid pyramid(texels_of(c), Refinement::max_error);
   const double e = pyramid.measure(pyramid.tessellate(1e30, true)) * 0.01;

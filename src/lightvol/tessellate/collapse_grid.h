@@ -14,10 +14,10 @@
 // Border vertices move only along their side (a corner never), and not at all on a locked side:
 // locked sides keep exactly the border vertices of the input (fixed closures). On an unlocked side,
 // the positions listed in `keep` stay too (omni seams: the vertices the neighbouring face keeps).
-// In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, alternate stripes in
+// In a fixed order (sweeps in texel order over horizontal stripes of 64 rows, the stripes in
 // parallel; vertices whose star crosses a stripe's edge then in stripes shifted by 32 rows; those
-// that cross both afterwards in order): the same input gives the same bytes on any machine and
-// any thread count.
+// that cross both afterwards in order; the flips in triangle order): the same input gives the same
+// bytes on any machine and any thread count.
 #pragma once
 
 #include <cstdint>
@@ -58,12 +58,23 @@ struct CollapseOptions {
   // measures the texels only when that bound exceeds the error bound (collapse_grid.cpp); the
   // result is the same.
   bool reference_texel_tests = false;
+  // The schedule as first written (for tests): the even stripes of a sweep, then the odd ones;
+  // the collapses of the vertices that cross both kinds of stripe edge one at a time; each flip
+  // decided when its turn comes. The default runs all stripes at once, and decides those
+  // collapses and flips in parallel ahead of making them in order, deciding again where a step
+  // before changed what a decision read (collapse_grid.cpp); the result is the same.
+  bool reference_order = false;
 };
 
 struct CollapseReport {
   std::uint64_t attempts = 0;   // collapses whose error was evaluated
   std::uint64_t collapses = 0;  // collapses made
   std::uint64_t flips = 0;      // edge flips made
+  // The default schedule's bookkeeping (0 with CollapseOptions::reference_order): collapses made
+  // in the in-order step (vertices whose star crosses both kinds of stripe edge), and flip tries
+  // decided again because a flip before changed a triangle their decision made ahead had read.
+  std::uint64_t in_order_collapses = 0;
+  std::uint64_t flips_redecided = 0;
   int rounds = 0;
   double seconds = 0;
 };
