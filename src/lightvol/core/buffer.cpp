@@ -1,6 +1,7 @@
 #include <sys/mman.h>
 
 #include <algorithm>
+#include <limits>
 
 #include <tbb/parallel_for.h>
 
@@ -8,20 +9,41 @@
 
 namespace lightvol {
 
-void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
 #ifdef MADV_POPULATE_WRITE
-  constexpr std::uintptr_t kPage = 4096, kBlock = std::uintptr_t{32} << 20;
+namespace {
+
+constexpr std::uintptr_t kPage = 4096;
+
+// The whole pages of each range, as (first page, end) address pairs split into blocks of at most
+// `block` bytes.
+std::vector<std::pair<std::uintptr_t, std::uintptr_t>> page_blocks(
+    std::initializer_list<std::pair<const void*, std::size_t>> ranges, std::uintptr_t block) {
   std::vector<std::pair<std::uintptr_t, std::uintptr_t>> blocks;
   for (const auto& [start, bytes] : ranges) {
     const auto begin = reinterpret_cast<std::uintptr_t>(start);
     const std::uintptr_t first = (begin + kPage - 1) & ~(kPage - 1);
     const std::uintptr_t end = (begin + bytes) & ~(kPage - 1);
-    for (std::uintptr_t at = first; at < end; at += kBlock)
-      blocks.emplace_back(at, std::min(kBlock, end - at));
+    for (std::uintptr_t at = first; at < end;) {
+      const std::uintptr_t n = std::min(block, end - at);
+      blocks.emplace_back(at, n);
+      at += n;
+    }
   }
-  tbb::parallel_for(std::size_t{0}, blocks.size(), [&](std::size_t i) {
-    ::madvise(reinterpret_cast<void*>(blocks[i].first), blocks[i].second, MADV_POPULATE_WRITE);
-  });
+  return blocks;
+}
+
+void populate_block(const std::pair<std::uintptr_t, std::uintptr_t>& b) {
+  ::madvise(reinterpret_cast<void*>(b.first), b.second, MADV_POPULATE_WRITE);
+}
+
+}  // namespace
+#endif
+
+void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
+#ifdef MADV_POPULATE_WRITE
+  const auto blocks = page_blocks(ranges, std::uintptr_t{32} << 20);
+  tbb::parallel_for(std::size_t{0}, blocks.size(),
+                    [&](std::size_t i) { populate_block(blocks[i]); });
 #else
   (void)ranges;
 #endif
@@ -29,13 +51,8 @@ void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size
 
 void populate(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
 #ifdef MADV_POPULATE_WRITE
-  constexpr std::uintptr_t kPage = 4096;
-  for (const auto& [start, bytes] : ranges) {
-    const auto begin = reinterpret_cast<std::uintptr_t>(start);
-    const std::uintptr_t first = (begin + kPage - 1) & ~(kPage - 1);
-    const std::uintptr_t end = (begin + bytes) & ~(kPage - 1);
-    if (end > first) ::madvise(reinterpret_cast<void*>(first), end - first, MADV_POPULATE_WRITE);
-  }
+  for (const auto& b : page_blocks(ranges, std::numeric_limits<std::uintptr_t>::max()))
+    populate_block(b);
 #else
   (void)ranges;
 #endif
