@@ -7,7 +7,9 @@
 #include <array>
 #include <atomic>
 #include <cctype>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -23,9 +25,16 @@ namespace {
 
 const Error kNotMine{"not a plain EXR depth map: read it through lightvol-image"};
 
+// Whether OpenEXRCore reported an error during this request. It reports some (a required
+// attribute of the wrong type, a damaged chunk table it works around) while the call still
+// succeeds; OpenImageIO queues them and fails the read, so any report at all is a refusal here.
+std::atomic<bool> reported{false};
+
 // OpenEXRCore prints its errors to stderr by default; here every error is a refusal, and the
 // parent's second reader says what is wrong.
-void silent(exr_const_context_t /*context*/, exr_result_t /*code*/, const char* /*message*/) {}
+void silent(exr_const_context_t /*context*/, exr_result_t /*code*/, const char* /*message*/) {
+  reported = true;
+}
 
 struct Context {
   exr_context_t handle = nullptr;
@@ -42,8 +51,27 @@ struct Plain {
   int width = 0;
   int height = 0;
   bool tiled = false;
+  bool half = false;
   std::string name;
 };
+
+float half_to_float(std::uint16_t h) {
+  const std::uint32_t sign = static_cast<std::uint32_t>(h & 0x8000u) << 16;
+  const std::uint32_t exponent = (h >> 10) & 0x1fu, mantissa = h & 0x3ffu;
+  std::uint32_t bits = 0;
+  if (exponent == 0) {
+    const float magnitude = std::ldexp(static_cast<float>(mantissa), -24);  // zero or subnormal
+    std::memcpy(&bits, &magnitude, sizeof bits);
+    bits |= sign;
+  } else if (exponent == 31) {
+    bits = sign | 0x7f800000u | (mantissa << 13);  // infinity, NaN
+  } else {
+    bits = sign | ((exponent + 112) << 23) | (mantissa << 13);
+  }
+  float value = 0;
+  std::memcpy(&value, &bits, sizeof value);
+  return value;
+}
 
 bool lower_equal(const std::string& a, const char* b) {
   std::string lower = a;
@@ -84,6 +112,7 @@ bool plain_header(const std::string& path, exr_const_context_t ctx, Plain* plain
   const exr_attr_chlist_entry_t& channel = channels->entries[0];
   if (channel.pixel_type != EXR_PIXEL_HALF && channel.pixel_type != EXR_PIXEL_FLOAT) return false;
   if (channel.x_sampling != 1 || channel.y_sampling != 1) return false;
+  plain->half = channel.pixel_type == EXR_PIXEL_HALF;
   if (channel.name.str == nullptr || channel.name.length <= 0) return false;
   plain->name.assign(channel.name.str, static_cast<std::size_t>(channel.name.length));
   // A name OpenImageIO may take for alpha (its header would then name an alpha channel).
@@ -147,7 +176,8 @@ bool plain_header(const std::string& path, exr_const_context_t ctx, Plain* plain
 
 // Decodes every chunk of the one channel, as floats, into `values` (width × height, rows top to
 // bottom), chunks shared among `threads` threads; false on any error.
-bool decode(exr_const_context_t ctx, const Plain& plain, float* values, int threads) {
+bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uint16_t* halves,
+            int threads) {
   std::vector<std::array<int, 2>> chunks;  // scanline: (y, 0); tiled: (tile x, tile y)
   std::int64_t tile_w = 0, tile_h = 0;
   if (plain.tiled) {
@@ -192,22 +222,26 @@ bool decode(exr_const_context_t ctx, const Plain& plain, float* values, int thre
         failed = true;
         break;
       }
-      const exr_result_t set = started ? exr_decoding_update(ctx, 0, &chunk, &decoder)
-                                       : exr_decoding_initialize(ctx, 0, &chunk, &decoder);
+      // A fresh decoder for each chunk, as OpenImageIO's reader has (exr_decoding_update keeps
+      // state that let a damaged chunk decode there while it failed in OpenImageIO).
+      if (started) exr_decoding_destroy(ctx, &decoder);
+      decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+      const exr_result_t set = exr_decoding_initialize(ctx, 0, &chunk, &decoder);
       started = true;
       if (set != EXR_ERR_SUCCESS || decoder.channel_count != 1) {
         failed = true;
         break;
       }
+      // In the file's own type, as OpenImageIO's reader decodes (HALF into `halves`, converted
+      // after).
       exr_coding_channel_info_t& out = decoder.channels[0];
-      out.decode_to_ptr = reinterpret_cast<std::uint8_t*>(
-          values + static_cast<std::size_t>(y0) * static_cast<std::size_t>(plain.width) +
-          static_cast<std::size_t>(x0));
-      out.user_pixel_stride = sizeof(float);
-      out.user_line_stride =
-          static_cast<int32_t>(sizeof(float) * static_cast<std::size_t>(plain.width));
-      out.user_data_type = EXR_PIXEL_FLOAT;
-      out.user_bytes_per_element = sizeof(float);
+      const std::size_t at = static_cast<std::size_t>(y0) * static_cast<std::size_t>(plain.width) +
+                             static_cast<std::size_t>(x0);
+      const std::size_t size = halves != nullptr ? sizeof(std::uint16_t) : sizeof(float);
+      out.decode_to_ptr = halves != nullptr ? reinterpret_cast<std::uint8_t*>(halves + at)
+                                            : reinterpret_cast<std::uint8_t*>(values + at);
+      out.user_pixel_stride = static_cast<int32_t>(size);
+      out.user_line_stride = static_cast<int32_t>(size * static_cast<std::size_t>(plain.width));
       if (exr_decoding_choose_default_routines(ctx, 0, &decoder) != EXR_ERR_SUCCESS ||
           exr_decoding_run(ctx, 0, &decoder) != EXR_ERR_SUCCESS) {
         failed = true;
@@ -232,12 +266,13 @@ void serve_read(ChildOutput& channel, int threads) {
       !channel.read_string(&magic) || !channel.read_string(&read_failure))
     return;
   if (plugin != "openexr") return channel.refuse(kNotMine);
+  reported = false;
   Context context;
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = &silent;
   Plain plain;
   if (exr_start_read(&context.handle, path.c_str(), &init) != EXR_ERR_SUCCESS ||
-      !plain_header(path, context.handle, &plain))
+      !plain_header(path, context.handle, &plain) || reported.load())
     return channel.refuse(kNotMine);
   channel.accept();
   channel.write_value(static_cast<std::int32_t>(plain.width));
@@ -270,7 +305,13 @@ void serve_read(ChildOutput& channel, int threads) {
   std::unique_ptr<float[]> own;
   if (shared == nullptr) own = uninitialized_large<float>(texels);
   float* const values = shared != nullptr ? shared : own.get();
-  const bool read = decode(context.handle, plain, values, threads);
+  std::unique_ptr<std::uint16_t[]> halves;
+  if (plain.half) halves = uninitialized_large<std::uint16_t>(texels);
+  const bool read =
+      decode(context.handle, plain, values, halves.get(), threads) && !reported.load();
+  // HALF to float, exactly (every half is a float; NaN keeps its payload, as in Imath's).
+  if (read && halves)
+    for (std::size_t i = 0; i < texels; ++i) values[i] = half_to_float(halves[i]);
   // No writable mapping may remain: the parent seals the memory against writes before it uses it.
   if (shared != nullptr) ::munmap(shared, bytes);
   if (!read) return channel.refuse(kNotMine);
