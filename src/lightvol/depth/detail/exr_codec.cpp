@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -174,6 +175,65 @@ bool plain_header(const std::string& path, exr_const_context_t ctx, Plain* plain
   return true;
 }
 
+// The file's chunk table (single part: right after the header) names, for each chunk, an offset
+// in the file where that chunk starts, with its own coordinates. OpenEXRCore rebuilds a damaged
+// table by scanning the file where OpenImageIO's reader fails: such a file is declined.
+bool sane_chunk_table(const std::string& path, exr_const_context_t ctx, const Plain& plain) {
+  std::int32_t count = 0, lines = 1;
+  if (exr_get_chunk_count(ctx, 0, &count) != EXR_ERR_SUCCESS || count < 1) return false;
+  if (!plain.tiled && (exr_get_scanlines_per_chunk(ctx, 0, &lines) != EXR_ERR_SUCCESS || lines < 1))
+    return false;
+  std::uint32_t tile_x = 1, tile_y = 1;
+  if (plain.tiled) {
+    exr_tile_level_mode_t levels{};
+    exr_tile_round_mode_t round{};
+    if (exr_get_tile_descriptor(ctx, 0, &tile_x, &tile_y, &levels, &round) != EXR_ERR_SUCCESS ||
+        tile_x < 1 || tile_y < 1)
+      return false;
+  }
+  const std::int64_t across = (std::int64_t{plain.width} + tile_x - 1) / tile_x;
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) return false;
+  std::ifstream in(path, std::ios::binary);
+  const auto read_at = [&](std::uint64_t offset, std::size_t n, void* out) {
+    if (offset > file_size || file_size - offset < n) return false;
+    in.seekg(static_cast<std::streamoff>(offset));
+    return static_cast<bool>(in.read(static_cast<char*>(out), static_cast<std::streamsize>(n)));
+  };
+  // The header, within its first MiB (else declined).
+  std::string bytes(static_cast<std::size_t>(std::min<std::uint64_t>(file_size, 1 << 20)), '\0');
+  if (!read_at(0, bytes.size(), bytes.data())) return false;
+  std::size_t at = 8;  // the attributes: name, type, size, value; an empty name ends them
+  while (at < bytes.size() && bytes[at] != '\0') {
+    const std::size_t name_end = bytes.find('\0', at);
+    if (name_end == std::string::npos) return false;
+    const std::size_t type_end = bytes.find('\0', name_end + 1);
+    if (type_end == std::string::npos || type_end + 5 > bytes.size()) return false;
+    std::int32_t size = 0;
+    std::memcpy(&size, bytes.data() + type_end + 1, sizeof size);
+    if (size < 0) return false;
+    at = type_end + 5 + static_cast<std::size_t>(size);
+  }
+  if (at >= bytes.size()) return false;
+  const std::uint64_t table = at + 1, table_end = table + 8 * static_cast<std::uint64_t>(count);
+  std::vector<std::uint64_t> offsets(static_cast<std::size_t>(count));
+  if (!read_at(table, offsets.size() * 8, offsets.data())) return false;
+  for (std::int32_t k = 0; k < count; ++k) {
+    const std::uint64_t offset = offsets[static_cast<std::size_t>(k)];
+    const std::size_t head = plain.tiled ? 20 : 8;  // coordinates and the packed size
+    std::int32_t field[5] = {};
+    if (offset < table_end || !read_at(offset, head, field)) return false;
+    const std::int32_t packed = plain.tiled ? field[4] : field[1];
+    if (packed < 0 || file_size - offset - head < static_cast<std::uint64_t>(packed)) return false;
+    if (plain.tiled
+            ? (field[0] != k % across || field[1] != k / across || field[2] != 0 || field[3] != 0)
+            : field[0] != k * lines)
+      return false;
+  }
+  return true;
+}
+
 // Decodes every chunk of the one channel, as floats, into `values` (width × height, rows top to
 // bottom), chunks shared among `threads` threads; false on any error.
 bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uint16_t* halves,
@@ -272,7 +332,8 @@ void serve_read(ChildOutput& channel, int threads) {
   init.error_handler_fn = &silent;
   Plain plain;
   if (exr_start_read(&context.handle, path.c_str(), &init) != EXR_ERR_SUCCESS ||
-      !plain_header(path, context.handle, &plain) || reported.load())
+      !plain_header(path, context.handle, &plain) ||
+      !sane_chunk_table(path, context.handle, plain) || reported.load())
     return channel.refuse(kNotMine);
   channel.accept();
   channel.write_value(static_cast<std::int32_t>(plain.width));
