@@ -4,6 +4,7 @@ include(CMakeFindDependencyMacro)
 find_dependency(OpenMesh)
 find_dependency(draco)
 find_dependency(OpenImageIO)  # lightvol-image and the fuzz targets only
+find_dependency(OpenEXR)  # lightvol-exr (its C core alone) and the fuzz targets only
 find_dependency(nlohmann_json)
 find_dependency(TBB)
 find_dependency(Eigen3)

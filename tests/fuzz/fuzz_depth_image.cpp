@@ -7,14 +7,17 @@
 #include <lightvol/core/check.h>
 #include <lightvol/core/detail/image_helper.h>
 #include <lightvol/depth/depth_image.h>
+#include <lightvol/depth/detail/exr_codec.h>
 #include <lightvol/depth/detail/image_codec.h>
 
 #include "fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  // The decoder in forked children of this process (its coverage counts), not lightvol-image.
+  // The decoders in forked children of this process (their coverage counts), not lightvol-image
+  // and lightvol-exr: an EXR goes to lightvol-exr's first, then (declined) to OpenImageIO's.
   static const bool in_process =
-      (lightvol::detail::set_in_process_image_server(&lightvol::detail::serve_image_request), true);
+      (lightvol::detail::set_in_process_image_server(&lightvol::detail::serve_image_request),
+       lightvol::detail::set_in_process_exr_server(&lightvol::detail::serve_exr_request), true);
   (void)in_process;
   if (size < 1) return 0;
   // The formats read_depth_image reads, then three it refuses without opening.

@@ -14,11 +14,18 @@
 #ifndef LIGHTVOL_IMAGE_HELPER_BUILT
 #define LIGHTVOL_IMAGE_HELPER_BUILT ""
 #endif
+#ifndef LIGHTVOL_EXR_HELPER_INSTALLED
+#define LIGHTVOL_EXR_HELPER_INSTALLED ""
+#endif
+#ifndef LIGHTVOL_EXR_HELPER_BUILT
+#define LIGHTVOL_EXR_HELPER_BUILT ""
+#endif
 
 namespace lightvol::detail {
 namespace {
 
 std::atomic<ImageServer> in_process_server{nullptr};
+std::atomic<ImageServer> in_process_exr_server{nullptr};
 
 // How long lightvol-image may take to load (about 0.2 s on a quiet machine; its 260 libraries on a
 // loaded one take longer): a backstop, apart from the limits of each request.
@@ -59,13 +66,17 @@ class ServerPool {
   std::vector<std::unique_ptr<IsolatedServer>> idle_;
 };
 
-ServerPool& server_pool() {
-  static ServerPool* const pool = [] {
-    auto* created = new ServerPool;
-    std::atexit([] { server_pool().clear(); });
+// One pool for each program (ImageProgram).
+ServerPool& server_pool(ImageProgram program = ImageProgram::image) {
+  static ServerPool* const pools = [] {
+    auto* created = new ServerPool[2];
+    std::atexit([] {
+      server_pool(ImageProgram::image).clear();
+      server_pool(ImageProgram::exr).clear();
+    });
     return created;
   }();
-  return *pool;
+  return pools[program == ImageProgram::exr ? 1 : 0];
 }
 
 bool executable(const std::string& path) {
@@ -101,26 +112,66 @@ Result<std::string> image_helper_path() {
                where + "); set LIGHTVOL_IMAGE_HELPER to its path"};
 }
 
+std::optional<std::string> exr_helper_path() {
+  if (const char* env = std::getenv("LIGHTVOL_EXR_HELPER"); env && *env) {
+    if (executable(env)) return std::string(env);
+    return {};
+  }
+  if (const char* env = std::getenv("LIGHTVOL_IMAGE_HELPER"); env && *env) return {};
+  std::vector<std::string> tried;
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    tried.push_back((self.parent_path() / "lightvol-exr").string());
+    tried.push_back(
+        (self.parent_path() / ".." / "libexec" / "lightvol" / "lightvol-exr").lexically_normal());
+  }
+  tried.emplace_back(LIGHTVOL_EXR_HELPER_INSTALLED);
+  tried.emplace_back(LIGHTVOL_EXR_HELPER_BUILT);
+  for (const std::string& path : tried)
+    if (executable(path)) return path;
+  return {};
+}
+
+bool exr_helper_available() {
+  if (in_process_exr_server.load() != nullptr) return true;
+  if (in_process_server.load() != nullptr) return false;
+  return exr_helper_path().has_value();
+}
+
 void set_in_process_image_server(ImageServer server) { in_process_server.store(server); }
 
-void close_idle_image_servers() { server_pool().clear(); }
+void set_in_process_exr_server(ImageServer server) { in_process_exr_server.store(server); }
+
+void close_idle_image_servers() {
+  server_pool(ImageProgram::image).clear();
+  server_pool(ImageProgram::exr).clear();
+}
 
 Status run_image_helper(const std::string& what, const IsolationLimits& limits,
-                        const std::function<Status(ChildInput&)>& parent) {
-  if (const ImageServer server = in_process_server.load())
+                        const std::function<Status(ChildInput&)>& parent, ImageProgram program) {
+  const bool exr = program == ImageProgram::exr;
+  if (const ImageServer server = (exr ? in_process_exr_server : in_process_server).load())
     return run_isolated(
         what, limits, [&](ChildOutput& channel) { server(channel, 1); }, parent);
-  std::unique_ptr<IsolatedServer> server = server_pool().take();
+  std::unique_ptr<IsolatedServer> server = server_pool(program).take();
   if (!server) {
-    const Result<std::string> program = image_helper_path();
-    if (!program) return Error{what + ": " + program.error().message};
+    Result<std::string> path = Error{""};
+    if (exr) {
+      const std::optional<std::string> found = exr_helper_path();
+      if (!found) return Error{what + ": cannot find lightvol-exr"};
+      path = *found;
+    } else {
+      path = image_helper_path();
+    }
+    if (!path) return Error{what + ": " + path.error().message};
     Result<std::unique_ptr<IsolatedServer>> started =
-        IsolatedServer::start("lightvol-image", {*program}, kStartSeconds);
+        IsolatedServer::start(exr ? "lightvol-exr" : "lightvol-image", {*path}, kStartSeconds);
     if (!started) return Error{what + ": " + started.error().message};
     server = std::move(*started);
   }
   Status answer = server->request(what, limits, parent);
-  server_pool().give_back(std::move(server));
+  server_pool(program).give_back(std::move(server));
   return answer;
 }
 

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,17 +32,36 @@ Result<std::string> image_helper_path();
 // thread count (0: every core).
 using ImageServer = bool (*)(ChildOutput& channel, int threads);
 
+// The programs that serve image requests: lightvol-image (OpenImageIO, every request), and
+// lightvol-exr, which links OpenEXR alone (a few libraries to load instead of about 260) and reads
+// only plain EXR depth maps, declining every other file (depth/detail/exr_codec.h): the depth
+// stage tries it first for an EXR file, then lightvol-image.
+enum class ImageProgram : std::uint8_t { image = 0, exr = 1 };
+
+// lightvol-exr's path, as image_helper_path finds lightvol-image's ($LIGHTVOL_EXR_HELPER instead of
+// $LIGHTVOL_IMAGE_HELPER); none when it is not found, or when $LIGHTVOL_IMAGE_HELPER is set and
+// $LIGHTVOL_EXR_HELPER is not (that program is then to serve every read).
+std::optional<std::string> exr_helper_path();
+
+// Whether a read of an EXR file should go to lightvol-exr first: its in-process server is set, or
+// (no in-process image server) the program is found.
+bool exr_helper_available();
+
 // Runs `parent` (which sends the request and reads the answer) against a fresh lightvol-image,
 // with `limits` (run_isolated_program); or, when this process serves images itself
 // (set_in_process_image_server), against a forked child running that server on one thread
 // (run_isolated). Errors name `what`.
 Status run_image_helper(const std::string& what, const IsolationLimits& limits,
-                        const std::function<Status(ChildInput&)>& parent);
+                        const std::function<Status(ChildInput&)>& parent,
+                        ImageProgram program = ImageProgram::image);
 
 // For programs that link the decoder (the fuzz targets, whose coverage must include it, and
 // which read thousands of inputs): images are then read in a forked child of this process, as
 // before lightvol-image existed, not by starting the program. nullptr restores the program.
 void set_in_process_image_server(ImageServer server);
+// The same for lightvol-exr's server (the fuzz targets). Without it, a process with an in-process
+// image server never tries lightvol-exr.
+void set_in_process_exr_server(ImageServer server);
 
 // Ends the idle lightvol-image servers (the next request starts a fresh one): for tests that
 // change LIGHTVOL_IMAGE_HELPER.

@@ -1,0 +1,398 @@
+#include <openexr.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <lightvol/core/buffer.h>
+#include <lightvol/depth/detail/exr_codec.h>
+#include <lightvol/depth/detail/image_file.h>
+
+namespace lightvol::detail {
+namespace {
+
+const Error kNotMine{"not a plain EXR depth map: read it through lightvol-image"};
+
+// Whether OpenEXRCore reported an error during this request. It reports some (a required
+// attribute of the wrong type, a damaged chunk table it works around) while the call still
+// succeeds; OpenImageIO queues them and fails the read, so any report at all is a refusal here.
+std::atomic<bool> reported{false};
+
+// OpenEXRCore prints its errors to stderr by default; here every error is a refusal, and the
+// parent's second reader says what is wrong.
+void silent(exr_const_context_t /*context*/, exr_result_t /*code*/, const char* /*message*/) {
+  reported = true;
+}
+
+struct Context {
+  exr_context_t handle = nullptr;
+  Context() = default;
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  ~Context() {
+    if (handle != nullptr) exr_finish(&handle);
+  }
+};
+
+// What the file is, when it is plain (see exr_codec.h).
+struct Plain {
+  int width = 0;
+  int height = 0;
+  bool tiled = false;
+  bool half = false;
+  std::string name;
+};
+
+float half_to_float(std::uint16_t h) {
+  const std::uint32_t sign = static_cast<std::uint32_t>(h & 0x8000u) << 16;
+  const std::uint32_t exponent = (h >> 10) & 0x1fu, mantissa = h & 0x3ffu;
+  std::uint32_t bits = 0;
+  if (exponent == 0) {
+    const float magnitude = std::ldexp(static_cast<float>(mantissa), -24);  // zero or subnormal
+    std::memcpy(&bits, &magnitude, sizeof bits);
+    bits |= sign;
+  } else if (exponent == 31) {
+    bits = sign | 0x7f800000u | (mantissa << 13);  // infinity, NaN
+  } else {
+    bits = sign | ((exponent + 112) << 23) | (mantissa << 13);
+  }
+  float value = 0;
+  std::memcpy(&value, &bits, sizeof value);
+  return value;
+}
+
+bool lower_equal(const std::string& a, const char* b) {
+  std::string lower = a;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower == b;
+}
+
+bool ends_lower(const std::string& a, const std::string& suffix) {
+  return a.size() >= suffix.size() &&
+         lower_equal(a.substr(a.size() - suffix.size()), suffix.c_str());
+}
+
+// The file's header when it is plain and passes image_codec.cpp's checks (open_image,
+// check_header) as OpenImageIO would compute them; false otherwise.
+bool plain_header(const std::string& path, exr_const_context_t ctx, Plain* plain) {
+  int parts = 0;
+  if (exr_get_count(ctx, &parts) != EXR_ERR_SUCCESS || parts != 1) return false;
+  exr_storage_t storage{};
+  if (exr_get_storage(ctx, 0, &storage) != EXR_ERR_SUCCESS) return false;
+  if (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED) return false;
+  plain->tiled = storage == EXR_STORAGE_TILED;
+  exr_attr_box2i_t data{}, display{};
+  if (exr_get_data_window(ctx, 0, &data) != EXR_ERR_SUCCESS ||
+      exr_get_display_window(ctx, 0, &display) != EXR_ERR_SUCCESS)
+    return false;
+  if (data.min.x != 0 || data.min.y != 0 || display.min.x != 0 || display.min.y != 0 ||
+      data.max.x != display.max.x || data.max.y != display.max.y)
+    return false;
+  const std::int64_t width = std::int64_t{data.max.x} + 1, height = std::int64_t{data.max.y} + 1;
+  // open_image's 2x2, check_header's 2^30 texels.
+  if (width < 2 || height < 2 || width * height > (std::int64_t{1} << 30)) return false;
+  plain->width = static_cast<int>(width);
+  plain->height = static_cast<int>(height);
+  const exr_attr_chlist_t* channels = nullptr;
+  if (exr_get_channels(ctx, 0, &channels) != EXR_ERR_SUCCESS || channels == nullptr ||
+      channels->num_channels != 1)
+    return false;
+  const exr_attr_chlist_entry_t& channel = channels->entries[0];
+  if (channel.pixel_type != EXR_PIXEL_HALF && channel.pixel_type != EXR_PIXEL_FLOAT) return false;
+  if (channel.x_sampling != 1 || channel.y_sampling != 1) return false;
+  plain->half = channel.pixel_type == EXR_PIXEL_HALF;
+  if (channel.name.str == nullptr || channel.name.length <= 0) return false;
+  plain->name.assign(channel.name.str, static_cast<std::size_t>(channel.name.length));
+  // A name OpenImageIO may take for alpha (its header would then name an alpha channel).
+  if (lower_equal(plain->name, "a") || lower_equal(plain->name, "alpha") ||
+      ends_lower(plain->name, ".a") || ends_lower(plain->name, ".alpha") ||
+      plain->name.size() > ChildOutput::kMaxString)
+    return false;
+  exr_compression_t compression{};
+  if (exr_get_compression(ctx, 0, &compression) != EXR_ERR_SUCCESS) return false;
+  std::int64_t chunks = 0;
+  if (plain->tiled) {
+    std::uint32_t tile_x = 0, tile_y = 0;
+    exr_tile_level_mode_t levels{};
+    exr_tile_round_mode_t round{};
+    if (exr_get_tile_descriptor(ctx, 0, &tile_x, &tile_y, &levels, &round) != EXR_ERR_SUCCESS ||
+        levels != EXR_TILE_ONE_LEVEL || tile_x < 1 || tile_y < 1 || tile_x > (1u << 30) ||
+        tile_y > (1u << 30))
+      return false;
+    chunks = ((width + tile_x - 1) / tile_x) * ((height + tile_y - 1) / tile_y);
+  } else {
+    // check_header's scanlines per chunk, by compression.
+    std::int64_t lines = 1;
+    switch (compression) {
+      case EXR_COMPRESSION_NONE:
+      case EXR_COMPRESSION_RLE:
+      case EXR_COMPRESSION_ZIPS:
+        lines = 1;
+        break;
+      case EXR_COMPRESSION_ZIP:
+      case EXR_COMPRESSION_PXR24:
+        lines = 16;
+        break;
+      case EXR_COMPRESSION_PIZ:
+      case EXR_COMPRESSION_B44:
+      case EXR_COMPRESSION_B44A:
+      case EXR_COMPRESSION_DWAA:
+        lines = 32;
+        break;
+      case EXR_COMPRESSION_DWAB:
+        lines = 256;
+        break;
+      default:
+        return false;
+    }
+    chunks = (height + lines - 1) / lines;
+  }
+  // Lossy compressions: whether OpenImageIO's floats would be the same is not checked here.
+  if (compression != EXR_COMPRESSION_NONE && compression != EXR_COMPRESSION_RLE &&
+      compression != EXR_COMPRESSION_ZIPS && compression != EXR_COMPRESSION_ZIP &&
+      compression != EXR_COMPRESSION_PIZ)
+    return false;
+  std::error_code ec;
+  const std::uintmax_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) return false;
+  if (static_cast<std::uintmax_t>(chunks) * 16 > file_size) return false;
+  const std::uintmax_t decoded = static_cast<std::uintmax_t>(width * height) *
+                                 (channel.pixel_type == EXR_PIXEL_HALF ? 2u : 4u);
+  if (decoded / 4096 > file_size) return false;
+  return true;
+}
+
+// The file's chunk table (single part: right after the header) names, for each chunk, an offset
+// in the file where that chunk starts, with its own coordinates. OpenEXRCore rebuilds a damaged
+// table by scanning the file where OpenImageIO's reader fails: such a file is declined.
+bool sane_chunk_table(const std::string& path, exr_const_context_t ctx, const Plain& plain) {
+  std::int32_t count = 0, lines = 1;
+  if (exr_get_chunk_count(ctx, 0, &count) != EXR_ERR_SUCCESS || count < 1) return false;
+  if (!plain.tiled && (exr_get_scanlines_per_chunk(ctx, 0, &lines) != EXR_ERR_SUCCESS || lines < 1))
+    return false;
+  std::uint32_t tile_x = 1, tile_y = 1;
+  if (plain.tiled) {
+    exr_tile_level_mode_t levels{};
+    exr_tile_round_mode_t round{};
+    if (exr_get_tile_descriptor(ctx, 0, &tile_x, &tile_y, &levels, &round) != EXR_ERR_SUCCESS ||
+        tile_x < 1 || tile_y < 1)
+      return false;
+  }
+  const std::int64_t across = (std::int64_t{plain.width} + tile_x - 1) / tile_x;
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
+  if (ec) return false;
+  std::ifstream in(path, std::ios::binary);
+  const auto read_at = [&](std::uint64_t offset, std::size_t n, void* out) {
+    if (offset > file_size || file_size - offset < n) return false;
+    in.seekg(static_cast<std::streamoff>(offset));
+    return static_cast<bool>(in.read(static_cast<char*>(out), static_cast<std::streamsize>(n)));
+  };
+  // The header, within its first MiB (else declined).
+  std::string bytes(static_cast<std::size_t>(std::min<std::uint64_t>(file_size, 1 << 20)), '\0');
+  if (!read_at(0, bytes.size(), bytes.data())) return false;
+  std::size_t at = 8;  // the attributes: name, type, size, value; an empty name ends them
+  while (at < bytes.size() && bytes[at] != '\0') {
+    const std::size_t name_end = bytes.find('\0', at);
+    if (name_end == std::string::npos) return false;
+    const std::size_t type_end = bytes.find('\0', name_end + 1);
+    if (type_end == std::string::npos || type_end + 5 > bytes.size()) return false;
+    std::int32_t size = 0;
+    std::memcpy(&size, bytes.data() + type_end + 1, sizeof size);
+    if (size < 0) return false;
+    at = type_end + 5 + static_cast<std::size_t>(size);
+  }
+  if (at >= bytes.size()) return false;
+  const std::uint64_t table = at + 1, table_end = table + 8 * static_cast<std::uint64_t>(count);
+  std::vector<std::uint64_t> offsets(static_cast<std::size_t>(count));
+  if (!read_at(table, offsets.size() * 8, offsets.data())) return false;
+  for (std::int32_t k = 0; k < count; ++k) {
+    const std::uint64_t offset = offsets[static_cast<std::size_t>(k)];
+    const std::size_t head = plain.tiled ? 20 : 8;  // coordinates and the packed size
+    std::int32_t field[5] = {};
+    if (offset < table_end || !read_at(offset, head, field)) return false;
+    const std::int32_t packed = plain.tiled ? field[4] : field[1];
+    if (packed < 0 || file_size - offset - head < static_cast<std::uint64_t>(packed)) return false;
+    if (plain.tiled
+            ? (field[0] != k % across || field[1] != k / across || field[2] != 0 || field[3] != 0)
+            : field[0] != k * lines)
+      return false;
+  }
+  return true;
+}
+
+// Decodes every chunk of the one channel, as floats, into `values` (width × height, rows top to
+// bottom), chunks shared among `threads` threads; false on any error.
+bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uint16_t* halves,
+            int threads) {
+  std::vector<std::array<int, 2>> chunks;  // scanline: (y, 0); tiled: (tile x, tile y)
+  std::int64_t tile_w = 0, tile_h = 0;
+  if (plain.tiled) {
+    std::uint32_t tile_x = 0, tile_y = 0;
+    exr_tile_level_mode_t levels{};
+    exr_tile_round_mode_t round{};
+    if (exr_get_tile_descriptor(ctx, 0, &tile_x, &tile_y, &levels, &round) != EXR_ERR_SUCCESS ||
+        tile_x < 1 || tile_y < 1)
+      return false;
+    tile_w = static_cast<std::int64_t>(tile_x);
+    tile_h = static_cast<std::int64_t>(tile_y);
+    const int across = static_cast<int>((std::int64_t{plain.width} + tile_x - 1) / tile_x);
+    const int down = static_cast<int>((std::int64_t{plain.height} + tile_y - 1) / tile_y);
+    for (int ty = 0; ty < down; ++ty)
+      for (int tx = 0; tx < across; ++tx) chunks.push_back({tx, ty});
+  } else {
+    int32_t lines = 0;
+    if (exr_get_scanlines_per_chunk(ctx, 0, &lines) != EXR_ERR_SUCCESS || lines < 1) return false;
+    for (std::int64_t y = 0; y < plain.height; y += lines)
+      chunks.push_back({static_cast<int>(y), 0});
+  }
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  const auto work = [&] {
+    exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+    bool started = false;
+    for (std::size_t i = next++; i < chunks.size() && !failed.load(); i = next++) {
+      exr_chunk_info_t chunk{};
+      const exr_result_t info =
+          plain.tiled ? exr_read_tile_chunk_info(ctx, 0, chunks[i][0], chunks[i][1], 0, 0, &chunk)
+                      : exr_read_scanline_chunk_info(ctx, 0, chunks[i][0], &chunk);
+      if (info != EXR_ERR_SUCCESS) {
+        failed = true;
+        break;
+      }
+      // Where the chunk goes: a tile's chunk information gives its tile indices, not its texels
+      // (OpenEXR 3.1). Its rectangle must lie in the image.
+      const std::int64_t x0 = plain.tiled ? chunks[i][0] * tile_w : 0;
+      const std::int64_t y0 = plain.tiled ? chunks[i][1] * tile_h : chunk.start_y;
+      if (y0 < 0 || chunk.width < 0 || chunk.height < 0 || x0 + chunk.width > plain.width ||
+          y0 + chunk.height > plain.height) {
+        failed = true;
+        break;
+      }
+      // A fresh decoder for each chunk, as OpenImageIO's reader has (exr_decoding_update keeps
+      // state that let a damaged chunk decode there while it failed in OpenImageIO).
+      if (started) exr_decoding_destroy(ctx, &decoder);
+      decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+      const exr_result_t set = exr_decoding_initialize(ctx, 0, &chunk, &decoder);
+      started = true;
+      if (set != EXR_ERR_SUCCESS || decoder.channel_count != 1) {
+        failed = true;
+        break;
+      }
+      // In the file's own type, as OpenImageIO's reader decodes (HALF into `halves`, converted
+      // after).
+      exr_coding_channel_info_t& out = decoder.channels[0];
+      const std::size_t at = static_cast<std::size_t>(y0) * static_cast<std::size_t>(plain.width) +
+                             static_cast<std::size_t>(x0);
+      const std::size_t size = halves != nullptr ? sizeof(std::uint16_t) : sizeof(float);
+      out.decode_to_ptr = halves != nullptr ? reinterpret_cast<std::uint8_t*>(halves + at)
+                                            : reinterpret_cast<std::uint8_t*>(values + at);
+      out.user_pixel_stride = static_cast<int32_t>(size);
+      out.user_line_stride = static_cast<int32_t>(size * static_cast<std::size_t>(plain.width));
+      if (exr_decoding_choose_default_routines(ctx, 0, &decoder) != EXR_ERR_SUCCESS ||
+          exr_decoding_run(ctx, 0, &decoder) != EXR_ERR_SUCCESS) {
+        failed = true;
+        break;
+      }
+    }
+    if (started) exr_decoding_destroy(ctx, &decoder);
+  };
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t count = std::min<std::size_t>(
+      chunks.size(), threads > 0 ? static_cast<std::size_t>(threads) : std::size_t{cores});
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < count; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& thread : pool) thread.join();
+  return !failed.load();
+}
+
+void serve_read(ChildOutput& channel, int threads) {
+  std::string path, plugin, magic, read_failure;
+  if (!channel.read_string(&path) || !channel.read_string(&plugin) ||
+      !channel.read_string(&magic) || !channel.read_string(&read_failure))
+    return;
+  if (plugin != "openexr") return channel.refuse(kNotMine);
+  reported = false;
+  Context context;
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.error_handler_fn = &silent;
+  Plain plain;
+  if (exr_start_read(&context.handle, path.c_str(), &init) != EXR_ERR_SUCCESS ||
+      !plain_header(path, context.handle, &plain) ||
+      !sane_chunk_table(path, context.handle, plain) || reported.load())
+    return channel.refuse(kNotMine);
+  channel.accept();
+  channel.write_value(static_cast<std::int32_t>(plain.width));
+  channel.write_value(static_cast<std::int32_t>(plain.height));
+  channel.write_value(std::int32_t{-1});  // no alpha channel
+  channel.write_value(std::uint8_t{0});   // not eight bits
+  channel.write_value(std::int32_t{1});
+  channel.write_string(plain.name);
+  channel.write_value(std::uint8_t{0});
+  std::int32_t go = 0;
+  if (!channel.read_value(&go) || go != 1) return;
+  channel.accept();  // check_header's checks passed in plain_header
+  std::int32_t chosen = -1;
+  if (!channel.read_value(&chosen) || chosen != 0) return;
+  std::uint8_t offered = 0;
+  int shared_fd = -1;
+  if (!channel.read_with_fd(&offered, &shared_fd)) return;
+  const std::size_t texels =
+      static_cast<std::size_t>(plain.width) * static_cast<std::size_t>(plain.height);
+  const std::size_t bytes = texels * sizeof(float);
+  float* shared = nullptr;
+  if (shared_fd >= 0) {
+    struct stat status {};
+    if (::fstat(shared_fd, &status) == 0 && static_cast<std::uintmax_t>(status.st_size) == bytes) {
+      void* mapped = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, shared_fd, 0);
+      if (mapped != MAP_FAILED) shared = static_cast<float*>(mapped);
+    }
+    ::close(shared_fd);
+  }
+  std::unique_ptr<float[]> own;
+  if (shared == nullptr) own = uninitialized_large<float>(texels);
+  float* const values = shared != nullptr ? shared : own.get();
+  std::unique_ptr<std::uint16_t[]> halves;
+  if (plain.half) halves = uninitialized_large<std::uint16_t>(texels);
+  const bool read =
+      decode(context.handle, plain, values, halves.get(), threads) && !reported.load();
+  // HALF to float, exactly (every half is a float; NaN keeps its payload, as in Imath's).
+  if (read && halves)
+    for (std::size_t i = 0; i < texels; ++i) values[i] = half_to_float(halves[i]);
+  // No writable mapping may remain: the parent seals the memory against writes before it uses it.
+  if (shared != nullptr) ::munmap(shared, bytes);
+  if (!read) return channel.refuse(kNotMine);
+  channel.accept();
+  channel.write_value(std::uint8_t{shared != nullptr});  // 1: in the shared memory; 0: follows
+  if (shared == nullptr) channel.write(values, bytes);
+}
+
+}  // namespace
+
+bool serve_exr_request(ChildOutput& channel, int threads) {
+  ImageRequest request{};
+  if (!channel.read_value(&request)) return false;
+  return serve_exr_request(channel, threads, request);
+}
+
+bool serve_exr_request(ChildOutput& channel, int threads, ImageRequest request) {
+  if (request != ImageRequest::read) return false;
+  serve_read(channel, threads);
+  return true;
+}
+
+}  // namespace lightvol::detail
