@@ -122,7 +122,9 @@ constexpr double kAdaptiveGridWorstBytesPerTexel = 4 + 2 * 12;
 constexpr double kQuadtreeBytesPerTriangle = 40;
 constexpr double kCollapseBytesPerTriangle = 78;
 // lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
-// file's buffers.
+// file's buffers. lightvol-exr, which reads plain EXR files first, is far smaller (a few MiB of
+// libraries), but any file it declines is read by lightvol-image, so the estimate is
+// lightvol-image's.
 constexpr double kImageReaderBase = 136.0 * (1 << 20);
 constexpr double kImageReaderBytesPerTexel = 7;
 }  // namespace
