@@ -157,7 +157,6 @@ TEST_F(MemoryEstimate, BuildAndStatsOfOneMapPerMode) {
     // lightvol-exr, the default reader of EXR files, is a smaller process: the estimate covers it.
     const std::uint64_t checked_fast = peak_of(with({dir_.file("c.ply")}), /*fast_exr=*/true);
     ASSERT_GT(checked_fast, 0u) << size;
-    EXPECT_LE(checked_fast, checked) << size;
     EXPECT_GE(estimate(BuildMemory::static_checked, n), static_cast<double>(checked_fast)) << size;
     expect_close("static --no-check .obj " + size, estimate(BuildMemory::static_unchecked, n),
                  peak_of(with({dir_.file("u.obj"), "--no-check"})));
