@@ -1,11 +1,15 @@
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <mutex>
 
+#include <lightvol/core/buffer.h>
 #include <lightvol/core/detail/image_helper.h>
 
 #ifndef LIGHTVOL_IMAGE_HELPER_INSTALLED
@@ -205,6 +209,31 @@ ImageWriteResult write_image_file(const std::string& create_name, const std::str
   if (Status run = run_image_helper(temp + ": OpenImageIO's writer", limits, parent); !run)
     return {ImageWriteResult::Outcome::failed, run.error().message};
   return result;
+}
+
+DecodedFloats::DecodedFloats(int shared_fd, std::size_t texels) : bytes_(texels * sizeof(float)) {
+  if (shared_fd >= 0) {
+    struct stat status {};
+    if (::fstat(shared_fd, &status) == 0 && static_cast<std::uintmax_t>(status.st_size) == bytes_) {
+      void* mapped = ::mmap(nullptr, bytes_, PROT_READ | PROT_WRITE, MAP_SHARED, shared_fd, 0);
+      if (mapped != MAP_FAILED) values_ = static_cast<float*>(mapped), shared_ = true;
+    }
+    ::close(shared_fd);
+  }
+  if (!shared_) {
+    own_ = uninitialized_large<float>(texels);
+    values_ = own_.get();
+  }
+}
+
+void DecodedFloats::unmap() {
+  if (shared_ && values_ != nullptr) ::munmap(values_, bytes_);
+  if (shared_) values_ = nullptr;
+}
+
+void DecodedFloats::send(ChildOutput& channel) const {
+  channel.write_value(std::uint8_t{shared_});  // 1: in the shared memory; 0: follows
+  if (!shared_) channel.write(values_, bytes_);
 }
 
 }  // namespace lightvol::detail

@@ -8,8 +8,10 @@
 // images through write_image_file.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,6 +64,31 @@ void set_in_process_image_server(ImageServer server);
 // The same for lightvol-exr's server (the fuzz targets). Without it, a process with an in-process
 // image server never tries lightvol-exr.
 void set_in_process_exr_server(ImageServer server);
+
+// A reader's destination for the floats of one read (lightvol-image's and lightvol-exr's side of
+// the conversation): the parent's shared memory when it offered a memfd of exactly `texels` floats
+// (mapped here; the descriptor is closed), else a buffer of the reader's own, not zeroed (the
+// decoder writes every float) and on huge pages (a 16384² map is 1 GiB).
+class DecodedFloats {
+ public:
+  DecodedFloats(int shared_fd, std::size_t texels);
+  ~DecodedFloats() { unmap(); }
+  DecodedFloats(const DecodedFloats&) = delete;
+  DecodedFloats& operator=(const DecodedFloats&) = delete;
+  float* data() const { return values_; }
+  // No writable mapping may remain once the parent seals the memory against writes: called before
+  // the reader answers (the floats stay readable only when they are the reader's own).
+  void unmap();
+  // After the read's last verdict: whether the floats are in the shared memory, and when not, the
+  // floats themselves.
+  void send(ChildOutput& channel) const;
+
+ private:
+  std::size_t bytes_ = 0;
+  float* values_ = nullptr;
+  bool shared_ = false;
+  std::unique_ptr<float[]> own_;
+};
 
 // Ends the idle lightvol-image servers (the next request starts a fresh one): for tests that
 // change LIGHTVOL_IMAGE_HELPER.

@@ -1,6 +1,4 @@
 #include <openexr.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -353,19 +351,8 @@ void serve_read(ChildOutput& channel, int threads) {
   if (!channel.read_with_fd(&offered, &shared_fd)) return;
   const std::size_t texels =
       static_cast<std::size_t>(plain.width) * static_cast<std::size_t>(plain.height);
-  const std::size_t bytes = texels * sizeof(float);
-  float* shared = nullptr;
-  if (shared_fd >= 0) {
-    struct stat status {};
-    if (::fstat(shared_fd, &status) == 0 && static_cast<std::uintmax_t>(status.st_size) == bytes) {
-      void* mapped = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, shared_fd, 0);
-      if (mapped != MAP_FAILED) shared = static_cast<float*>(mapped);
-    }
-    ::close(shared_fd);
-  }
-  std::unique_ptr<float[]> own;
-  if (shared == nullptr) own = uninitialized_large<float>(texels);
-  float* const values = shared != nullptr ? shared : own.get();
+  DecodedFloats floats(shared_fd, texels);
+  float* const values = floats.data();
   std::unique_ptr<std::uint16_t[]> halves;
   if (plain.half) halves = uninitialized_large<std::uint16_t>(texels);
   const bool read =
@@ -373,12 +360,10 @@ void serve_read(ChildOutput& channel, int threads) {
   // HALF to float, exactly (every half is a float; NaN keeps its payload, as in Imath's).
   if (read && halves)
     for (std::size_t i = 0; i < texels; ++i) values[i] = half_to_float(halves[i]);
-  // No writable mapping may remain: the parent seals the memory against writes before it uses it.
-  if (shared != nullptr) ::munmap(shared, bytes);
+  floats.unmap();
   if (!read) return channel.refuse(kNotMine);
   channel.accept();
-  channel.write_value(std::uint8_t{shared != nullptr});  // 1: in the shared memory; 0: follows
-  if (shared == nullptr) channel.write(values, bytes);
+  floats.send(channel);
 }
 
 }  // namespace

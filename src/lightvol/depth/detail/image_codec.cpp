@@ -1,5 +1,3 @@
-#include <sys/mman.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdint>
@@ -161,36 +159,19 @@ void serve_read(ChildOutput& channel, int threads) {
   std::uint8_t offered = 0;
   int shared_fd = -1;
   if (!channel.read_with_fd(&offered, &shared_fd)) return;
-  const std::size_t texels =
-      static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
-  const std::size_t bytes = texels * sizeof(float);
-  float* shared = nullptr;
-  if (shared_fd >= 0) {
-    struct stat status {};
-    if (::fstat(shared_fd, &status) == 0 && static_cast<std::uintmax_t>(status.st_size) == bytes) {
-      void* mapped = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, shared_fd, 0);
-      if (mapped != MAP_FAILED) shared = static_cast<float*>(mapped);
-    }
-    ::close(shared_fd);
-  }
-  // Decoded straight into the parent's pages; else (none offered, or they cannot be mapped) into
-  // a buffer of its own, written whole by the reader before it is sent: not zeroed first, and on
-  // huge pages (a 16384² map is 1 GiB: 512 page faults rather than 262,144).
-  std::unique_ptr<float[]> own;
-  if (shared == nullptr) own = uninitialized_large<float>(texels);
-  float* const values = shared != nullptr ? shared : own.get();
+  DecodedFloats floats(
+      shared_fd, static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
+  float* const values = floats.data();
   OIIO::ImageInput* const in = opened->input.get();
   // A truncated file can come back "read" with the damage reported only in the error queue.
   const bool read =
       in->read_image(0, 0, chosen, chosen + 1, OIIO::TypeDesc::FLOAT, values) && !in->has_error();
-  // No writable mapping may remain: the parent seals the memory against writes before it uses it.
-  if (shared != nullptr) ::munmap(shared, bytes);
+  floats.unmap();
   if (!read)
     return channel.refuse(Error{path + ": " + read_failure + ": " + oiio_message(in->geterror())});
   in->close();
   channel.accept();
-  channel.write_value(std::uint8_t{shared != nullptr});  // 1: in the shared memory; 0: follows
-  if (shared == nullptr) channel.write(values, bytes);
+  floats.send(channel);
 }
 
 void serve_write(ChildOutput& channel, int threads) {
