@@ -43,10 +43,18 @@ constexpr std::array<int, 3> kCleanupSignals = {SIGINT, SIGTERM, SIGHUP};
 std::atomic<int> g_defer_depth{0};
 std::atomic<int> g_deferred_signal{0};
 
+// Set once a signal's cleanup begins: the process is about to die of it. Another thread may be
+// registering a temporary at that moment (it took no part in deferring the signal, or began after
+// the deferred signal was acted on); either the cleanup sees its slot armed, or the registration
+// sees this flag and unlinks its own file (sequentially consistent both ways: a store then a load
+// on each side).
+std::atomic<bool> g_dying{false};
+
 void unlink_temporaries() {
+  g_dying.store(true);
   const pid_t self = ::getpid();
   for (TempSlot& slot : g_slots)
-    if (slot.state.load(std::memory_order_acquire) == 2 && slot.owner == self) ::unlink(slot.path);
+    if (slot.state.load() == 2 && slot.owner == self) ::unlink(slot.path);
 }
 
 extern "C" void unlink_temporaries_and_reraise(int sig) {
@@ -90,7 +98,11 @@ int register_temporary(const std::string& absolute_path) {
     if (!g_slots[i].state.compare_exchange_strong(expected, 1)) continue;
     g_slots[i].owner = ::getpid();
     std::memcpy(g_slots[i].path, absolute_path.c_str(), absolute_path.size() + 1);
-    g_slots[i].state.store(2, std::memory_order_release);
+    g_slots[i].state.store(2);
+    if (g_dying.load()) {  // a signal's cleanup may have passed this slot: the process dies now
+      ::unlink(g_slots[i].path);
+      for (;;) ::pause();
+    }
     return i;
   }
   return -1;
