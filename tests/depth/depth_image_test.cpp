@@ -136,6 +136,36 @@ TEST(DepthImage, BadPixelsNameTheFirstOne) {
   }
 }
 
+// validate_depths tests blocks of 65,536 texels in parallel: the texel it names is still the first
+// in row order, whichever blocks hold bad ones, and -0 passes as 0 does.
+TEST(DepthImage, ValidationNamesTheFirstBadTexelOfALargeImage) {
+  const int w = 1000, h = 700;  // 11 blocks, the last one partial
+  const float nan = std::numeric_limits<float>::quiet_NaN(),
+              inf = std::numeric_limits<float>::infinity(),
+              tiny = -std::numeric_limits<float>::denorm_min();
+  DepthImage image = ramp(w, h);
+  image.values[123] = -0.0f;
+  EXPECT_TRUE(validate_depths(image, "m.exr").ok());
+  struct Case {
+    std::vector<std::pair<std::size_t, float>> bad;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{{699999, tiny}}, "m.exr: pixel (999, 699): depth is negative"},
+      {{{65536 * 7 + 5, -inf}, {65536 * 3 + 1, nan}},
+       "m.exr: pixel (609, 196): depth is NaN"},  // 196,609 = 65,536·3 + 1
+      {{{65535, inf}, {65536, -1.0f}, {0 + 999, inf}}, "m.exr: pixel (999, 0): depth is infinite"},
+      {{{65536 * 10 + 17, nan}}, "m.exr: pixel (377, 655): depth is NaN"},  // 655,377
+  };
+  for (const Case& c : cases) {
+    DepthImage bad = image;
+    for (const auto& [at, value] : c.bad) bad.values[at] = value;
+    const Status s = validate_depths(bad, "m.exr");
+    ASSERT_FALSE(s.ok());
+    EXPECT_EQ(s.error().message.rfind(c.message, 0), 0u) << s.error().message;
+  }
+}
+
 TEST(DepthImage, RejectsMissingTruncatedJunkTinyAnd8Bit) {
   test::TempDir dir;
   expect_error(read_depth_image(dir.file("none.exr")), "no such file");

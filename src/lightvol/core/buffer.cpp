@@ -4,6 +4,7 @@
 #include <limits>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <lightvol/core/buffer.h>
 
@@ -41,7 +42,14 @@ void populate_block(const std::pair<std::uintptr_t, std::uintptr_t>& b) {
 
 void populate_in_parallel(std::initializer_list<std::pair<const void*, std::size_t>> ranges) {
 #ifdef MADV_POPULATE_WRITE
-  const auto blocks = page_blocks(ranges, std::uintptr_t{32} << 20);
+  std::uintptr_t bytes = 0;
+  for (const auto& range : ranges) bytes += range.second;
+  const auto threads =
+      static_cast<std::uintptr_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+  const std::uintptr_t block =
+      std::clamp(bytes / (8 * threads), std::uintptr_t{2} << 20, std::uintptr_t{32} << 20) &
+      ~((std::uintptr_t{2} << 20) - 1);
+  const auto blocks = page_blocks(ranges, block);
   tbb::parallel_for(std::size_t{0}, blocks.size(),
                     [&](std::size_t i) { populate_block(blocks[i]); });
 #else

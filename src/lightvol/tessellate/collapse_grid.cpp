@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -57,6 +58,38 @@ template <bool kUniform, class D>
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+// The items k of [0, n) for which live(k) holds, each with its rank among them: counted by blocks
+// in parallel, then visited by blocks in parallel (for_each(fn) calls fn(k, rank)).
+template <class Live>
+class LiveBlocks {
+ public:
+  LiveBlocks(std::size_t n, Live live) : n_(n), live_(std::move(live)), first_(blocks() + 1, 0) {
+    tbb::parallel_for(std::size_t{0}, blocks(), [&](std::size_t b) {
+      std::size_t count = 0;
+      for (std::size_t k = b * kBlock; k < end(b); ++k) count += live_(k) ? 1 : 0;
+      first_[b + 1] = count;
+    });
+    for (std::size_t b = 0; b < blocks(); ++b) first_[b + 1] += first_[b];
+  }
+  std::size_t count() const { return first_.back(); }
+  template <class Fn>
+  void for_each(const Fn& fn) const {
+    tbb::parallel_for(std::size_t{0}, blocks(), [&](std::size_t b) {
+      std::size_t at = first_[b];
+      for (std::size_t k = b * kBlock; k < end(b); ++k)
+        if (live_(k)) fn(k, at++);
+    });
+  }
+
+ private:
+  static constexpr std::size_t kBlock = std::size_t{1} << 16;
+  std::size_t blocks() const { return (n_ + kBlock - 1) / kBlock; }
+  std::size_t end(std::size_t b) const { return std::min(n_, (b + 1) * kBlock); }
+  std::size_t n_;
+  Live live_;
+  std::vector<std::size_t> first_;
+};
+
 // Each vertex's star (the triangles around it), flat: one 32-byte slot a vertex (two a cache
 // line) holding the count and up to kInline triangles; a larger star moves to a heap block of its
 // own, owned by the slot, and stays there (collapses merge stars: nothing bounds a degree). The
@@ -72,11 +105,12 @@ class StarTable {
       if (s.n & kHeap) delete[] heap(s);
   }
 
-  // `degree[v]`: the size v's star will have once filled by push().
-  void init(const std::vector<std::uint32_t>& degree, std::size_t nv) {
-    resize_large(slots_, nv);
-    for (std::size_t v = 0; v < nv; ++v)
-      if (degree[v] > kInline) set_heap(&slots_[v], new std::uint32_t[degree[v]], degree[v], 0);
+  // Empty stars for `nv` vertices.
+  void init(std::size_t nv) { resize_large(slots_, nv); }
+
+  // Room for `degree` triangles in v's empty star: the size it will have once filled by push().
+  void reserve(std::uint32_t v, std::uint32_t degree) {
+    if (degree > kInline) set_heap(&slots_[v], new std::uint32_t[degree], degree, 0);
   }
 
   std::span<const std::uint32_t> operator[](std::uint32_t v) const {
@@ -187,19 +221,21 @@ class Collapser {
                           LV_CHECK((a > 0) == (sign_ > 0));
                         }
                       });
-    std::vector<std::uint32_t> degree;
-    assign_large(degree, nv + 1, std::uint32_t{0});
-    for (std::size_t k = 0; k < nt; ++k)
-      for (int c = 0; c < 3; ++c) ++degree[tri_[k][c]];
-    star_.init(degree, nv);
+    star_.init(nv);
     // Each star in triangle order; blocks of vertices in parallel, each block reading every
-    // triangle and filling only its own vertices' stars.
+    // triangle twice (its vertices' degrees, then their stars) and filling only its own
+    // vertices' stars.
     const std::size_t blocks =
         static_cast<std::size_t>(std::clamp(tbb::this_task_arena::max_concurrency(), 1, 8));
     const std::size_t block = nv / blocks + 1;
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
-      const std::uint32_t lo = static_cast<std::uint32_t>(b * block),
+      const std::uint32_t lo = static_cast<std::uint32_t>(std::min(nv, b * block)),
                           hi = static_cast<std::uint32_t>(std::min(nv, (b + 1) * block));
+      std::vector<std::uint32_t> degree(hi - lo, 0);
+      for (std::size_t k = 0; k < nt; ++k)
+        for (int c = 0; c < 3; ++c)
+          if (tri_[k][c] >= lo && tri_[k][c] < hi) ++degree[tri_[k][c] - lo];
+      for (std::uint32_t v = lo; v < hi; ++v) star_.reserve(v, degree[v - lo]);
       for (std::size_t k = 0; k < nt; ++k)
         for (int c = 0; c < 3; ++c)
           if (tri_[k][c] >= lo && tri_[k][c] < hi)
@@ -362,31 +398,34 @@ class Collapser {
     AdaptiveGrid out;
     out.width = grid_.width;
     out.height = grid_.height;
+    // The live vertices and triangles in their order (most of the input's are gone), counted and
+    // copied by blocks in parallel.
+    const LiveBlocks vertices(pt_.size(), [&](std::size_t v) { return vertex_alive_[v] != 0; });
     std::vector<std::uint32_t> rank;
-    assign_large(rank, pt_.size(), kNone);
-    for (std::size_t v = 0; v < pt_.size(); ++v) {
-      if (!vertex_alive_[v]) continue;
-      rank[v] = static_cast<std::uint32_t>(out.vertices.size());
-      out.vertices.push_back(grid_.vertices[v]);
-      const Pt p = pt_[v];
+    resize_large(rank, pt_.size());
+    out.vertices.resize(vertices.count());
+    vertices.for_each([&](std::size_t v, std::size_t at) {
+      rank[v] = static_cast<std::uint32_t>(at);
+      out.vertices[at] = grid_.vertices[v];
+    });
+    const auto w = static_cast<std::uint32_t>(grid_.width);
+    for (const std::uint32_t id : out.vertices) {
+      const Pt p{static_cast<int>(id % w), static_cast<int>(id / w)};
       if (p.y == 0) out.border[kTop].push_back(p.x);
       if (p.y == grid_.height - 1) out.border[kBottom].push_back(p.x);
-    }
-    for (std::size_t v = 0; v < pt_.size(); ++v) {
-      if (!vertex_alive_[v]) continue;
-      const Pt p = pt_[v];
       if (p.x == 0) out.border[kLeft].push_back(p.y);
       if (p.x == grid_.width - 1) out.border[kRight].push_back(p.y);
     }
     for (const std::vector<int>& side : out.border)
       LV_CHECK(std::is_sorted(side.begin(), side.end()));
-    for (std::size_t k = 0; k < tri_.size(); ++k) {
-      if (!alive_[k]) continue;
+    const LiveBlocks triangles(tri_.size(), [&](std::size_t k) { return alive_[k] != 0; });
+    out.indices.resize(3 * triangles.count());
+    triangles.for_each([&](std::size_t k, std::size_t at) {
       for (int c = 0; c < 3; ++c) {
-        LV_CHECK(rank[tri_[k][c]] != kNone);
-        out.indices.push_back(rank[tri_[k][c]]);
+        LV_CHECK(vertex_alive_[tri_[k][c]]);
+        out.indices[3 * at + static_cast<std::size_t>(c)] = rank[tri_[k][c]];
       }
-    }
+    });
     out.leaves = grid_.leaves;
     out.fixup_rounds = grid_.fixup_rounds;
     return out;

@@ -42,8 +42,7 @@ class PyramidBuilder {
         value_(*value) {
     value_.resize(static_cast<std::size_t>(q_.top) + 1);
     for (int level = 1; level <= q_.top; ++level) {  // level 1: a quarter of the texels' count
-      reserve_large(value_[level], q_.cells(level));
-      value_[level].assign(q_.cells(level), 0.0f);
+      assign_large(value_[level], q_.cells(level), 0.0f);
     }
   }
 
