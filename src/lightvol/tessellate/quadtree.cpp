@@ -143,6 +143,9 @@ class Refiner {
     int level, i, j;
   };
   std::vector<Cell> changed_;
+  // split_failing_changed_leaves' flags of the cells (level ≥ 2) taken as candidates: all clear
+  // between calls; allocated by the first.
+  std::vector<std::vector<std::uint8_t>> candidate_;
   std::uint64_t visits_ = 0;
 };
 
@@ -330,13 +333,25 @@ bool Refiner::split_failing_leaves() {
 }
 
 bool Refiner::split_failing_changed_leaves() {
-  // The candidates, as (level, cell index) keys: sorted and unique, so each is tested once.
+  // The candidates, as (level, cell index) keys, each once (a flag per cell marks those taken; the
+  // flags are cleared again below), in the order changed_ reaches them: the leaves are tested
+  // against the tree as this round found it and split after all tests, so the order changes
+  // nothing but the work's locality, which this order keeps (a changed cell's candidates are its
+  // children and neighbours).
+  if (candidate_.empty()) {
+    candidate_.resize(split_.size());
+    for (int level = 2; level <= q_.top; ++level)
+      assign_large(candidate_[level], split_[level].size(), std::uint8_t{0});
+  }
   std::vector<std::uint64_t> keys;
   const auto add = [&](int level, int i, int j) {
     if (level < 2 || i < 0 || j < 0 || i >= q_.nx(level) || j >= q_.ny(level)) return;
-    keys.push_back((static_cast<std::uint64_t>(level) << 58) |
-                   (static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(q_.nx(level)) +
-                    static_cast<std::uint64_t>(i)));
+    const std::size_t cell = static_cast<std::size_t>(j) * static_cast<std::size_t>(q_.nx(level)) +
+                             static_cast<std::size_t>(i);
+    std::uint8_t& taken = candidate_[level][cell];
+    if (taken) return;
+    taken = 1;
+    keys.push_back((static_cast<std::uint64_t>(level) << 58) | cell);
   };
   for (const Cell& c : changed_) {
     for (int dj = 0; dj < 2; ++dj)
@@ -347,8 +362,8 @@ bool Refiner::split_failing_changed_leaves() {
     add(c.level, c.i, c.j + 1);
   }
   changed_.clear();
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  for (const std::uint64_t key : keys)
+    candidate_[key >> 58][key & ((std::uint64_t{1} << 58) - 1)] = 0;
   visits_ += keys.size();
   std::vector<std::uint8_t> fails(keys.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys.size(), 64),
