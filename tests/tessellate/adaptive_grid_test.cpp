@@ -174,6 +174,43 @@ TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
   }
 }
 
+// The test for borrowing reads the texels in blocks of 65,536 (texel_depths.cpp): one texel that is
+// not its own depth, in the last block of a larger image, is enough to copy; without it the
+// image is borrowed (a directional light's uniform scale: nothing else is computed).
+TEST(Adaptive, TexelDepthsBorrowOnlyWhenEveryBlockHolds) {
+  const int w = 301, h = 250;  // 75,250 texels: two blocks
+  const std::size_t last = static_cast<std::size_t>(w) * h - 3;
+  struct Case {
+    std::string light;
+    float lo, hi, odd;  // odd: the value of texel `last`, or NaN for none
+    bool borrowed;
+  };
+  const float none = std::numeric_limits<float>::quiet_NaN();
+  const Case cases[] = {{unit_box_json(), 0.05f, 0.95f, none, true},
+                        {unit_box_json(), 0.05f, 0.95f, 1.5f, false},
+                        {test::spot_json("window"), 0.9f, 1.0f, none, true},
+                        {test::spot_json("window"), 0.9f, 1.0f, 1.01f, false}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.light + " " + std::to_string(c.odd));
+    DepthImage depth = make_depth(w, h, [&](int col, int row) {
+      return c.lo + (c.hi - c.lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
+    });
+    if (!std::isnan(c.odd)) depth.values[last] = c.odd;
+    const Light light = light_from_json(c.light);
+    Result<TexelDepths> lent = TexelDepths::create(light, depth, 0, "x", true);
+    Result<TexelDepths> copied = TexelDepths::create(light, depth, 0, "x");
+    ASSERT_TRUE(lent.ok() && copied.ok());
+    EXPECT_EQ(lent->float_depths() && lent->depth_row_as<float>(0) == depth.values.data(),
+              c.borrowed);
+    for (int row = 0; row < h; ++row)
+      for (int col = 0; col < w; ++col)
+        ASSERT_EQ(lent->window_depth(col, row), copied->window_depth(col, row))
+            << col << ", " << row;
+    EXPECT_EQ(copied->window_depth(static_cast<int>(last % w), static_cast<int>(last / w)),
+              std::isnan(c.odd) ? depth.values[last] : 1.0);
+  }
+}
+
 // ---- the pyramid capped at the bound
 // -------------------------------------------------------------
 

@@ -8,7 +8,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
@@ -66,32 +65,34 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
     const double z = -std::clamp(stored, light.near, light.far);
     return std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
   };
-  // Floats when every depth is one exactly (window: always; linear: checked, stopping at the
-  // first that is not).
+  // Whether test(stored value) holds for every texel: blocks of texels in parallel, each block's
+  // loop without an early exit (it vectorizes), the blocks after a failed one skipped.
+  const auto every_value = [&](auto test) {
+    constexpr std::size_t kBlock = std::size_t{1} << 16;
+    const float* values = image.values.data();
+    std::atomic<bool> all{true};
+    tbb::parallel_for(std::size_t{0}, (n + kBlock - 1) / kBlock, [&](std::size_t b) {
+      if (!all.load(std::memory_order_relaxed)) return;
+      const std::size_t end = std::min(n, (b + 1) * kBlock);
+      unsigned holds = 1;
+#pragma omp simd reduction(& : holds)
+      for (std::size_t v = b * kBlock; v < end; ++v) holds &= test(values[v]) ? 1u : 0u;
+      if (!holds) all.store(false, std::memory_order_relaxed);
+    });
+    return all.load();
+  };
+  // Floats when every depth is one exactly (window: always; linear: checked).
   t.float_depths_ = window;
   // Borrowed: every stored value is its own window depth.
   const bool borrowed = borrow && (window || linear_fast) &&
-                        tbb::parallel_reduce(
-                            tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
-                            [&](const tbb::blocked_range<std::size_t>& r, bool same) {
-                              for (std::size_t v = r.begin(); v != r.end() && same; ++v)
-                                same = fast_depth(image.values[v]) == double{image.values[v]};
-                              return same;
-                            },
-                            [](bool a, bool b) { return a && b; });
+                        every_value([&](float v) { return fast_depth(v) == double{v}; });
   if (borrowed) {
     t.float_depths_ = true;
   } else if (linear_fast) {
-    t.float_depths_ = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, n, std::size_t{1} << 16), true,
-        [&](const tbb::blocked_range<std::size_t>& r, bool exact) {
-          for (std::size_t v = r.begin(); v != r.end() && exact; ++v) {
-            const double d = fast_depth(image.values[v]);
-            exact = static_cast<double>(static_cast<float>(d)) == d;
-          }
-          return exact;
-        },
-        [](bool a, bool b) { return a && b; });
+    t.float_depths_ = every_value([&](float v) {
+      const double d = fast_depth(v);
+      return static_cast<double>(static_cast<float>(d)) == d;
+    });
   }
   if (borrowed) {
     t.depth_fp_ = image.values.data();
@@ -110,6 +111,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
                   h1[2] * h0[3] - h0[2] * h1[3]};
     return length(g) / std::abs(h0[3] + d * h1[3]);
   };
+  if (borrowed && t.uniform_) return t;  // no depth to convert, no scale to compute
   if (window || linear_fast) {
     // Row by row in two loops that vectorize (-fopenmp-simd, -fno-math-errno for the square
     // root): the depths, then the error scales from the depths just written.
