@@ -116,11 +116,14 @@ constexpr double kAdaptiveGridWorstBytesPerTexel = 4 + 2 * 12;
 // grid (a vertex id per two triangles, three indices) and the volume assembled from it (12 bytes
 // of position per two triangles, 12 of indices, the check's and the writer's share); the collapse
 // adds its tables (a point and a star of triangles per vertex, a triangle's corners and flags) and
-// the grid it returns. Measured on noise at a bound of 0 (T = 2 per texel; 2048²: peaks of
-// 400.5 MiB and 669 MiB, 36.5 and 70 bytes per triangle over the per-texel tables), with some
-// room above.
+// the grid it returns (the collapse rewrites the quadtree grid's own indices). Measured on noise at
+// a bound of 0 (T = 2 per texel; 2048²: peaks of 400.5 MiB and 500.7 MiB, 36.5 and 49 bytes per
+// triangle over the per-texel tables), with some room above.
 constexpr double kQuadtreeBytesPerTriangle = 40;
-constexpr double kCollapseBytesPerTriangle = 78;
+constexpr double kCollapseBytesPerTriangle = 57;
+// An omni light's collapse keeps each face's quadtree grid for its seam rounds and collapses a copy
+// of its indices (omni_adaptive.cpp): 12 bytes more per triangle.
+constexpr double kOmniCollapseBytesPerTriangle = kCollapseBytesPerTriangle + 12;
 // lightvol-image: its libraries (OpenImageIO and what it loads), then the decoded image and the
 // file's buffers. lightvol-exr, which reads plain EXR files first, is far smaller (a few MiB of
 // libraries), but any file it declines is read by lightvol-image, so the estimate is
@@ -168,10 +171,11 @@ std::uint64_t adaptive_memory_bytes(std::int64_t width, std::int64_t height, int
   if (width <= 0 || height <= 0 || images <= 0) return 0;
   const double texels = static_cast<double>(width) * static_cast<double>(height);
   const double per_texel = kAdaptiveBytesPerTexel - (float_depths ? 4 : 0);
-  const double lightvol = static_cast<double>(process_base_bytes()) +
-                          texels * static_cast<double>(images) * per_texel +
-                          static_cast<double>(quadtree_triangles) *
-                              (collapse ? kCollapseBytesPerTriangle : kQuadtreeBytesPerTriangle);
+  const double lightvol =
+      static_cast<double>(process_base_bytes()) + texels * static_cast<double>(images) * per_texel +
+      static_cast<double>(quadtree_triangles) * (!collapse    ? kQuadtreeBytesPerTriangle
+                                                 : images > 1 ? kOmniCollapseBytesPerTriangle
+                                                              : kCollapseBytesPerTriangle);
   const double reader = kImageReaderBase + texels * kImageReaderBytesPerTexel;
   const double bytes = std::max(lightvol, reader);
   return bytes >= 1.8e19 ? std::uint64_t{1} << 63 : static_cast<std::uint64_t>(bytes);

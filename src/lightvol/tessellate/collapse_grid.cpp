@@ -178,15 +178,53 @@ class StarTable {
   std::vector<Slot> slots_;
 };
 
+// The triangles' corners, three a triangle, in one flat buffer: the grid's indices themselves,
+// moved in (no copy) when the caller gives the grid up.
+class Corners {
+ public:
+  explicit Corners(std::vector<std::uint32_t> flat) : flat_(std::move(flat)) {
+    LV_CHECK_EQ(flat_.size() % 3, 0u);
+  }
+  std::size_t size() const { return flat_.size() / 3; }
+  std::span<std::uint32_t, 3> operator[](std::size_t k) {
+    return std::span<std::uint32_t, 3>(flat_.data() + 3 * k, 3);
+  }
+  std::span<const std::uint32_t, 3> operator[](std::size_t k) const {
+    return std::span<const std::uint32_t, 3>(flat_.data() + 3 * k, 3);
+  }
+  void set(std::size_t k, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+    flat_[3 * k] = a, flat_[3 * k + 1] = b, flat_[3 * k + 2] = c;
+  }
+
+ private:
+  std::vector<std::uint32_t> flat_;
+};
+
+// A copy of `values`, its pages mapped and its elements copied by all cores.
+std::vector<std::uint32_t> copy_large(const std::vector<std::uint32_t>& values) {
+  std::vector<std::uint32_t> copy;
+  reserve_large(copy, values.size());
+  populate_for_fill(copy, 0, values.size());
+  copy.resize(values.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values.size(), std::size_t{1} << 16),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::copy(values.begin() + static_cast<std::ptrdiff_t>(r.begin()),
+                                values.begin() + static_cast<std::ptrdiff_t>(r.end()),
+                                copy.begin() + static_cast<std::ptrdiff_t>(r.begin()));
+                    });
+  return copy;
+}
+
 class Collapser {
  public:
-  Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
-            const CollapseOptions& options)
-      : t_(texels), grid_(grid), bound_(bound), options_(options) {
+  // `indices`: the grid's, or a copy of them (the collapse rewrites them in place).
+  Collapser(const TexelDepths& texels, const AdaptiveGrid& grid, std::vector<std::uint32_t> indices,
+            double bound, const CollapseOptions& options)
+      : t_(texels), grid_(grid), bound_(bound), options_(options), tri_(std::move(indices)) {
     for (const std::vector<int>& keep : options.keep)
       LV_CHECK(std::is_sorted(keep.begin(), keep.end()));
     const int w = grid.width, h = grid.height;
-    const std::size_t nv = grid.vertices.size(), nt = grid.num_triangles();
+    const std::size_t nv = grid.vertices.size(), nt = tri_.size();
     resize_large(pt_, nv);
     resize_large(sides_, nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096),
@@ -204,18 +242,16 @@ class Collapser {
                           sides_[v] = s;
                         }
                       });
-    resize_large(tri_, nt);
     assign_large(alive_, nt, std::uint8_t{1});
     // Every triangle turns the way the first one does (the winding kept).
     const auto area2 = [&](std::size_t k) {
-      const std::uint32_t* c = &grid.indices[3 * k];
+      const std::span<const std::uint32_t, 3> c = std::as_const(tri_)[k];
       return cross(pt_[c[0]], pt_[c[1]], pt_[c[2]]);
     };
     sign_ = area2(0) > 0 ? 1 : -1;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 4096),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t k = range.begin(); k != range.end(); ++k) {
-                          for (int c = 0; c < 3; ++c) tri_[k][c] = grid.indices[3 * k + c];
                           const std::int64_t a = area2(k);
                           LV_CHECK(a != 0);
                           LV_CHECK((a > 0) == (sign_ > 0));
@@ -656,7 +692,7 @@ class Collapser {
       // Orientation first (cheap), then the texels.
       bool ok = true;
       for (const std::uint32_t k : star_[u]) {
-        const std::array<std::uint32_t, 3>& tr = tri_[k];
+        const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
         if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
         Pt p[3];
         for (int c = 0; c < 3; ++c) p[c] = tr[c] == u ? pt_[v] : pt_[tr[c]];
@@ -680,7 +716,7 @@ class Collapser {
       if (!ok) continue;
       ++*attempts;
       for (const std::uint32_t k : star_[u]) {
-        const std::array<std::uint32_t, 3>& tr = tri_[k];
+        const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
         if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
         Pt p[3];
         for (int c = 0; c < 3; ++c) p[c] = tr[c] == u ? pt_[v] : pt_[tr[c]];
@@ -725,7 +761,7 @@ class Collapser {
     const std::uint32_t a = tri_[k][e], b = tri_[k][(e + 1) % 3];
     for (const std::uint32_t n : star_[a]) {
       if (n == k) continue;
-      const std::array<std::uint32_t, 3>& t = tri_[n];
+      const std::span<const std::uint32_t, 3> t = std::as_const(tri_)[n];
       if (t[0] == b || t[1] == b || t[2] == b) return n;
     }
     return kNone;
@@ -762,8 +798,8 @@ class Collapser {
     std::uint32_t d = kNone;
     for (const std::uint32_t x : tri_[m])
       if (x != a && x != b) d = x;
-    tri_[k] = {c, a, d};
-    tri_[m] = {c, d, b};
+    tri_.set(k, c, a, d);
+    tri_.set(m, c, d, b);
     star_.erase(a, m);
     star_.erase(b, k);
     star_.push(c, m);
@@ -841,7 +877,7 @@ class Collapser {
     touched_.push_back(v);
     // u's star is read in place: the loop changes only the stars of u's neighbours (v among them).
     for (const std::uint32_t k : star_[u]) {
-      std::array<std::uint32_t, 3>& tr = tri_[k];
+      const std::span<std::uint32_t, 3> tr = tri_[k];
       for (int c = 0; c < 3; ++c)
         if (tr[c] != u && tr[c] != v) touched_.push_back(tr[c]);
       if (tr[0] == v || tr[1] == v || tr[2] == v) {
@@ -865,7 +901,7 @@ class Collapser {
   int sign_ = 1;
   std::vector<Pt> pt_;
   std::vector<std::uint8_t> sides_;
-  std::vector<std::array<std::uint32_t, 3>> tri_;
+  Corners tri_;
   std::vector<std::uint8_t> alive_, vertex_alive_;
   StarTable star_;
   std::vector<std::uint8_t> queued_;
@@ -894,13 +930,14 @@ class Collapser {
 
 }  // namespace
 
-AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
-                           const CollapseOptions& options, CollapseReport* report) {
+namespace {
+
+// collapse_grid's body; `indices`: the grid's, or a copy of them.
+AdaptiveGrid collapse_indices(const TexelDepths& texels, const AdaptiveGrid& grid,
+                              std::vector<std::uint32_t> indices, double bound,
+                              const CollapseOptions& options, CollapseReport* report) {
   const auto start = std::chrono::steady_clock::now();
-  LV_CHECK(grid.width == texels.width() && grid.height == texels.height());
-  LV_CHECK(bound >= 0);
-  if (grid.num_triangles() == 0) return grid;
-  Collapser collapser(texels, grid, bound, options);
+  Collapser collapser(texels, grid, std::move(indices), bound, options);
   CollapseReport r = collapser.run();
   r.flips = collapser.flip();
   r.flips_redecided = collapser.flips_redecided();
@@ -910,6 +947,26 @@ AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, 
   out.balance_seconds = grid.balance_seconds;
   if (report) *report = r;
   return out;
+}
+
+}  // namespace
+
+AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
+                           const CollapseOptions& options, CollapseReport* report) {
+  LV_CHECK(grid.width == texels.width() && grid.height == texels.height());
+  LV_CHECK(bound >= 0);
+  if (grid.num_triangles() == 0) return grid;
+  return collapse_indices(texels, grid, copy_large(grid.indices), bound, options, report);
+}
+
+AdaptiveGrid collapse_grid(const TexelDepths& texels, AdaptiveGrid&& grid, double bound,
+                           const CollapseOptions& options, CollapseReport* report) {
+  LV_CHECK(grid.width == texels.width() && grid.height == texels.height());
+  LV_CHECK(bound >= 0);
+  if (grid.num_triangles() == 0) return std::move(grid);
+  std::vector<std::uint32_t> indices = std::move(grid.indices);
+  grid.indices.clear();
+  return collapse_indices(texels, grid, std::move(indices), bound, options, report);
 }
 
 GridQuality grid_quality(const AdaptiveGrid& grid) {

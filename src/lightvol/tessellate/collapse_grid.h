@@ -84,6 +84,10 @@ struct CollapseReport {
 // order, border positions per side).
 AdaptiveGrid collapse_grid(const TexelDepths& texels, const AdaptiveGrid& grid, double bound,
                            const CollapseOptions& options = {}, CollapseReport* report = nullptr);
+// The same, rewriting the grid's own index buffer instead of a copy of it (no second buffer of the
+// grid's size): `grid` is left without indices.
+AdaptiveGrid collapse_grid(const TexelDepths& texels, AdaptiveGrid&& grid, double bound,
+                           const CollapseOptions& options = {}, CollapseReport* report = nullptr);
 
 // The smallest interior angle (degrees) and the smallest area (texel units²) of a grid's
 // triangles, in texel space.

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -132,7 +133,7 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
   if (collapse) {
     // The closing follows whatever border the grid keeps: no side is locked.
     CollapseReport c;
-    grid = collapse_grid(pyramid.texels(), grid, *bound, {}, &c);
+    grid = collapse_grid(pyramid.texels(), std::move(grid), *bound, {}, &c);
     r.collapses = c.collapses;
     r.collapse_seconds = c.seconds;
   }

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <iterator>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -201,7 +202,7 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     for (bool& side : flips.locked) side = true;
     flips.max_rounds = 0;
     tbb::parallel_for(0, kOmniFaces, [&](int f) {
-      grids[f] = collapse_grid(pyramids[f].texels(), grids[f], bound, flips);
+      grids[f] = collapse_grid(pyramids[f].texels(), std::move(grids[f]), bound, flips);
     });
     for (const CollapseReport& c : reports) r.collapses += c.collapses;
     r.collapse_seconds = seconds_since(collapse_start);

@@ -51,7 +51,7 @@ BoundStats VolumeStats::at(double max_error, Tessellation tessellation) const {
   AdaptiveGrid grid = pyramid_->tessellate(max_error, standard_);
   if (tessellation == Tessellation::collapse) {
     CollapseReport collapse;
-    grid = collapse_grid(pyramid_->texels(), grid, max_error, {}, &collapse);
+    grid = collapse_grid(pyramid_->texels(), std::move(grid), max_error, {}, &collapse);
     r.collapse_seconds = collapse.seconds;
   }
   const GridQuality quality = grid_quality(grid);
