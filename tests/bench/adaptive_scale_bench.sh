@@ -8,6 +8,11 @@
 # second table is this version over the other (CPU, wall, memory, read, pyramid, collapse): ratios
 # from one run of both. The output's md5
 # (first 12 digits) says whether both wrote the same bytes.
+# ANY_MAP_SIZES (environment, default none), e.g. "16384": at each such N, also the maps that
+# are hardest on the adaptive build, in the unit light box (linear depth / far): the Sponza and
+# Sibenik spot maps rendered at N² (with SCENES_DIR), Sponza's 1024² map upsampled to N² (each
+# texel repeated: plateaus with steps) and heightfield_tool's steps map (its fix-up rounds
+# cascade: N/8 - 1 of them).
 # Usage: tests/bench/adaptive_scale_bench.sh BUILD_DIR [OTHER_BUILD_DIR] [RUNS] [SIZES] [SCENES_DIR]
 #   (BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON: make_depth, heightfield_tool), e.g.
 #   tests/bench/adaptive_scale_bench.sh build /tmp/main-build 1 "4096 16384" ../shared/scenes
@@ -46,12 +51,33 @@ for n in $sizes; do
   "$build/tests/bench/make_depth" "$n" "$n" "$work/d$n.exr"
   maps+=("synthetic spot $n² (window)|$work/d$n.exr|$work/spot.json")
 done
-if [ -n "$scenes" ]; then
-  real_spot_maps "$build" "$scenes" 4097
+# real_maps_at N: the scenes' spot maps at N² as $work/SCENE_N.exr in $work/box_N.json.
+real_maps_at() {
+  local n=$1 scene
+  real_spot_maps "$build" "$scenes" "$n"
+  mv "$work/box.json" "$work/box_$n.json"
   for scene in "${real_maps[@]}"; do
-    maps+=("$scene spot 4097² (depth/far)|$work/$scene.exr|$work/box.json")
+    mv "$work/$scene.exr" "$work/${scene}_$n.exr"
+    maps+=("$scene spot $n² (depth/far)|$work/${scene}_$n.exr|$work/box_$n.json")
   done
-fi
+}
+[ -n "$scenes" ] && real_maps_at 4097
+tool="$build/tests/bench/heightfield_tool"
+for n in ${ANY_MAP_SIZES:-}; do
+  if [ -n "$scenes" ]; then
+    real_maps_at "$n"
+    if [ -f "$work/sponza_$n.exr" ]; then
+      real_spot_maps "$build" "$scenes" 1024
+      "$tool" upsample "$work/sponza.exr" $((n / 1024)) "$work/upsampled_$n.exr" "$work/upsampled.f32"
+      rm -f "$work/upsampled.f32"
+      maps+=("Sponza spot 1024² upsampled to $n²|$work/upsampled_$n.exr|$work/box_$n.json")
+    fi
+  fi
+  "$tool" steps "$n" "$work/steps_$n.exr" "$work/steps.f32"
+  rm -f "$work/steps.f32"
+  [ -f "$work/box_$n.json" ] || awk -v n="$n" 'BEGIN { s = n - 1; printf "{\"type\": \"directional\", \"position\": [0, 0, 0], \"direction\": [0, 0, -1], \"up\": [0, 1, 0], \"ortho\": [%.17g, %.17g, %.17g, %.17g], \"near\": 0, \"far\": 1, \"depth\": \"linear\"}\n", -0.5 / s, (s + 0.5) / s, -(s + 0.5) / s, 0.5 / s }' > "$work/box_$n.json"
+  maps+=("steps $n²|$work/steps_$n.exr|$work/box_$n.json")
+done
 
 echo "E = 0.001; $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg); $(date -u '+%Y-%m-%d %H:%M')"
 printf '| map | version | triangles | output md5 | CPU user+sys | wall | peak memory | read | pyramid | collapse |\n'
