@@ -3,6 +3,7 @@
 // lossless compression, odd sizes, special values; and files it must decline), the fast reader
 // either declines or gives the same header and the same floats, bit for bit.
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdint>
@@ -18,7 +19,6 @@
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
-#include <zlib.h>
 
 #include <lightvol/core/detail/image_helper.h>
 #include <lightvol/depth/detail/exr_codec.h>
@@ -375,7 +375,8 @@ TEST(ExrReader, ZipChunksUndoAsOpenEXRsOwnRoutineUndoesThem) {
         const std::size_t at = k < 4 ? k : random() % changed.size();
         changed[at] = static_cast<char>(changed[at] ^ (1 << (random() % 8)));
         if (changed.size() == size) continue;  // would read as stored
-        expect_undo_zip_as_openexr(changed, size, what + ", byte " + std::to_string(at) + " changed");
+        expect_undo_zip_as_openexr(changed, size,
+                                   what + ", byte " + std::to_string(at) + " changed");
       }
     }
   }

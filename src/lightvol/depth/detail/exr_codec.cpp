@@ -143,9 +143,9 @@ void predict_and_interleave(std::uint8_t* s, std::size_t n, std::uint8_t* out) {
 #if defined(__SSE2__)
   __m128i sums = _mm_setzero_si128();
   for (; i + 16 <= first; i += 16)
-    sums = _mm_add_epi64(
-        sums, _mm_sad_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i)),
-                           _mm_setzero_si128()));
+    sums =
+        _mm_add_epi64(sums, _mm_sad_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i)),
+                                         _mm_setzero_si128()));
   sum = static_cast<std::uint64_t>(_mm_cvtsi128_si64(sums)) +
         static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_unpackhi_epi64(sums, sums)));
 #endif
@@ -207,8 +207,8 @@ exr_result_t zip_decompress(exr_decode_pipeline_t* decode) {
 }
 #endif
 
-// HALF to float for `n` values, exactly as half_to_float: blocks of 64 halves all normal (exponent 1
-// to 30: no zero, subnormal, infinity or NaN) by the arithmetic, which vectorizes; other blocks
+// HALF to float for `n` values, exactly as half_to_float: blocks of 64 halves all normal (exponent
+// 1 to 30: no zero, subnormal, infinity or NaN) by the arithmetic, which vectorizes; other blocks
 // value by value.
 void halves_to_floats(const std::uint16_t* in, float* out, std::size_t n) {
   constexpr std::size_t kBlock = 64;
@@ -472,10 +472,11 @@ bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uin
       if (plain.zip && decoder.decompress_fn != nullptr) {
         decoder.decompress_fn = &zip_decompress;
         decoder.decoding_user_data = &target;
-        if (!plain.tiled && chunk.width == plain.width && decoder.unpack_and_convert_fn != nullptr) {
+        if (!plain.tiled && chunk.width == plain.width &&
+            decoder.unpack_and_convert_fn != nullptr) {
           target.direct = out.decode_to_ptr;
-          target.bytes = size * static_cast<std::size_t>(chunk.width) *
-                         static_cast<std::size_t>(chunk.height);
+          target.bytes =
+              size * static_cast<std::size_t>(chunk.width) * static_cast<std::size_t>(chunk.height);
           decoder.unpack_and_convert_fn = nullptr;
         }
       }
