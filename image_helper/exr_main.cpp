@@ -1,7 +1,7 @@
 // lightvol-exr: reads plain EXR depth maps for the lightvol library (depth/detail/exr_codec.h),
 // answering read requests one after another on file descriptor 3, as lightvol-image does, until it
-// closes. It links OpenEXR's C core and not OpenImageIO or OpenVDB: it starts in a fraction of
-// lightvol-image's time. Every file that is not plain it declines, and the library reads it
+// closes. It links OpenEXR's C core (and libdeflate) and not OpenImageIO or OpenVDB: it starts in
+// a fraction of lightvol-image's time. Every file that is not plain it declines, and the library reads it
 // through lightvol-image. Not meant to be run by hand.
 #include <malloc.h>
 

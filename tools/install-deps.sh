@@ -7,6 +7,7 @@ packages=(
   libcgal-dev libeigen3-dev libgmp-dev libmpfr-dev libtbb-dev libxxhash-dev
   libopenvdb-dev  # OpenVDB density grids (lightvol-image reads them)
   libopenexr-dev  # OpenEXR's C core: lightvol-exr, the fast reader of plain EXR depth maps
+  libdeflate-dev  # lightvol-exr inflates ZIP-compressed EXR chunks with it (optional: else zlib)
   python3-openvdb  # the density tests write their OpenVDB files with it (/usr/bin/python3)
   parallel  # lightvol batch --shard across hosts, in its test
   nlohmann-json3-dev libcli11-dev

@@ -3,14 +3,17 @@
 // lossless compression, odd sizes, special values; and files it must decline), the fast reader
 // either declines or gives the same header and the same floats, bit for bit.
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -217,6 +220,17 @@ TEST(ExrReader, WrittenEXRsAndTheirDamagedCopiesReadAsOpenImageIOReadsThem) {
         for (const auto& size : {std::array<int, 2>{2, 2}, std::array<int, 2>{3, 5},
                                  std::array<int, 2>{37, 19}, std::array<int, 2>{130, 67}})
           files.push_back(write_exr(name(), size[0], size[1], 1, type, compression, tile, true));
+  // ZIP (16 scanlines a chunk) and ZIPS (one) at sizes whose chunks are longer than libdeflate's
+  // and the predictor's blocks, the last chunk of the ZIP files shorter than the rest (77 = 4 x 16
+  // + 13, 1000 = 62 x 16 + 8); each with its compressed data damaged at a few places below.
+  const std::size_t first_zip = files.size();
+  for (const OIIO::TypeDesc type : {OIIO::TypeDesc::HALF, OIIO::TypeDesc::FLOAT})
+    for (const char* compression : {"zips", "zip"})
+      for (const int tile : {0, 64})
+        for (const auto& size : {std::array<int, 2>{517, 77}, std::array<int, 2>{1000, 33},
+                                 std::array<int, 2>{61, 1000}})
+          files.push_back(write_exr(name(), size[0], size[1], 1, type, compression, tile, true));
+  const std::size_t end_zip = files.size();
   // Declined: lossy compressions, more channels, UINT, an alpha name, a data window elsewhere,
   // (MIP-mapped files are declined too; OpenImageIO here writes none.)
   files.push_back(write_exr(name(), 33, 20, 1, OIIO::TypeDesc::HALF, "pxr24", 0, false));
@@ -226,9 +240,23 @@ TEST(ExrReader, WrittenEXRsAndTheirDamagedCopiesReadAsOpenImageIOReadsThem) {
   files.push_back(write_exr(name(), 33, 20, 1, OIIO::TypeDesc::UINT32, "zip", 0, false));
   files.push_back(write_exr(name(), 33, 20, 1, OIIO::TypeDesc::FLOAT, "zip", 0, false, "A"));
   files.push_back(write_exr(name(), 33, 20, 1, OIIO::TypeDesc::FLOAT, "zip", 0, false, "Z", 4, 2));
-  for (const Written& file : files) {
+  for (std::size_t f = 0; f < files.size(); ++f) {
+    const Written& file = files[f];
     const bool taken = same_as_openimageio(file.path);
     EXPECT_EQ(taken, file.plain) << file.path;
+    if (f >= first_zip && f < end_zip) {
+      // A byte of the chunks' data changed, at a third, a half and nine tenths of the file (its
+      // header and chunk table are in the first few hundred bytes; every chunk is compressed).
+      const std::string bytes = bytes_of(file.path);
+      for (const std::size_t tenths : {3, 5, 9}) {
+        std::string changed = bytes;
+        const std::size_t at = changed.size() * tenths / 10;
+        changed[at] = static_cast<char>(changed[at] ^ 0x21);
+        const std::string damaged = dir.file("zipflip" + std::to_string(n++) + ".exr");
+        write_bytes(damaged, changed);
+        same_as_openimageio(damaged);
+      }
+    }
     // Damaged copies (of every fourth file: each read forks two children): cut short, and a byte
     // changed in the pixels.
     if (n % 4 != 0) continue;
@@ -244,6 +272,117 @@ TEST(ExrReader, WrittenEXRsAndTheirDamagedCopiesReadAsOpenImageIOReadsThem) {
     write_bytes(flipped, changed);
     same_as_openimageio(flipped);
   }
+}
+
+// OpenEXRCore 3.1's ZIP routine (internal_zip.c, its portable code), the reference for
+// undo_exr_zip: zlib, then the predictor, then the interleave. False where it fails.
+bool reference_undo_zip(const std::string& packed, std::size_t unpacked_size, std::string* out) {
+  if (packed.size() == unpacked_size) {
+    *out = packed;
+    return true;
+  }
+  std::string scratch(unpacked_size, '\0');
+  uLongf size = static_cast<uLongf>(unpacked_size);
+  if (uncompress(reinterpret_cast<Bytef*>(scratch.data()), &size,
+                 reinterpret_cast<const Bytef*>(packed.data()),
+                 static_cast<uLong>(packed.size())) != Z_OK ||
+      size != unpacked_size)
+    return false;
+  for (std::size_t i = 1; i < unpacked_size; ++i)
+    scratch[i] = static_cast<char>(static_cast<unsigned char>(scratch[i - 1]) +
+                                   static_cast<unsigned char>(scratch[i]) - 128);
+  out->assign(unpacked_size, '\0');
+  const std::size_t half = (unpacked_size + 1) / 2;
+  for (std::size_t i = 0; i < unpacked_size; ++i)
+    (*out)[i] = scratch[i % 2 == 0 ? i / 2 : half + i / 2];
+  return true;
+}
+
+// OpenEXR's ZIP compression of `raw` (internal_zip.c's apply_zip_impl): the halves split, the
+// predictor applied, zlib at `level`; or `raw` itself.
+std::string zip_compress(const std::string& raw, int level) {
+  std::string split(raw.size(), '\0');
+  const std::size_t half = (raw.size() + 1) / 2;
+  for (std::size_t i = 0; i < raw.size(); ++i) split[i % 2 == 0 ? i / 2 : half + i / 2] = raw[i];
+  for (std::size_t i = split.size(); i-- > 1;)
+    split[i] = static_cast<char>(static_cast<unsigned char>(split[i]) -
+                                 static_cast<unsigned char>(split[i - 1]) + 128);
+  uLongf size = compressBound(static_cast<uLong>(split.size()));
+  std::string packed(size, '\0');
+  EXPECT_EQ(compress2(reinterpret_cast<Bytef*>(packed.data()), &size,
+                      reinterpret_cast<const Bytef*>(split.data()),
+                      static_cast<uLong>(split.size()), level),
+            Z_OK);
+  packed.resize(size);
+  // Stored when it does not shrink (OpenEXR stores it only when it grows: a stream as long as the
+  // chunk would then read as stored, and wrongly).
+  return packed.size() >= raw.size() ? raw : packed;
+}
+
+// Whether undo_exr_zip gives what OpenEXRCore's routine gives for `packed`: the same verdict, and
+// the same bytes when it succeeds.
+void expect_undo_zip_as_openexr(const std::string& packed, std::size_t unpacked_size,
+                                const std::string& what) {
+  std::string expected;
+  const bool reference = reference_undo_zip(packed, unpacked_size, &expected);
+  std::string got(unpacked_size + 1, '\x5c');  // one byte more: it must stay untouched
+  const bool undone = detail::undo_exr_zip(packed.data(), packed.size(), got.data(), unpacked_size);
+  EXPECT_EQ(undone, reference) << what;
+  EXPECT_EQ(got.back(), '\x5c') << what << ": a byte written beyond the chunk";
+  got.pop_back();
+  if (undone && reference) {
+    EXPECT_EQ(got, expected) << what;
+  }
+}
+
+TEST(ExrReader, ZipChunksUndoAsOpenEXRsOwnRoutineUndoesThem) {
+#ifdef LIGHTVOL_EXPECT_LIBDEFLATE
+  ASSERT_TRUE(detail::exr_zip_by_libdeflate()) << "built with libdeflate, but lightvol-exr is not";
+#else
+  if (!detail::exr_zip_by_libdeflate()) GTEST_SKIP() << "built without libdeflate";
+#endif
+  std::mt19937 random(29);
+  // Sizes around the 16-byte blocks of the predictor (each half) and odd ones (the halves differ).
+  for (const std::size_t size :
+       {std::size_t{1}, std::size_t{2}, std::size_t{3}, std::size_t{31}, std::size_t{32},
+        std::size_t{33}, std::size_t{63}, std::size_t{64}, std::size_t{65}, std::size_t{97},
+        std::size_t{1000}, std::size_t{4097}, std::size_t{65536 + 3}, std::size_t{1} << 20}) {
+    for (const bool smooth : {true, false}) {
+      // Depth-like floats (slowly varying bytes) or random bytes below 32 (which compress less).
+      std::string raw(size, '\0');
+      for (std::size_t i = 0; i < size; ++i)
+        raw[i] = static_cast<char>(smooth ? (i % 4 == 3 ? 0x3f : (i / 4) % 7 + (i % 4) * 11)
+                                          : static_cast<int>(random() & 31u));
+      const std::string what = std::to_string(size) + (smooth ? " smooth" : " random") + " bytes";
+      for (const int level : {1, 6, 9}) {
+        const std::string packed = zip_compress(raw, level);
+        std::string got(size, '\0');
+        ASSERT_TRUE(detail::undo_exr_zip(packed.data(), packed.size(), got.data(), size)) << what;
+        EXPECT_EQ(got, raw) << what;
+        expect_undo_zip_as_openexr(packed, size, what);
+      }
+      const std::string packed = zip_compress(raw, 6);
+      // Another size than the stream's: an error in both.
+      expect_undo_zip_as_openexr(packed, size + 1, what + ", one more expected");
+      if (size > 1) expect_undo_zip_as_openexr(packed, size - 1, what + ", one fewer expected");
+      // Stored: the packed size is the unpacked size.
+      expect_undo_zip_as_openexr(raw, size, what + ", stored");
+      // Damaged: cut short, and bytes changed across the stream (header, blocks, checksum).
+      expect_undo_zip_as_openexr(packed.substr(0, packed.size() / 2), size, what + ", cut");
+      expect_undo_zip_as_openexr(packed.substr(0, packed.size() - 1), size, what + ", cut");
+      for (std::size_t k = 0; k < 24; ++k) {
+        std::string changed = packed;
+        const std::size_t at = k < 4 ? k : random() % changed.size();
+        changed[at] = static_cast<char>(changed[at] ^ (1 << (random() % 8)));
+        if (changed.size() == size) continue;  // would read as stored
+        expect_undo_zip_as_openexr(changed, size,
+                                   what + ", byte " + std::to_string(at) + " changed");
+      }
+    }
+  }
+  // Nothing at all: an error (OpenEXRCore would leave the chunk's bytes unwritten).
+  std::string out(8, '\0');
+  EXPECT_FALSE(detail::undo_exr_zip("", 0, out.data(), out.size()));
 }
 
 // The programs: a plain EXR is read by lightvol-exr (the fake lightvol-image, which crashes on a

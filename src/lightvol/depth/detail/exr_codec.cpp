@@ -1,9 +1,20 @@
 #include <openexr.h>
 #include <unistd.h>
 
+#ifndef LIGHTVOL_HAVE_LIBDEFLATE
+#define LIGHTVOL_HAVE_LIBDEFLATE 0
+#endif
+#if LIGHTVOL_HAVE_LIBDEFLATE
+#include <libdeflate.h>
+#endif
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <new>
 #include <string>
 #include <thread>
 #include <vector>
@@ -51,6 +63,7 @@ struct Plain {
   int height = 0;
   bool tiled = false;
   bool half = false;
+  bool zip = false;  // ZIP or ZIPS
   std::string name;
 };
 
@@ -70,6 +83,151 @@ float half_to_float(std::uint16_t h) {
   float value = 0;
   std::memcpy(&value, &bits, sizeof value);
   return value;
+}
+
+#if LIGHTVOL_HAVE_LIBDEFLATE
+// Each decoding thread's inflater, and the buffer it inflates a chunk into (grown as needed).
+struct Inflater {
+  libdeflate_decompressor* inflate = libdeflate_alloc_decompressor();
+  std::unique_ptr<std::uint8_t[]> scratch;
+  std::size_t capacity = 0;
+  Inflater() = default;
+  Inflater(const Inflater&) = delete;
+  Inflater& operator=(const Inflater&) = delete;
+  ~Inflater() {
+    if (inflate != nullptr) libdeflate_free_decompressor(inflate);
+  }
+  bool reserve(std::size_t bytes) {
+    if (bytes <= capacity) return true;
+    scratch.reset(new (std::nothrow) std::uint8_t[bytes]);
+    capacity = scratch ? bytes : 0;
+    return scratch != nullptr;
+  }
+};
+
+Inflater& thread_inflater() {
+  thread_local Inflater inflater;
+  return inflater;
+}
+
+#if defined(__SSE2__)
+// Running sums of the 16 bytes of `x` (each byte less 128) after `carry` (its 16 bytes the value
+// before them), modulo 256; `carry` becomes the last sum's, in all 16 bytes.
+inline __m128i running_sums(__m128i x, __m128i& carry) {
+  x = _mm_add_epi8(x, _mm_set1_epi8(static_cast<char>(-128)));
+  x = _mm_add_epi8(x, _mm_slli_si128(x, 1));
+  x = _mm_add_epi8(x, _mm_slli_si128(x, 2));
+  x = _mm_add_epi8(x, _mm_slli_si128(x, 4));
+  x = _mm_add_epi8(x, _mm_slli_si128(x, 8));
+  x = _mm_add_epi8(x, carry);
+  __m128i last = _mm_srli_si128(x, 15);
+  last = _mm_unpacklo_epi8(last, last);
+  carry = _mm_shuffle_epi32(_mm_shufflelo_epi16(last, 0), 0);
+  return x;
+}
+#endif
+
+// OpenEXRCore's ZIP predictor and interleave (internal_zip.c's reconstruct, then interleave) in
+// one pass: `s` holds n bytes, each (but the first) the difference from the byte before it plus
+// 128 (mod 256); once that is undone, the first (n + 1) / 2 bytes go to the even offsets of `out`,
+// the rest to the odd ones. The two halves are undone side by side, the second starting from the
+// first's last value (the sum of all its differences, found first).
+void predict_and_interleave(std::uint8_t* s, std::size_t n, std::uint8_t* out) {
+  if (n == 0) return;
+  const std::size_t first = (n + 1) / 2, second = n / 2;
+  const std::uint8_t* a = s;
+  const std::uint8_t* b = s + first;
+  s[0] = static_cast<std::uint8_t>(s[0] + 128);  // now a difference like every other byte
+  std::uint64_t sum = 0;
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  __m128i sums = _mm_setzero_si128();
+  for (; i + 16 <= first; i += 16)
+    sums =
+        _mm_add_epi64(sums, _mm_sad_epu8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i)),
+                                         _mm_setzero_si128()));
+  sum = static_cast<std::uint64_t>(_mm_cvtsi128_si64(sums)) +
+        static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_unpackhi_epi64(sums, sums)));
+#endif
+  for (; i < first; ++i) sum += a[i];
+  unsigned value_a = 0;
+  auto value_b = static_cast<unsigned>((sum - 128 * std::uint64_t{first}) & 255u);
+  i = 0;
+#if defined(__SSE2__)
+  __m128i carry_a = _mm_setzero_si128();
+  __m128i carry_b = _mm_set1_epi8(static_cast<char>(value_b));
+  for (; i + 16 <= second; i += 16) {
+    const __m128i x =
+        running_sums(_mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i)), carry_a);
+    const __m128i y =
+        running_sums(_mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i)), carry_b);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + 2 * i), _mm_unpacklo_epi8(x, y));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + 2 * i + 16), _mm_unpackhi_epi8(x, y));
+  }
+  value_a = static_cast<unsigned>(_mm_cvtsi128_si32(carry_a)) & 255u;
+  value_b = static_cast<unsigned>(_mm_cvtsi128_si32(carry_b)) & 255u;
+#endif
+  for (; i < second; ++i) {
+    value_a = (value_a + a[i] + 128) & 255u;  // + 128 is - 128, modulo 256
+    value_b = (value_b + b[i] + 128) & 255u;
+    out[2 * i] = static_cast<std::uint8_t>(value_a);
+    out[2 * i + 1] = static_cast<std::uint8_t>(value_b);
+  }
+  if (first > second) out[n - 1] = static_cast<std::uint8_t>((value_a + a[second] + 128) & 255u);
+}
+
+// The file's bytes are little-endian, as OpenEXRCore's unpacking (a copy) leaves them here.
+static_assert(std::endian::native == std::endian::little, "lightvol-exr assumes little-endian");
+
+// Where a chunk's decoded bytes go when they are the image's own (a scanline chunk, as wide as
+// the image, in the file's type): straight there, without OpenEXRCore's copy from its buffer.
+struct ZipTarget {
+  std::uint8_t* direct = nullptr;
+  std::size_t bytes = 0;
+};
+
+// The pipeline's decompress_fn for ZIP and ZIPS chunks, in place of OpenEXRCore's
+// (default_decompress_chunk, which calls internal_exr_undo_zip): the same bytes, or an error.
+exr_result_t zip_decompress(exr_decode_pipeline_t* decode) {
+  const auto* target = static_cast<const ZipTarget*>(decode->decoding_user_data);
+  const std::uint64_t packed = decode->chunk.packed_size, unpacked = decode->chunk.unpacked_size;
+  if (decode->packed_buffer == nullptr || target == nullptr) return EXR_ERR_INVALID_ARGUMENT;
+  void* out = decode->unpacked_buffer;
+  if (target->direct != nullptr) {
+    if (unpacked != target->bytes) return EXR_ERR_CORRUPT_CHUNK;
+    out = target->direct;
+  }
+  if (out == nullptr) return EXR_ERR_INVALID_ARGUMENT;
+  // Stored as is: OpenEXRCore's buffers are then one.
+  if (packed == unpacked && out == decode->packed_buffer) return EXR_ERR_SUCCESS;
+  return undo_exr_zip(decode->packed_buffer, static_cast<std::size_t>(packed), out,
+                      static_cast<std::size_t>(unpacked))
+             ? EXR_ERR_SUCCESS
+             : EXR_ERR_CORRUPT_CHUNK;
+}
+#endif
+
+// HALF to float for `n` values, exactly as half_to_float: blocks of 64 halves all normal (exponent
+// 1 to 30: no zero, subnormal, infinity or NaN) by the arithmetic, which vectorizes; other blocks
+// value by value.
+void halves_to_floats(const std::uint16_t* in, float* out, std::size_t n) {
+  constexpr std::size_t kBlock = 64;
+  std::size_t i = 0;
+  for (; i + kBlock <= n; i += kBlock) {
+    std::uint32_t bits[kBlock];
+    unsigned special = 0;
+    for (std::size_t k = 0; k < kBlock; ++k) {
+      const std::uint32_t h = in[i + k], exponent = h & 0x7c00u;
+      special |= static_cast<unsigned>(exponent == 0) | static_cast<unsigned>(exponent == 0x7c00u);
+      bits[k] = ((h & 0x8000u) << 16) | (((h & 0x7fffu) << 13) + (112u << 23));
+    }
+    if (special == 0) {
+      std::memcpy(out + i, bits, sizeof bits);
+    } else {
+      for (std::size_t k = 0; k < kBlock; ++k) out[i + k] = half_to_float(in[i + k]);
+    }
+  }
+  for (; i < n; ++i) out[i] = half_to_float(in[i]);
 }
 
 bool lower_equal(const std::string& a, const char* b) {
@@ -121,6 +279,7 @@ bool plain_header(const std::string& path, exr_const_context_t ctx, Plain* plain
     return false;
   exr_compression_t compression{};
   if (exr_get_compression(ctx, 0, &compression) != EXR_ERR_SUCCESS) return false;
+  plain->zip = compression == EXR_COMPRESSION_ZIP || compression == EXR_COMPRESSION_ZIPS;
   std::int64_t chunks = 0;
   if (plain->tiled) {
     std::uint32_t tile_x = 0, tile_y = 0;
@@ -233,7 +392,8 @@ bool sane_chunk_table(const std::string& path, exr_const_context_t ctx, const Pl
 }
 
 // Decodes every chunk of the one channel, as floats, into `values` (width × height, rows top to
-// bottom), chunks shared among `threads` threads; false on any error.
+// bottom), chunks shared among `threads` threads; false on any error. A HALF file's chunks are
+// decoded into `halves` first, each converted to floats by the thread that decoded it.
 bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uint16_t* halves,
             int threads) {
   std::vector<std::array<int, 2>> chunks;  // scanline: (y, 0); tiled: (tile x, tile y)
@@ -300,11 +460,38 @@ bool decode(exr_const_context_t ctx, const Plain& plain, float* values, std::uin
                                             : reinterpret_cast<std::uint8_t*>(values + at);
       out.user_pixel_stride = static_cast<int32_t>(size);
       out.user_line_stride = static_cast<int32_t>(size * static_cast<std::size_t>(plain.width));
-      if (exr_decoding_choose_default_routines(ctx, 0, &decoder) != EXR_ERR_SUCCESS ||
-          exr_decoding_run(ctx, 0, &decoder) != EXR_ERR_SUCCESS) {
+      if (exr_decoding_choose_default_routines(ctx, 0, &decoder) != EXR_ERR_SUCCESS) {
         failed = true;
         break;
       }
+#if LIGHTVOL_HAVE_LIBDEFLATE
+      // ZIP and ZIPS: libdeflate inflates in place of zlib. A scanline chunk's rows are contiguous
+      // in the destination, in the file's type (little-endian, as this machine): its bytes go
+      // there, and OpenEXRCore's unpacking (a copy of each row) is skipped.
+      ZipTarget target;
+      if (plain.zip && decoder.decompress_fn != nullptr) {
+        decoder.decompress_fn = &zip_decompress;
+        decoder.decoding_user_data = &target;
+        if (!plain.tiled && chunk.width == plain.width &&
+            decoder.unpack_and_convert_fn != nullptr) {
+          target.direct = out.decode_to_ptr;
+          target.bytes =
+              size * static_cast<std::size_t>(chunk.width) * static_cast<std::size_t>(chunk.height);
+          decoder.unpack_and_convert_fn = nullptr;
+        }
+      }
+#endif
+      if (exr_decoding_run(ctx, 0, &decoder) != EXR_ERR_SUCCESS) {
+        failed = true;
+        break;
+      }
+      // HALF to float, exactly (every half is a float; NaN keeps its payload, as in Imath's).
+      if (halves != nullptr)
+        for (std::int64_t y = 0; y < chunk.height; ++y) {
+          const std::size_t row =
+              at + static_cast<std::size_t>(y) * static_cast<std::size_t>(plain.width);
+          halves_to_floats(halves + row, values + row, static_cast<std::size_t>(chunk.width));
+        }
     }
     if (started) exr_decoding_destroy(ctx, &decoder);
   };
@@ -357,9 +544,6 @@ void serve_read(ChildOutput& channel, int threads) {
   if (plain.half) halves = uninitialized_large<std::uint16_t>(texels);
   const bool read =
       decode(context.handle, plain, values, halves.get(), threads) && !reported.load();
-  // HALF to float, exactly (every half is a float; NaN keeps its payload, as in Imath's).
-  if (read && halves)
-    for (std::size_t i = 0; i < texels; ++i) values[i] = half_to_float(halves[i]);
   floats.unmap();
   if (!read) return channel.refuse(kNotMine);
   channel.accept();
@@ -367,6 +551,31 @@ void serve_read(ChildOutput& channel, int threads) {
 }
 
 }  // namespace
+
+bool exr_zip_by_libdeflate() { return LIGHTVOL_HAVE_LIBDEFLATE != 0; }
+
+bool undo_exr_zip(const void* packed, std::size_t packed_size, void* out,
+                  std::size_t unpacked_size) {
+#if LIGHTVOL_HAVE_LIBDEFLATE
+  if (packed_size == 0 || unpacked_size == 0 || packed == nullptr || out == nullptr) return false;
+  if (packed_size == unpacked_size) {
+    if (out != packed) std::memcpy(out, packed, unpacked_size);
+    return true;
+  }
+  Inflater& inflater = thread_inflater();
+  if (inflater.inflate == nullptr || !inflater.reserve(unpacked_size)) return false;
+  std::size_t inflated = 0;
+  if (libdeflate_zlib_decompress(inflater.inflate, packed, packed_size, inflater.scratch.get(),
+                                 unpacked_size, &inflated) != LIBDEFLATE_SUCCESS ||
+      inflated != unpacked_size)
+    return false;
+  predict_and_interleave(inflater.scratch.get(), unpacked_size, static_cast<std::uint8_t*>(out));
+  return true;
+#else
+  (void)packed, (void)packed_size, (void)out, (void)unpacked_size;
+  return false;
+#endif
+}
 
 bool serve_exr_request(ChildOutput& channel, int threads) {
   ImageRequest request{};
