@@ -1,12 +1,17 @@
 // The lattice helpers of the tessellate stage: RowSpanWalker gives exactly triangle_row_span's
 // spans row after row (the collapse tessellation's texel loops walk rows with it); DepthBounds
 // bounds every block's texels, and within_by_bounds proves only triangles the measure finds
-// within the bound.
+// within the bound. box_error_rows and the error pyramid's values are what a plain loop over the
+// texels finds.
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <random>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -19,8 +24,11 @@
 namespace lightvol {
 namespace {
 
+using detail::box_error_rows;
 using detail::DepthBounds;
 using detail::Pt;
+using detail::Quadtree;
+using detail::round_up;
 using detail::RowSpanWalker;
 using detail::triangle_error;
 using detail::triangle_row_span;
@@ -126,6 +134,162 @@ TEST(DepthBounds, BoundEveryBoxAndProveOnlyWhatTheMeasureConfirms) {
   // Both answers occur: the shortcut proves many triangles, and leaves others to the measure.
   EXPECT_GT(proved, 1000);
   EXPECT_GT(unproved_within, 1000);
+}
+
+// box_error_rows one texel at a time: the planes of the cell's triangles through its corners'
+// depths and the same operations per texel as error_kernels.cpp (each texel on the triangle the
+// diagonal from (x1, y0) to (x0, y1) puts it in, the upper-left one when on it), the rows in order,
+// stopping after the first row that takes the largest error past `cap`. *gap: the largest
+// |plane − depth| over the rows taken.
+double box_error_reference(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                           double cap, double* gap) {
+  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
+  const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
+               dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
+  const double g1x = (db - da) / wx, g1y = (dc - da) / wy;
+  const double g2x = (dd - dc) / wx, g2y = (dd - db) / wy;
+  double worst = 0;
+  *gap = 0;
+  for (int y = y_begin; y < y_end; ++y) {
+    const int s = y - b.y0;
+    for (int x = b.x0; x <= b.x1; ++x) {
+      const bool upper = std::int64_t{x - b.x0} * wy <= std::int64_t{wx} * (wy - s);
+      const double d =
+          upper ? (da + g1y * s) + g1x * (x - b.x0) : (dd + g2y * (y - b.y1)) + g2x * (x - b.x1);
+      const double a = std::abs(d - t.window_depth(x, y));
+      const double e =
+          t.uniform() ? a * t.uniform_scale()
+                      : a * t.scale_row(y)[x] / std::abs(t.w0(0, y) + t.w0_dc() * x + d * t.w1());
+      worst = std::max(worst, e);
+      *gap = std::max(*gap, a);
+    }
+    if (worst > cap) break;
+  }
+  return worst;
+}
+
+// Maps with a smooth surface, plateaus with steps, a cliff and noise, under uniform and per-texel
+// error scales, depths held as floats and as doubles, sizes whose border cells are clipped at every
+// level.
+struct ErrorCase {
+  std::string light;
+  double lo, hi;  // stored values
+};
+
+std::vector<ErrorCase> error_cases() {
+  const std::string box =
+      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+  return {{test::spot_json("window"), 0.96, 0.995},
+          {test::spot_json("linear"), 2.0, 6.0},
+          {test::directional_json("window"), 0.1, 0.6},
+          {box, 0.05, 0.95}};
+}
+
+TexelDepths error_map(const ErrorCase& c, int w, int h, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> step(0, 0.05 * (c.hi - c.lo)),
+      jitter(0, 1e-3 * (c.hi - c.lo));
+  std::vector<double> plateau(64);
+  for (double& p : plateau) p = step(rng);
+  const double span = c.hi - c.lo;
+  // Noise on every texel: the largest error of many cells lies on their diagonal, where the two
+  // planes agree only to rounding (the kernels must take the same plane there).
+  const DepthImage depth = test::make_depth(w, h, [&](int col, int row) {
+    const double smooth =
+        0.5 + 0.25 * std::sin(col / 37.0) * std::cos(row / 29.0) + 0.2 * (col + row) / (w + h);
+    const double steps = col > w / 2 && row > h / 2
+                             ? plateau[static_cast<std::size_t>(row / 5 * 8 + col / 7) % 64]
+                             : 0.0;
+    const double cliff = col == w / 3 ? 0.2 * span : 0.0;
+    return static_cast<float>(c.lo + span * 0.8 * smooth + steps + cliff + jitter(rng));
+  });
+  Result<TexelDepths> t = TexelDepths::create(test::light_from_json(c.light), depth, 0, "x");
+  EXPECT_TRUE(t.ok());
+  return std::move(*t);
+}
+
+// Every cell of every level (whole squares of 2 to 256 texels a side, cells clipped at the border),
+// all rows and a middle part of them, without a cap and with caps the rows pass at different
+// places: exactly the reference's error (and depth gap), for both error scales and depth types.
+TEST(BoxErrorRows, SameAsOneTexelAtATime) {
+  bool uniform = false, scaled = false, floats = false, doubles = false;
+  int capped = 0;
+  for (const ErrorCase& c : error_cases())
+    for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}}) {
+      SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
+      const TexelDepths t = error_map(c, w, h, 5);
+      (t.uniform() ? uniform : scaled) = true;
+      (t.float_depths() ? floats : doubles) = true;
+      const Quadtree q(w, h);
+      for (int level = 1; level <= q.top; ++level)
+        for (int j = 0; j < q.ny(level); ++j)
+          for (int i = 0; i < q.nx(level); ++i) {
+            const Quadtree::Box b = q.box(level, i, j);
+            const int inner = std::min(3, (b.y1 - b.y0) / 2);
+            for (const auto& [y_begin, y_end] :
+                 {std::pair{b.y0, b.y1 + 1}, std::pair{b.y0 + inner, b.y1 + 1 - inner}}) {
+              double gap = 0, want_gap = 0;
+              const double inf = std::numeric_limits<double>::infinity();
+              const double full = box_error_reference(t, b, y_begin, y_end, inf, &want_gap);
+              for (const double cap : {inf, full, std::nextafter(full, 0.0), 0.5 * full, 0.0}) {
+                const double want = box_error_reference(t, b, y_begin, y_end, cap, &want_gap);
+                capped += want < full;
+                ASSERT_EQ(box_error_rows(t, b, y_begin, y_end, cap, &gap), want)
+                    << "level " << level << " cell " << i << ", " << j << " rows " << y_begin
+                    << ".." << y_end << " cap " << cap;
+                ASSERT_EQ(gap, want_gap) << "level " << level << " cell " << i << ", " << j;
+                ASSERT_EQ(box_error_rows(t, b, y_begin, y_end, cap), want)
+                    << "level " << level << " cell " << i << ", " << j;
+              }
+            }
+          }
+    }
+  EXPECT_TRUE(uniform && scaled && floats && doubles);
+  EXPECT_GT(capped, 1000);  // the caps stop the rows early in many cells
+}
+
+// Without a cap every cell is measured: each value is the cell's own measure rounded up to a
+// float (over both triangles by the reference; a whole level-1 cell: its five texels between
+// corners, TexelDepths::error at the midpoints' depths), maxed with its children's values.
+TEST(Pyramid, UncappedValuesAreTheCellsErrorsTexelByTexel) {
+  for (const ErrorCase& c : error_cases())
+    for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}, std::pair{70, 37}}) {
+      SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
+      const RefinementPyramid pyramid(error_map(c, w, h, 9), Refinement::max_error);
+      const TexelDepths& t = pyramid.texels();
+      const Quadtree q(w, h);
+      std::vector<float> below;
+      for (int level = 1; level <= q.top; ++level) {
+        std::vector<float> here(q.cells(level));
+        for (int j = 0; j < q.ny(level); ++j)
+          for (int i = 0; i < q.nx(level); ++i) {
+            const Quadtree::Box b = q.box(level, i, j);
+            double own = 0, gap = 0;
+            if (level == 1 && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+              const int x = b.x0, y = b.y0;
+              const double da = t.window_depth(x, y), db = t.window_depth(x + 2, y),
+                           dc = t.window_depth(x, y + 2), dd = t.window_depth(x + 2, y + 2);
+              own = std::max(
+                  {t.error(x + 1, y, 0.5 * (da + db)), t.error(x, y + 1, 0.5 * (da + dc)),
+                   t.error(x + 1, y + 1, 0.5 * (db + dc)), t.error(x + 2, y + 1, 0.5 * (db + dd)),
+                   t.error(x + 1, y + 2, 0.5 * (dc + dd))});
+            } else {
+              own = box_error_reference(t, b, b.y0, b.y1 + 1,
+                                        std::numeric_limits<double>::infinity(), &gap);
+            }
+            float v = round_up(own);
+            for (int cj = 2 * j; level > 1 && cj < std::min(2 * j + 2, q.ny(level - 1)); ++cj)
+              for (int ci = 2 * i; ci < std::min(2 * i + 2, q.nx(level - 1)); ++ci)
+                v = std::max(v, below[static_cast<std::size_t>(cj) * q.nx(level - 1) + ci]);
+            const std::size_t cell = static_cast<std::size_t>(j) * q.nx(level) + i;
+            here[cell] = v;
+            ASSERT_EQ(pyramid.value(level, cell), v)
+                << "level " << level << " cell " << i << ", " << j;
+          }
+        below = std::move(here);
+      }
+    }
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -153,6 +154,8 @@ class RefinementPyramid {
   // Cells whose own measure was taken (wholly or up to the cap): what the cap saves, for tests
   // and benchmarks.
   std::uint64_t cells_measured() const { return cells_measured_; }
+  // A cell's value, level ≥ 1, cells row-major (detail::Quadtree's numbering): for tests.
+  float value(int level, std::size_t cell) const { return value_[level][cell]; }
 
   // Tessellates at `bound` ≤ cap() (max_error: world units; laplacian: the threshold T).
   // `standard` chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.

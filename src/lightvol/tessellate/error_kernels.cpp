@@ -59,47 +59,167 @@ void scaled_span(const TexelDepths& t, const D* dt, int y, int x0, int x1, int x
   g = gg;
 }
 
-// The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
-// triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
-// general triangle's span arithmetic. Each texel is taken once; on the diagonal both planes agree.
-template <bool kUniform, class D>
-double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
-                        double cap, double* depth_gap) {
+// The two planes of an unsplit cell `b` (cell_triangles(config 0)): the upper-left triangle
+// (a, b, c), whose depth is a + g1·(p − a), and the lower-right one (b, d, c), d + g2·(p − d).
+struct CellPlanes {
+  double da, dd, g1x, g1y, g2x, g2y;
+};
+
+CellPlanes cell_planes(const TexelDepths& t, const Quadtree::Box& b) {
   const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
                dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
-  const double g1x = (db - da) / wx, g1y = (dc - da) / wy;  // a + g1·(p − a)
-  const double g2x = (dd - dc) / wx, g2y = (dd - db) / wy;  // d + g2·(p − d)
-  double worst = 0, gap = 0;
+  return {da, dd, (db - da) / wx, (dc - da) / wy, (dd - dc) / wx, (dd - db) / wy};
+}
+
+// Rows [y_begin, y_end) of an unsplit cell, row by row: raises `worst` to the largest error
+// (with kUniform before the uniform scale) and `gap` to the largest |plane − depth| (window depth;
+// with kUniform the same as `worst`; otherwise only with `with_gap`), and stops after the first
+// row that takes the error past `cap`. Each texel is taken once; on the diagonal both planes
+// agree.
+template <bool kUniform, class D>
+void box_rows_by_row(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int y_begin,
+                     int y_end, double cap, bool with_gap, double& worst, double& gap) {
+  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   for (int y = y_begin; y < y_end; ++y) {
     const int s = y - b.y0;
     const int xs =
         b.x0 + (wx == wy ? wy - s : static_cast<int>((std::int64_t{wx} * (wy - s)) / wy));
     const D* dt = t.depth_row_as<D>(y);
-    const double base1 = da + g1y * s, base2 = dd + g2y * (y - b.y1);
+    const double base1 = p.da + p.g1y * s, base2 = p.dd + p.g2y * (y - b.y1);
     double m = 0;
     if constexpr (kUniform) {
 #pragma omp simd reduction(max : m)
       for (int x = b.x0; x <= xs; ++x) {
-        const double e = std::abs(base1 + g1x * (x - b.x0) - dt[x]);
+        const double e = std::abs(base1 + p.g1x * (x - b.x0) - dt[x]);
         m = m > e ? m : e;
       }
 #pragma omp simd reduction(max : m)
       for (int x = xs + 1; x <= b.x1; ++x) {
-        const double e = std::abs(base2 + g2x * (x - b.x1) - dt[x]);
+        const double e = std::abs(base2 + p.g2x * (x - b.x1) - dt[x]);
         m = m > e ? m : e;
       }
-    } else if (depth_gap == nullptr) {
-      scaled_span<false>(t, dt, y, b.x0, xs, b.x0, base1, g1x, m, gap);
-      scaled_span<false>(t, dt, y, xs + 1, b.x1, b.x1, base2, g2x, m, gap);
+    } else if (!with_gap) {
+      scaled_span<false>(t, dt, y, b.x0, xs, b.x0, base1, p.g1x, m, gap);
+      scaled_span<false>(t, dt, y, xs + 1, b.x1, b.x1, base2, p.g2x, m, gap);
     } else {  // the same, and the largest |d − depth| in window units
-      scaled_span<true>(t, dt, y, b.x0, xs, b.x0, base1, g1x, m, gap);
-      scaled_span<true>(t, dt, y, xs + 1, b.x1, b.x1, base2, g2x, m, gap);
+      scaled_span<true>(t, dt, y, b.x0, xs, b.x0, base1, p.g1x, m, gap);
+      scaled_span<true>(t, dt, y, xs + 1, b.x1, b.x1, base2, p.g2x, m, gap);
     }
     if constexpr (kUniform) gap = std::max(gap, m);
     worst = std::max(worst, m);
     // Scaling is monotonic: the rows left can only raise what is already past the cap.
     if (scaled<kUniform>(t, worst) > cap) break;
+  }
+}
+
+// Rows [y_begin, y_end) of a whole square cell of side kSide (the levels descend measures, 4 to
+// 64 texels), without box_rows_by_row's two short vectorized loops and horizontal max per row:
+// one loop a row over its kSide + 1 texels of compile-time count, each texel on its own plane (a
+// select: the same operations on the same operands as box_rows_by_row), raising a per-column
+// maximum kept across the rows; the columns are joined once at the end. Raises `worst` and `gap`
+// as box_rows_by_row does (kGap: the gap, non-uniform only), without the cap.
+template <int kSide, bool kUniform, bool kGap, class D>
+void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int y_begin,
+                 int y_end, double& worst, double& gap) {
+  constexpr int kTexels = kSide + 1;
+  const double g1x = p.g1x, g2x = p.g2x;
+  double m[kTexels] = {}, g[kTexels] = {};
+  for (int y = y_begin; y < y_end; ++y) {
+    const int s = y - b.y0, cs = kSide - s;  // columns 0..cs on the upper-left plane
+    const D* dt = t.depth_row_as<D>(y) + b.x0;
+    const double base1 = p.da + p.g1y * s, base2 = p.dd + p.g2y * (y - b.y1);
+    if constexpr (kUniform) {
+#pragma omp simd
+      for (int c = 0; c < kTexels; ++c) {
+        const bool upper = c <= cs;
+        const double base = upper ? base1 : base2, gx = upper ? g1x : g2x;
+        const double d = base + gx * (c - (upper ? 0 : kSide));
+        const double e = std::abs(d - dt[c]);
+        m[c] = m[c] > e ? m[c] : e;
+      }
+    } else {
+      const double* k = t.scale_row(y) + b.x0;
+      const double w1 = t.w1();
+      const double w0y = t.w0(0, y), w0dc = t.w0_dc();
+#pragma omp simd
+      for (int c = 0; c < kTexels; ++c) {
+        const bool upper = c <= cs;
+        const double base = upper ? base1 : base2, gx = upper ? g1x : g2x;
+        const double d = base + gx * (c - (upper ? 0 : kSide));
+        const double a = std::abs(d - dt[c]);
+        const double e = a * k[c] / std::abs(w0y + w0dc * (b.x0 + c) + d * w1);
+        m[c] = m[c] > e ? m[c] : e;
+        if constexpr (kGap) g[c] = g[c] > a ? g[c] : a;
+      }
+    }
+  }
+  double mm = worst, gg = gap;
+  for (int c = 0; c < kTexels; ++c) {
+    mm = std::max(mm, m[c]);
+    if constexpr (kGap) gg = std::max(gg, g[c]);
+  }
+  worst = mm;
+  if constexpr (kUniform) gap = std::max(gap, mm);
+  if constexpr (kGap) gap = gg;
+}
+
+// box_rows_by_row for a whole square cell of side kSide, by square_rows in blocks of up to
+// kBlockRows rows: the cap is checked once a block. A block that takes the error past the cap is
+// measured again row by row (box_rows_by_row, from the worst before it), which stops at the same
+// row as box_rows_by_row over all the rows would: the rows before the block left the error
+// within the cap, and max and scaling commute (scaling is monotonic). So `worst` and `gap` end as
+// box_rows_by_row leaves them.
+template <int kSide, bool kUniform, class D>
+void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int y_begin,
+                     int y_end, double cap, bool with_gap, double& worst, double& gap) {
+  constexpr int kBlockRows = 17;  // a level-4 cell in one block
+  for (int y = y_begin; y < y_end; y += kBlockRows) {
+    const int y1 = std::min(y + kBlockRows, y_end);
+    double w = worst, g = gap;
+    if (!kUniform && with_gap) {
+      square_rows<kSide, kUniform, true, D>(t, b, p, y, y1, w, g);
+    } else {
+      square_rows<kSide, kUniform, false, D>(t, b, p, y, y1, w, g);
+    }
+    if (scaled<kUniform>(t, w) > cap) {
+      box_rows_by_row<kUniform, D>(t, b, p, y, y1, cap, with_gap, worst, gap);
+      return;
+    }
+    worst = w;
+    gap = g;
+  }
+}
+
+// The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
+// triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
+// general triangle's span arithmetic. Whole square cells of 4 to 64 texels a side take
+// square_box_rows, the others (longer rows, cells clipped at the border) box_rows_by_row.
+template <bool kUniform, class D>
+double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                        double cap, double* depth_gap) {
+  const CellPlanes p = cell_planes(t, b);
+  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
+  const bool with_gap = depth_gap != nullptr;
+  double worst = 0, gap = 0;
+  switch (wx == wy ? wx : 0) {
+    case 4:
+      square_box_rows<4, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      break;
+    case 8:
+      square_box_rows<8, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      break;
+    case 16:
+      square_box_rows<16, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      break;
+    case 32:
+      square_box_rows<32, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      break;
+    case 64:
+      square_box_rows<64, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      break;
+    default:
+      box_rows_by_row<kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
   }
   if (depth_gap != nullptr) *depth_gap = gap;
   return scaled<kUniform>(t, worst);
