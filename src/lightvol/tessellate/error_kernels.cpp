@@ -65,8 +65,9 @@ struct CellPlanes {
   double da, dd, g1x, g1y, g2x, g2y;
 };
 
-CellPlanes cell_planes(const TexelDepths& t, const Quadtree::Box& b) {
-  const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
+// The planes of cell `b`, wx × wy texels. Inlined, so that with sides known at compile time (powers
+// of two) the divisions become multiplications by their reciprocals (exact: the same quotients).
+[[gnu::always_inline]] inline CellPlanes cell_planes(const TexelDepths& t, const Quadtree::Box& b, int wx, int wy) {
   const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
                dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
   return {da, dd, (db - da) / wx, (dc - da) / wy, (dd - dc) / wx, (dd - db) / wy};
@@ -120,13 +121,13 @@ void box_rows_by_row(const TexelDepths& t, const Quadtree::Box& b, const CellPla
 // maximum kept across the rows; the columns are joined once at the end. Raises `worst` and `gap`
 // as box_rows_by_row does (kGap: the gap, non-uniform only), without the cap.
 template <int kSide, bool kUniform, bool kGap, class D>
-void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int y_begin,
-                 int y_end, double& worst, double& gap) {
+void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int s_begin,
+                 int s_end, double& worst, double& gap) {
   constexpr int kTexels = kSide + 1;
   const double g1x = p.g1x, g2x = p.g2x;
   double m[kTexels] = {}, g[kTexels] = {};
-  for (int y = y_begin; y < y_end; ++y) {
-    const int s = y - b.y0, cs = kSide - s;  // columns 0..cs on the upper-left plane
+  const auto row = [&](int s) {  // row b.y0 + s: columns 0..kSide − s on the upper-left plane
+    const int y = b.y0 + s, cs = kSide - s;
     const D* dt = t.depth_row_as<D>(y) + b.x0;
     const double base1 = p.da + p.g1y * s, base2 = p.dd + p.g2y * (y - b.y1);
     if constexpr (kUniform) {
@@ -153,6 +154,12 @@ void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes&
         if constexpr (kGap) g[c] = g[c] > a ? g[c] : a;
       }
     }
+  };
+  if constexpr (kSide <= 8) {
+#pragma GCC unroll 9
+    for (int s = s_begin; s < s_end; ++s) row(s);
+  } else {
+    for (int s = s_begin; s < s_end; ++s) row(s);
   }
   double mm = worst, gg = gap;
   for (int c = 0; c < kTexels; ++c) {
@@ -171,16 +178,24 @@ void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes&
 // within the cap, and max and scaling commute (scaling is monotonic). So `worst` and `gap` end as
 // box_rows_by_row leaves them.
 template <int kSide, bool kUniform, class D>
-void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int y_begin,
-                     int y_end, double cap, bool with_gap, double& worst, double& gap) {
+void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                     double cap, bool with_gap, double& worst, double& gap) {
+  const CellPlanes p = cell_planes(t, b, kSide, kSide);
   constexpr int kBlockRows = 17;  // a level-4 cell in one block
+  const auto block = [&](int s_begin, int s_end, double& w, double& g) {
+    if (!kUniform && with_gap) {
+      square_rows<kSide, kUniform, true, D>(t, b, p, s_begin, s_end, w, g);
+    } else {
+      square_rows<kSide, kUniform, false, D>(t, b, p, s_begin, s_end, w, g);
+    }
+  };
   for (int y = y_begin; y < y_end; y += kBlockRows) {
     const int y1 = std::min(y + kBlockRows, y_end);
     double w = worst, g = gap;
-    if (!kUniform && with_gap) {
-      square_rows<kSide, kUniform, true, D>(t, b, p, y, y1, w, g);
+    if (kSide < kBlockRows && y == b.y0 && y1 == b.y1 + 1) {
+      block(0, kSide + 1, w, g);  // the whole cell: a row count known at compile time
     } else {
-      square_rows<kSide, kUniform, false, D>(t, b, p, y, y1, w, g);
+      block(y - b.y0, y1 - b.y0, w, g);
     }
     if (scaled<kUniform>(t, w) > cap) {
       box_rows_by_row<kUniform, D>(t, b, p, y, y1, cap, with_gap, worst, gap);
@@ -198,28 +213,27 @@ void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPla
 template <bool kUniform, class D>
 double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
                         double cap, double* depth_gap) {
-  const CellPlanes p = cell_planes(t, b);
   const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
   const bool with_gap = depth_gap != nullptr;
   double worst = 0, gap = 0;
   switch (wx == wy ? wx : 0) {
     case 4:
-      square_box_rows<4, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      square_box_rows<4, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
       break;
     case 8:
-      square_box_rows<8, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      square_box_rows<8, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
       break;
     case 16:
-      square_box_rows<16, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      square_box_rows<16, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
       break;
     case 32:
-      square_box_rows<32, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      square_box_rows<32, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
       break;
     case 64:
-      square_box_rows<64, kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      square_box_rows<64, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
       break;
     default:
-      box_rows_by_row<kUniform, D>(t, b, p, y_begin, y_end, cap, with_gap, worst, gap);
+      box_rows_by_row<kUniform, D>(t, b, cell_planes(t, b, wx, wy), y_begin, y_end, cap, with_gap, worst, gap);
   }
   if (depth_gap != nullptr) *depth_gap = gap;
   return scaled<kUniform>(t, worst);
