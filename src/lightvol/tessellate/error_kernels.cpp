@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -67,7 +68,8 @@ struct CellPlanes {
 
 // The planes of cell `b`, wx × wy texels. Inlined, so that with sides known at compile time (powers
 // of two) the divisions become multiplications by their reciprocals (exact: the same quotients).
-[[gnu::always_inline]] inline CellPlanes cell_planes(const TexelDepths& t, const Quadtree::Box& b, int wx, int wy) {
+[[gnu::always_inline]] inline CellPlanes cell_planes(const TexelDepths& t, const Quadtree::Box& b,
+                                                     int wx, int wy) {
   const double da = t.window_depth(b.x0, b.y0), db = t.window_depth(b.x1, b.y0),
                dc = t.window_depth(b.x0, b.y1), dd = t.window_depth(b.x1, b.y1);
   return {da, dd, (db - da) / wx, (dc - da) / wy, (dd - dc) / wx, (dd - db) / wy};
@@ -114,22 +116,36 @@ void box_rows_by_row(const TexelDepths& t, const Quadtree::Box& b, const CellPla
   }
 }
 
-// Rows [y_begin, y_end) of a whole square cell of side kSide (the levels descend measures, 4 to
-// 64 texels), without box_rows_by_row's two short vectorized loops and horizontal max per row:
-// one loop a row over its kSide + 1 texels of compile-time count, each texel on its own plane (a
-// select: the same operations on the same operands as box_rows_by_row), raising a per-column
-// maximum kept across the rows; the columns are joined once at the end. Raises `worst` and `gap`
-// as box_rows_by_row does (kGap: the gap, non-uniform only), without the cap.
+// box_rows_by_row for a whole square cell of side kSide (4, 8 or 16 texels: levels 2 to 4, whose
+// short rows cost box_rows_by_row more in loop overhead and a horizontal max per row than in
+// arithmetic), without its two short vectorized loops per row: one loop a row over
+// its kSide + 1 texels (a count known at compile time), each texel on its own plane by a select
+// (the same operations on the same operands as box_rows_by_row), raising a per-column maximum
+// kept across the rows; the columns are joined only at the end, or where the cap may have been
+// passed. `near` is below every error (before the uniform scale) that passes the cap, so a row
+// whose columns all stay at or below it cannot pass it; a row with a column above it has its
+// columns joined and the cap tested exactly as box_rows_by_row does (max and scaling commute:
+// scaling is monotonic), and stops the rows at the same row. So `worst` and `gap` end as
+// box_rows_by_row leaves them (kGap: the gap, non-uniform only).
 template <int kSide, bool kUniform, bool kGap, class D>
-void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes& p, int s_begin,
-                 int s_end, double& worst, double& gap) {
+void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
+                     double cap, double near, double& worst, double& gap) {
   constexpr int kTexels = kSide + 1;
+  const CellPlanes p = cell_planes(t, b, kSide, kSide);
   const double g1x = p.g1x, g2x = p.g2x;
   double m[kTexels] = {}, g[kTexels] = {};
-  const auto row = [&](int s) {  // row b.y0 + s: columns 0..kSide − s on the upper-left plane
+  const auto joined = [&] {
+    double w = 0;
+    for (int c = 0; c < kTexels; ++c) w = std::max(w, m[c]);
+    return w;
+  };
+  // Row b.y0 + s (columns 0..kSide − s on the upper-left plane); true: the cap is passed.
+  const auto row = [&](int s) {
     const int y = b.y0 + s, cs = kSide - s;
     const D* dt = t.depth_row_as<D>(y) + b.x0;
     const double base1 = p.da + p.g1y * s, base2 = p.dd + p.g2y * (y - b.y1);
+    // The select picks the plane's operands, not its computed depths: GCC vectorizes a select
+    // of values, but not one of two computations it may sink into branches (-ftrapping-math).
     if constexpr (kUniform) {
 #pragma omp simd
       for (int c = 0; c < kTexels; ++c) {
@@ -154,86 +170,70 @@ void square_rows(const TexelDepths& t, const Quadtree::Box& b, const CellPlanes&
         if constexpr (kGap) g[c] = g[c] > a ? g[c] : a;
       }
     }
+    bool above = false;
+    for (int c = 0; c < kTexels; ++c) above |= m[c] > near;
+    return above && scaled<kUniform>(t, std::max(worst, joined())) > cap;
   };
-  if constexpr (kSide <= 8) {
+  if (kSide <= 8 && y_begin == b.y0 && y_end == b.y1 + 1) {
+    // The whole cell: a row count known at compile time, the rows unrolled.
 #pragma GCC unroll 9
-    for (int s = s_begin; s < s_end; ++s) row(s);
+    for (int s = 0; s <= kSide; ++s)
+      if (row(s)) break;
   } else {
-    for (int s = s_begin; s < s_end; ++s) row(s);
+    for (int s = y_begin - b.y0; s < y_end - b.y0; ++s)
+      if (row(s)) break;
   }
-  double mm = worst, gg = gap;
-  for (int c = 0; c < kTexels; ++c) {
-    mm = std::max(mm, m[c]);
-    if constexpr (kGap) gg = std::max(gg, g[c]);
+  worst = std::max(worst, joined());
+  if constexpr (kUniform) gap = std::max(gap, worst);
+  if constexpr (kGap) {
+    for (int c = 0; c < kTexels; ++c) gap = std::max(gap, g[c]);
   }
-  worst = mm;
-  if constexpr (kUniform) gap = std::max(gap, mm);
-  if constexpr (kGap) gap = gg;
 }
 
-// box_rows_by_row for a whole square cell of side kSide, by square_rows in blocks of up to
-// kBlockRows rows: the cap is checked once a block. A block that takes the error past the cap is
-// measured again row by row (box_rows_by_row, from the worst before it), which stops at the same
-// row as box_rows_by_row over all the rows would: the rows before the block left the error
-// within the cap, and max and scaling commute (scaling is monotonic). So `worst` and `gap` end as
-// box_rows_by_row leaves them.
-template <int kSide, bool kUniform, class D>
-void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
-                     double cap, bool with_gap, double& worst, double& gap) {
-  const CellPlanes p = cell_planes(t, b, kSide, kSide);
-  constexpr int kBlockRows = 17;  // a level-4 cell in one block
-  const auto block = [&](int s_begin, int s_end, double& w, double& g) {
-    if (!kUniform && with_gap) {
-      square_rows<kSide, kUniform, true, D>(t, b, p, s_begin, s_end, w, g);
-    } else {
-      square_rows<kSide, kUniform, false, D>(t, b, p, s_begin, s_end, w, g);
-    }
-  };
-  for (int y = y_begin; y < y_end; y += kBlockRows) {
-    const int y1 = std::min(y + kBlockRows, y_end);
-    double w = worst, g = gap;
-    if (kSide < kBlockRows && y == b.y0 && y1 == b.y1 + 1) {
-      block(0, kSide + 1, w, g);  // the whole cell: a row count known at compile time
-    } else {
-      block(y - b.y0, y1 - b.y0, w, g);
-    }
-    if (scaled<kUniform>(t, w) > cap) {
-      box_rows_by_row<kUniform, D>(t, b, p, y, y1, cap, with_gap, worst, gap);
-      return;
-    }
-    worst = w;
-    gap = g;
-  }
+// square_box_rows' `near` for a cap: without a uniform scale, the cap; with one, s, an error w at
+// or below which w·s does not round above the cap: cap / s less a relative 1e-12 (w·s rounds above
+// the cap only if w > cap / s · (1 − 2⁻⁵²), when nothing underflows), 0 where cap / s is tiny or 0
+// (no cap passed by 0), −∞ for a negative cap (passed by every row).
+double near_cap(const TexelDepths& t, double cap) {
+  if (!t.uniform()) return cap;
+  const double q = cap / t.uniform_scale();
+  if (q >= 1e-290) return q * (1 - 1e-12);
+  return cap < 0 ? -std::numeric_limits<double>::infinity() : 0.0;
 }
 
 // The largest error over the texels of an unsplit cell (rows [y_begin, y_end)): the upper-left
 // triangle (a, b, c) and the lower-right one (b, d, c) of cell_triangles(config 0), without the
-// general triangle's span arithmetic. Whole square cells of 4 to 64 texels a side take
-// square_box_rows, the others (longer rows, cells clipped at the border) box_rows_by_row.
+// general triangle's span arithmetic. Whole square cells of 4, 8 and 16 texels a side take
+// square_box_rows; the others (long rows, where its per-column maxima in memory cost more than
+// they save, and cells clipped at the border) box_rows_by_row.
 template <bool kUniform, class D>
 double box_error_rows_t(const TexelDepths& t, const Quadtree::Box& b, int y_begin, int y_end,
                         double cap, double* depth_gap) {
   const int wx = b.x1 - b.x0, wy = b.y1 - b.y0;
-  const bool with_gap = depth_gap != nullptr;
   double worst = 0, gap = 0;
+  const auto square = [&](auto side) {
+    constexpr int kSide = decltype(side)::value;
+    if (!kUniform && depth_gap != nullptr) {
+      square_box_rows<kSide, kUniform, true, D>(t, b, y_begin, y_end, cap, near_cap(t, cap), worst,
+                                                gap);
+    } else {
+      square_box_rows<kSide, kUniform, false, D>(t, b, y_begin, y_end, cap, near_cap(t, cap), worst,
+                                                 gap);
+    }
+  };
   switch (wx == wy ? wx : 0) {
     case 4:
-      square_box_rows<4, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
+      square(std::integral_constant<int, 4>{});
       break;
     case 8:
-      square_box_rows<8, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
+      square(std::integral_constant<int, 8>{});
       break;
     case 16:
-      square_box_rows<16, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
-      break;
-    case 32:
-      square_box_rows<32, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
-      break;
-    case 64:
-      square_box_rows<64, kUniform, D>(t, b, y_begin, y_end, cap, with_gap, worst, gap);
+      square(std::integral_constant<int, 16>{});
       break;
     default:
-      box_rows_by_row<kUniform, D>(t, b, cell_planes(t, b, wx, wy), y_begin, y_end, cap, with_gap, worst, gap);
+      box_rows_by_row<kUniform, D>(t, b, cell_planes(t, b, wx, wy), y_begin, y_end, cap,
+                                   depth_gap != nullptr, worst, gap);
   }
   if (depth_gap != nullptr) *depth_gap = gap;
   return scaled<kUniform>(t, worst);
