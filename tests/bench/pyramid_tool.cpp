@@ -3,8 +3,6 @@
 // with at most THREADS threads. Per build one line: the process's CPU seconds (user + sys) and the
 // wall seconds of the pyramid (RefinementPyramid's constructor; the texel depths are made before),
 // the cells measured and a hash (FNV-1a) of every level's values, which changes with any value.
-#include <sys/resource.h>
-
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -22,18 +20,9 @@
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/tessellate/detail/lattice.h>
 
-namespace {
+#include "cpu_seconds.h"
 
-double cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  const auto s = [](const timeval& t) {
-    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
-  };
-  return s(u.ru_utime) + s(u.ru_stime);
-}
-
-}  // namespace
+using lightvol::bench::cpu_seconds;
 
 int main(int argc, char** argv) {
   if (argc != 6) {

@@ -2,8 +2,6 @@
 // (synthetic_scene.h) under the benchmark's directional light (near 0, far 1, linear depth) at max
 // error E, in memory: triangles, reached error (RefinementPyramid::measure), time of each stage,
 // smallest angle and area.
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -15,6 +13,7 @@
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/tessellate/collapse_grid.h>
 
+#include "cpu_seconds.h"
 #include "synthetic_scene.h"
 
 namespace {
@@ -32,17 +31,9 @@ double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-// CPU seconds (user + sys) of the whole process so far: on a shared machine the comparable time.
-double cpu_seconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  const auto s = [](const timeval& t) {
-    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
-  };
-  return s(u.ru_utime) + s(u.ru_stime);
-}
-
 }  // namespace
+
+using lightvol::bench::cpu_seconds;
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
