@@ -5,10 +5,8 @@
 #include <string>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
 #include <lightvol/core/atomic_file.h>
+#include <lightvol/core/detail/block_scan.h>
 #include <lightvol/core/detail/image_helper.h>
 #include <lightvol/core/limits.h>
 #include <lightvol/core/path.h>
@@ -59,26 +57,13 @@ Result<int> choose_channel(const detail::ImageHeader& spec, const DepthReadOptio
 
 Status validate_depths(const DepthImage& image, const std::string& source) {
   const std::size_t n = image.values.size();
-  // The first block of texels holding a depth that is not finite and ≥ 0: blocks in parallel, each
-  // tested without an early exit (the loop vectorizes); then that block one texel at a time.
-  constexpr std::size_t kBlock = std::size_t{1} << 16;
+  // The first block of texels holding a depth that is not finite and ≥ 0, then that block one
+  // texel at a time.
   const float* values = image.values.data();
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  const std::size_t first_bad = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, blocks), blocks,
-      [&](const tbb::blocked_range<std::size_t>& range, std::size_t first) {
-        for (std::size_t b = range.begin(); b != range.end() && b < first; ++b) {
-          const std::size_t end = std::min(n, (b + 1) * kBlock);
-          unsigned ok = 1;
-          for (std::size_t i = b * kBlock; i < end; ++i)
-            ok &= static_cast<unsigned>(values[i] >= 0.0f) &
-                  static_cast<unsigned>(values[i] <= std::numeric_limits<float>::max());
-          if (!ok) return b;
-        }
-        return first;
-      },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
-  for (std::size_t i = first_bad * kBlock; i < n; ++i) {
+  const std::size_t first_bad = detail::first_failing_block(n, [values](std::size_t i) {
+    return (values[i] >= 0.0f) & (values[i] <= std::numeric_limits<float>::max());
+  });
+  for (std::size_t i = first_bad * detail::kScanBlock; i < n; ++i) {
     const float v = image.values[i];
     if (std::isfinite(v) && v >= 0) continue;
     const std::size_t col = i % static_cast<std::size_t>(image.width);

@@ -203,9 +203,7 @@ class Corners {
 // A copy of `values`, its pages mapped and its elements copied by all cores.
 std::vector<std::uint32_t> copy_large(const std::vector<std::uint32_t>& values) {
   std::vector<std::uint32_t> copy;
-  reserve_large(copy, values.size());
-  populate_for_fill(copy, 0, values.size());
-  copy.resize(values.size());
+  resize_large(copy, values.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values.size(), std::size_t{1} << 16),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       std::copy(values.begin() + static_cast<std::ptrdiff_t>(r.begin()),

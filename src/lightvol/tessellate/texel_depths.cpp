@@ -11,6 +11,7 @@
 
 #include <lightvol/core/buffer.h>
 #include <lightvol/core/check.h>
+#include <lightvol/core/detail/block_scan.h>
 #include <lightvol/light/texel.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 
@@ -65,21 +66,11 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
     const double z = -std::clamp(stored, light.near, light.far);
     return std::clamp(0.5 * ((pz * z + pzc) / (pw * z + pwc) + 1.0), 0.0, 1.0);
   };
-  // Whether test(stored value) holds for every texel: blocks of texels in parallel, each block's
-  // loop without an early exit (it vectorizes), the blocks after a failed one skipped.
+  // Whether test(stored value) holds for every texel.
   const auto every_value = [&](auto test) {
-    constexpr std::size_t kBlock = std::size_t{1} << 16;
     const float* values = image.values.data();
-    std::atomic<bool> all{true};
-    tbb::parallel_for(std::size_t{0}, (n + kBlock - 1) / kBlock, [&](std::size_t b) {
-      if (!all.load(std::memory_order_relaxed)) return;
-      const std::size_t end = std::min(n, (b + 1) * kBlock);
-      unsigned holds = 1;
-#pragma omp simd reduction(& : holds)
-      for (std::size_t v = b * kBlock; v < end; ++v) holds &= test(values[v]) ? 1u : 0u;
-      if (!holds) all.store(false, std::memory_order_relaxed);
-    });
-    return all.load();
+    return detail::first_failing_block(n, [&](std::size_t v) { return test(values[v]); }) ==
+           (n + detail::kScanBlock - 1) / detail::kScanBlock;
   };
   // Floats when every depth is one exactly (window: always; linear: checked).
   t.float_depths_ = window;

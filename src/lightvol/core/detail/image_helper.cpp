@@ -89,26 +89,33 @@ bool executable(const std::string& path) {
          ::access(path.c_str(), X_OK) == 0;
 }
 
+// Where a reader program `name` may be, in order: beside the running program, in the libexec
+// folder of its install prefix, where it was installed, where it was built.
+std::vector<std::string> program_candidates(const char* name, const char* installed,
+                                            const char* built) {
+  std::vector<std::string> tried;
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    tried.push_back((self.parent_path() / name).string());
+    tried.push_back((self.parent_path() / ".." / "libexec" / "lightvol" / name).lexically_normal());
+  }
+  tried.emplace_back(installed);
+  tried.emplace_back(built);
+  return tried;
+}
+
 }  // namespace
 
 Result<std::string> image_helper_path() {
-  std::vector<std::string> tried;
   if (const char* env = std::getenv("LIGHTVOL_IMAGE_HELPER"); env && *env) {
     if (executable(env)) return std::string(env);
     return Error{std::string("LIGHTVOL_IMAGE_HELPER names ") + env +
                  ", which is not an executable file"};
   }
-  std::error_code ec;
-  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    tried.push_back((self.parent_path() / "lightvol-image").string());
-    tried.push_back(
-        (self.parent_path() / ".." / "libexec" / "lightvol" / "lightvol-image").lexically_normal());
-  }
-  tried.emplace_back(LIGHTVOL_IMAGE_HELPER_INSTALLED);
-  tried.emplace_back(LIGHTVOL_IMAGE_HELPER_BUILT);
   std::string where;
-  for (const std::string& path : tried) {
+  for (const std::string& path : program_candidates(
+           "lightvol-image", LIGHTVOL_IMAGE_HELPER_INSTALLED, LIGHTVOL_IMAGE_HELPER_BUILT)) {
     if (executable(path)) return path;
     if (!path.empty()) where += (where.empty() ? "" : ", ") + path;
   }
@@ -122,17 +129,8 @@ std::optional<std::string> exr_helper_path() {
     return {};
   }
   if (const char* env = std::getenv("LIGHTVOL_IMAGE_HELPER"); env && *env) return {};
-  std::vector<std::string> tried;
-  std::error_code ec;
-  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    tried.push_back((self.parent_path() / "lightvol-exr").string());
-    tried.push_back(
-        (self.parent_path() / ".." / "libexec" / "lightvol" / "lightvol-exr").lexically_normal());
-  }
-  tried.emplace_back(LIGHTVOL_EXR_HELPER_INSTALLED);
-  tried.emplace_back(LIGHTVOL_EXR_HELPER_BUILT);
-  for (const std::string& path : tried)
+  for (const std::string& path :
+       program_candidates("lightvol-exr", LIGHTVOL_EXR_HELPER_INSTALLED, LIGHTVOL_EXR_HELPER_BUILT))
     if (executable(path)) return path;
   return {};
 }
