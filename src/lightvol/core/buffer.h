@@ -1,8 +1,6 @@
 // Allocation of the large flat buffers a volume lives in.
 #pragma once
 
-#include <sys/mman.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -12,18 +10,12 @@
 
 namespace lightvol {
 
-// Asks the kernel to back the whole 2 MiB pages inside [data, data + bytes) with transparent huge
-// pages, when there are at least four 2 MiB's worth of bytes: a 33-million-triangle volume then
-// takes hundreds, not hundreds of thousands, of page faults to fill. Advice only: harmless where
-// huge pages are unavailable.
-inline void advise_huge_pages(const void* data, std::size_t bytes) {
-  constexpr std::size_t kHuge = std::size_t{2} << 20;
-  if (bytes < 4 * kHuge) return;
-  const auto begin = reinterpret_cast<std::uintptr_t>(data);
-  const std::uintptr_t aligned = (begin + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t end = (begin + bytes) & ~(kHuge - 1);
-  if (end > aligned) ::madvise(reinterpret_cast<void*>(aligned), end - aligned, MADV_HUGEPAGE);
-}
+// Large buffers are left on the kernel's ordinary pages: no huge-page advice (MADV_HUGEPAGE).
+// On a virtual machine whose host takes back the guest's free memory (virtio-balloon's free page
+// reporting hands it whole 2 MiB blocks), a fresh huge page is one the host must back again, and
+// filling a 650 MB mesh on huge pages took 0.9-1.3 s of the kernel's time against 0.26-0.6 s on
+// 4 KiB pages (docs/performance.md, "Large buffers on ordinary pages"); where the system turns
+// huge pages on for every mapping, it still does.
 
 // Maps the pages of each (start, bytes) range in blocks of 2 to 32 MiB (about eight a thread), in
 // parallel, before they are
@@ -47,12 +39,10 @@ inline bool vector_lanes() {
 #endif
 }
 
-// Reserves room for `capacity` elements (so later appends never copy the buffer), on huge pages
-// when large.
+// Reserves room for `capacity` elements (so later appends never copy the buffer).
 template <class T>
 void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
   buffer.reserve(capacity);
-  advise_huge_pages(buffer.data(), capacity * sizeof(T));
 }
 
 // Before a large buffer's elements [from, to) are first written in one thread: their pages mapped
@@ -65,9 +55,8 @@ void populate_for_fill(const std::vector<T>& buffer, std::size_t from, std::size
   populate_in_parallel({{buffer.data() + from, (to - from) * sizeof(T)}});
 }
 
-// Makes `buffer` hold `n` copies of `value` (its old contents dropped), on huge pages when large:
-// the huge-page advice is given before the first write, so filling the buffer takes one page fault
-// per 2 MiB instead of one per 4 KiB, and the pages are mapped by all cores (populate_for_fill).
+// Makes `buffer` hold `n` copies of `value` (its old contents dropped), its pages mapped by all
+// cores before the fill when large (populate_for_fill).
 template <class T>
 void assign_large(std::vector<T>& buffer, std::size_t n, const T& value) {
   buffer.clear();
@@ -76,8 +65,8 @@ void assign_large(std::vector<T>& buffer, std::size_t n, const T& value) {
   buffer.assign(n, value);
 }
 
-// Resizes `buffer` to `n` elements (new ones value-initialized), on huge pages when it has to
-// grow into a new allocation that is large, the new elements' pages mapped by all cores.
+// Resizes `buffer` to `n` elements (new ones value-initialized), the new elements' pages mapped by
+// all cores when they are many.
 template <class T>
 void resize_large(std::vector<T>& buffer, std::size_t n) {
   reserve_large(buffer, n);
@@ -86,12 +75,10 @@ void resize_large(std::vector<T>& buffer, std::size_t n) {
 }
 
 // An array of `n` elements left uninitialized (the caller's parallel loop writes each first, and
-// its threads take the page faults), on huge pages when large.
+// its threads take the page faults).
 template <class T>
 std::unique_ptr<T[]> uninitialized_large(std::size_t n) {
-  auto array = std::make_unique_for_overwrite<T[]>(n);
-  advise_huge_pages(array.get(), n * sizeof(T));
-  return array;
+  return std::make_unique_for_overwrite<T[]>(n);
 }
 
 }  // namespace lightvol

@@ -94,7 +94,7 @@ class TexelDepths {
            static_cast<std::size_t>(col);
   }
   int width_ = 0, height_ = 0;
-  // Per texel, written once in parallel (no serial zero-fill, huge pages where available).
+  // Per texel, written once in parallel (no serial zero-fill).
   std::unique_ptr<double[]> depth_;   // window depth, or null when float_depths_
   std::unique_ptr<float[]> depth_f_;  // window depth when float_depths_ and not borrowed
   const float* depth_fp_ = nullptr;   // window depth when float_depths_: depth_f_ or the image's

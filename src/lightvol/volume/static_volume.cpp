@@ -151,7 +151,7 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
   LV_CHECK_LT(counts.vertices, std::uint64_t{std::numeric_limits<std::uint32_t>::max()});
 
   const std::size_t grid_vertices = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-  // Huge pages, mapped first (the kernel zeroes each as it maps it, the slowest part of the build
+  // Pages mapped first (the kernel zeroes each as it maps it, the slowest part of the build
   // on a virtual machine): by reserve_static_volume while the map was read, else here in parallel
   // blocks; then zeroed again by the vectors.
   Mesh mesh;

@@ -53,7 +53,7 @@ Result<Mesh> build_static_volume(const Light& light, const DepthImage& depth,
                                  Mesh storage = {});
 
 // Room for the static volume of a W×H map of a spot or directional light (`type`): a mesh with no
-// vertices and no triangles whose buffers are reserved for them on huge pages and already mapped
+// vertices and no triangles whose buffers are reserved for them and already mapped
 // (MADV_POPULATE_WRITE, in this thread only: the kernel zeroes fresh pages as it maps them, which
 // on a virtual machine is the slowest part of a large build). Made on a thread of its own while
 // the map is read, then handed to build_static_volume (pipeline/build_file.cpp).

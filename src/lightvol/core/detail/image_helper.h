@@ -68,7 +68,7 @@ void set_in_process_exr_server(ImageServer server);
 // A reader's destination for the floats of one read (lightvol-image's and lightvol-exr's side of
 // the conversation): the parent's shared memory when it offered a memfd of exactly `texels` floats
 // (mapped here; the descriptor is closed), else a buffer of the reader's own, not zeroed (the
-// decoder writes every float) and on huge pages (a 16384² map is 1 GiB).
+// decoder writes every float).
 class DecodedFloats {
  public:
   DecodedFloats(int shared_fd, std::size_t texels);

@@ -445,7 +445,6 @@ Result<ImageChannel> read_image_channel(
       if (!floats) return Error{path + ": " + floats.error().message};
       image.values = std::move(*floats);
     } else {
-      // On huge pages: the zeroing resize then faults 2 MiB at a time (512 faults a GiB).
       std::vector<float> values;
       reserve_large(values, texels);
       values.resize(texels);

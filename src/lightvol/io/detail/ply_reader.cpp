@@ -340,7 +340,6 @@ class Builder {
   // (and zeroed) now, while the positions are, for triangles() to fill.
   Builder(const Header& header, bool triangles) : vertices_(header.vertices) {
     const auto faces = static_cast<std::size_t>(header.faces);
-    // Huge pages: a thousand page faults instead of 150,000 for a 33-million-triangle volume.
     // The kernel zeroes fresh pages as they are mapped: mapped in parallel blocks first, so that
     // both threads share that, then zeroed again by the vectors (in cache-sized strides, fast).
     const std::size_t positions = 3 * static_cast<std::size_t>(header.vertices);
