@@ -41,17 +41,28 @@ std::int64_t cross(Pt a, Pt b, Pt c) {
 // Whether every texel (lattice point) of the closed triangle (a, b, c) lies within `bound` of the
 // triangle's plane in window depth (TexelDepths::error). Stops at the first row that breaks it.
 // Rows are walked with RowSpanWalker (no division per row: most triangles here are a few texels
-// wide, so the per-row work is most of the cost).
+// wide, so the per-row work is most of the cost). Row `first_row`, when the triangle has it, is
+// tested before the others: the same span and the same arithmetic as in the walk, so the answer
+// is the same, only sooner where that row breaks the bound.
 template <bool kUniform, class D>
-[[gnu::flatten]] bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound) {
+[[gnu::flatten]] bool triangle_within(const TexelDepths& t, Pt a, Pt b, Pt c, double bound,
+                                      int first_row) {
   const TrianglePlane plane = triangle_plane(t, a, b, c);
+  const auto row_within = [&](int y, int x0, int x1) {
+    const double m = span_error<kUniform, D>(t, y, x0, x1, plane.at(x0, y), plane.gx);
+    return !(kUniform ? m * t.uniform_scale() > bound : m > bound);
+  };
   const int y0 = std::min({a.y, b.y, c.y}), y1 = std::max({a.y, b.y, c.y});
+  if (first_row >= y0 && first_row <= y1) {
+    RowSpanWalker row(plane.v, first_row);
+    int x0 = 0, x1 = 0;
+    if (row.next(&x0, &x1) && !row_within(first_row, x0, x1)) return false;
+  }
   RowSpanWalker walk(plane.v, y0);
   for (int y = y0; y <= y1; ++y) {
     int x0 = 0, x1 = 0;
-    if (!walk.next(&x0, &x1)) continue;
-    const double m = span_error<kUniform, D>(t, y, x0, x1, plane.at(x0, y), plane.gx);
-    if (kUniform ? m * t.uniform_scale() > bound : m > bound) return false;
+    if (!walk.next(&x0, &x1) || y == first_row) continue;
+    if (!row_within(y, x0, x1)) return false;
   }
   return true;
 }
@@ -466,10 +477,12 @@ class Collapser {
   }
 
  private:
-  bool within(Pt a, Pt b, Pt c) const {
+  // With `first_row`: that row's texels are tested first (triangle_within).
+  bool within(Pt a, Pt b, Pt c, int first_row = std::numeric_limits<int>::min()) const {
     if (!bounds_.empty() && within_by_bounds(t_, bounds_, a, b, c, bound_)) return true;
     return with_texel_kind(t_, [&](auto uniform, auto depth) {
-      return triangle_within<decltype(uniform)::value, decltype(depth)>(t_, a, b, c, bound_);
+      return triangle_within<decltype(uniform)::value, decltype(depth)>(t_, a, b, c, bound_,
+                                                                        first_row);
     });
   }
 
@@ -687,8 +700,11 @@ class Collapser {
     candidates_.clear();
     for (const std::uint64_t key : keys) candidates_.push_back(static_cast<std::uint32_t>(key));
     for (const std::uint32_t v : candidates_) {
-      // Orientation first (cheap), then the texels.
+      // Orientation first (cheap), then the texels. The new triangle over u's own texel is tested
+      // first: where the bound fails, it fails there most often (the old surface passed through
+      // that texel's depth), and the answer, every triangle within, is the same in any order.
       bool ok = true;
+      std::uint32_t over_u = kNone;
       for (const std::uint32_t k : star_[u]) {
         const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
         if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
@@ -699,6 +715,7 @@ class Collapser {
           ok = false;
           break;
         }
+        if (over_u == kNone && covers(p, pu)) over_u = k;
         // Height over the longest edge: |a| / L ≥ h ⇔ a² ≥ h²·L².
         double longest2 = 0;
         for (int c = 0; c < 3; ++c) {
@@ -713,12 +730,17 @@ class Collapser {
       }
       if (!ok) continue;
       ++*attempts;
-      for (const std::uint32_t k : star_[u]) {
+      const auto new_within = [&](std::uint32_t k, int first_row) {
         const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
-        if (tr[0] == v || tr[1] == v || tr[2] == v) continue;
         Pt p[3];
         for (int c = 0; c < 3; ++c) p[c] = tr[c] == u ? pt_[v] : pt_[tr[c]];
-        if (!within(p[0], p[1], p[2])) {
+        return within(p[0], p[1], p[2], first_row);
+      };
+      if (over_u != kNone && !new_within(over_u, pu.y)) continue;
+      for (const std::uint32_t k : star_[u]) {
+        const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
+        if (k == over_u || tr[0] == v || tr[1] == v || tr[2] == v) continue;
+        if (!new_within(k, std::numeric_limits<int>::min())) {
           ok = false;
           break;
         }
@@ -726,6 +748,15 @@ class Collapser {
       if (ok) return v;
     }
     return kNone;
+  }
+
+  // Whether the closed triangle p (oriented as the grid, sign_) holds the lattice point q.
+  bool covers(const Pt (&p)[3], Pt q) const {
+    for (int c = 0; c < 3; ++c) {
+      const std::int64_t a = cross(p[c], p[(c + 1) % 3], q);
+      if (sign_ > 0 ? a < 0 : a > 0) return false;
+    }
+    return true;
   }
 
   // The smallest interior angle (radians) of triangle p, q, r (texel space).
