@@ -59,6 +59,33 @@ TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
   }
 }
 
+// A `room` that refuses the leaves' triangles gets their exact number, and nothing is emitted; one
+// that accepts them changes nothing.
+TEST(Adaptive, RoomIsAskedForTheTrianglesBeforeAnyIsEmitted) {
+  const Light light = light_from_json(directional_json("linear"));
+  const DepthImage depth = adaptive_scene(50, 40, 7.0);
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
+  ASSERT_TRUE(t.ok());
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  const AdaptiveGrid plain = pyramid.tessellate(0.05, true);
+  ASSERT_GT(plain.num_triangles(), 0u);
+  EXPECT_EQ(plain.refused_triangles, 0u);
+  std::vector<std::uint64_t> asked;
+  const AdaptiveGrid refused = pyramid.tessellate(0.05, true, {}, [&](std::uint64_t n) {
+    asked.push_back(n);
+    return false;
+  });
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], plain.num_triangles());
+  EXPECT_EQ(refused.refused_triangles, plain.num_triangles());
+  EXPECT_TRUE(refused.indices.empty());
+  EXPECT_TRUE(refused.vertices.empty());
+  const AdaptiveGrid accepted = pyramid.tessellate(0.05, true, {}, [](std::uint64_t) { return true; });
+  EXPECT_EQ(accepted.refused_triangles, 0u);
+  EXPECT_EQ(accepted.indices, plain.indices);
+  EXPECT_EQ(accepted.vertices, plain.vertices);
+}
+
 // ---- depths held as floats ----------------------------------------------------------------------
 
 // TexelDepths holds the window depths as floats when every one is a float exactly: window

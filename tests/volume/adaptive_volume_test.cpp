@@ -11,7 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <lightvol/core/limits.h>
 #include <lightvol/core/mesh.h>
+#include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/volume/adaptive_volume.h>
 #include <lightvol/volume/static_volume.h>
 
@@ -247,6 +249,43 @@ TEST(Adaptive, RadialDepthNoParallelRayReachesIsAnError) {
   ASSERT_FALSE(mesh.ok());
   EXPECT_NE(mesh.error().message.find("r.exr: pixel (0, 0): radial depth"), std::string::npos)
       << mesh.error().message;
+}
+
+// A map whose quadtree at the bound is too large for the memory budget is refused with the
+// estimate for the triangles counted, before they are emitted (the quadtree at full resolution on
+// noise: a 64 x 64 map, 7,938 triangles), and builds once the budget allows them.
+TEST(Adaptive, TessellationBeyondTheMemoryBudgetIsRefused) {
+  const Light light = light_from_json(directional_json("linear"));
+  std::uint32_t state = 12345;
+  const DepthImage depth = make_depth(64, 64, [&](int, int) {
+    state = state * 1664525u + 1013904223u;
+    return 2.0f + static_cast<float>(state >> 8) * 0x1p-24f;
+  });
+  AdaptiveOptions o;
+  o.max_error = 1e-6;
+  Result<Mesh> built = build_adaptive_volume(light, depth, {}, o, "noise.exr");
+  ASSERT_TRUE(built.ok()) << built.error().message;
+  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "noise.exr");
+  ASSERT_TRUE(t.ok());
+  const bool float_depths = t->float_depths();
+  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  const std::uint64_t triangles = pyramid.tessellate(1e-6, true).num_triangles();
+  EXPECT_EQ(triangles, std::uint64_t{2} * 63 * 63);
+  const std::uint64_t needed = adaptive_memory_bytes(64, 64, 1, triangles, true, float_depths);
+  set_memory_budget(needed - 1);
+  Result<Mesh> refused = build_adaptive_volume(light, depth, {}, o, "noise.exr");
+  const Status expected = check_memory(needed, "noise.exr", "the adaptive volume at this bound");
+  set_memory_budget(needed);
+  Result<Mesh> allowed = build_adaptive_volume(light, depth, {}, o, "noise.exr");
+  set_memory_budget(0);  // back to the default
+  ASSERT_FALSE(refused.ok());
+  ASSERT_FALSE(expected.ok());
+  EXPECT_EQ(refused.error().message, expected.error().message);
+  EXPECT_NE(refused.error().message.find("noise.exr: the adaptive volume at this bound needs about"),
+            std::string::npos)
+      << refused.error().message;
+  ASSERT_TRUE(allowed.ok()) << allowed.error().message;
+  EXPECT_EQ(allowed->indices, built->indices);
 }
 
 }  // namespace

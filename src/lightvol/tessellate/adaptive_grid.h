@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -131,6 +132,9 @@ struct AdaptiveGrid {
   // (tessellate), or one sweep of every level per round (tessellate_by_full_rounds).
   std::uint64_t balance_visits = 0;
   double emit_seconds = 0;
+  // The triangles the quadtree would have emitted when the `room` of tessellate refused them (then
+  // nothing is emitted: no vertices, no indices); 0 otherwise.
+  std::uint64_t refused_triangles = 0;
 
   std::size_t num_triangles() const { return indices.size() / 3; }
   // Index in `vertices` of texel (col, row), which must be a vertex.
@@ -159,7 +163,10 @@ class RefinementPyramid {
 
   // Tessellates at `bound` ≤ cap() (max_error: world units; laplacian: the threshold T).
   // `standard` chooses the winding (Unprojector::standard_winding()). Deterministic; parallel.
-  AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {}) const;
+  // `room` (may be empty) is asked, once the leaves are known, whether their triangles may be
+  // emitted: if not, the grid comes back without them (AdaptiveGrid::refused_triangles).
+  AdaptiveGrid tessellate(double bound, bool standard, const BorderSplits& forced = {},
+                          const std::function<bool(std::uint64_t triangles)>& room = {}) const;
   // The same grid by the plain rounds: every fix-up round re-balances and re-tests the whole
   // quadtree (time: rounds × cells), measuring the texels of every leaf it tests (tessellate
   // skips the leaves whose corners and the texels' depth bounds prove them within the bound).
@@ -173,7 +180,8 @@ class RefinementPyramid {
 
  private:
   AdaptiveGrid tessellate_rounds(double bound, bool standard, const BorderSplits& forced,
-                                 bool full_rounds) const;
+                                 bool full_rounds,
+                                 const std::function<bool(std::uint64_t)>& room) const;
   TexelDepths texels_;
   Refinement refinement_;
   double cap_;

@@ -90,7 +90,8 @@ class Refiner {
   std::uint64_t visits() const { return visits_; }
   // Emission: the vertex bitmap and triangle counts, the vertices ranked in texel order, the
   // triangles (wound as `standard` says), and the border vertices per side.
-  void emit(bool standard, AdaptiveGrid* grid);
+  // The leaves' triangles into `grid`, unless `room` (if any) refuses their number.
+  void emit(bool standard, AdaptiveGrid* grid, const std::function<bool(std::uint64_t)>& room);
 
  private:
   // Leaves come by blocks: a block is one row of level-(L+1) cells, whose unsplit children are the
@@ -501,11 +502,16 @@ void Refiner::write_triangles(const std::vector<Block>& blocks,
                     });
 }
 
-void Refiner::emit(bool standard, AdaptiveGrid* grid) {
+void Refiner::emit(bool standard, AdaptiveGrid* grid,
+                   const std::function<bool(std::uint64_t)>& room) {
   const int w = texels_.width(), h = texels_.height();
   const std::vector<Block> blks = blocks();
   VertexBits bits;
   const std::vector<std::uint64_t> first_triangle = mark_vertices(blks, &bits, grid);
+  if (room && !room(first_triangle.back())) {
+    grid->refused_triangles = first_triangle.back();
+    return;
+  }
   rank_vertices(&bits, grid);
   write_triangles(blks, first_triangle, bits, standard, grid);
   for (int c = 0; c < w; ++c) {
@@ -520,19 +526,20 @@ void Refiner::emit(bool standard, AdaptiveGrid* grid) {
 
 }  // namespace
 
-AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard,
-                                           const BorderSplits& forced) const {
-  return tessellate_rounds(bound, standard, forced, false);
+AdaptiveGrid RefinementPyramid::tessellate(double bound, bool standard, const BorderSplits& forced,
+                                           const std::function<bool(std::uint64_t)>& room) const {
+  return tessellate_rounds(bound, standard, forced, false, room);
 }
 
 AdaptiveGrid RefinementPyramid::tessellate_by_full_rounds(double bound, bool standard,
                                                           const BorderSplits& forced) const {
-  return tessellate_rounds(bound, standard, forced, true);
+  return tessellate_rounds(bound, standard, forced, true, {});
 }
 
 AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
-                                                  const BorderSplits& forced,
-                                                  bool full_rounds) const {
+                                                  const BorderSplits& forced, bool full_rounds,
+                                                  const std::function<bool(std::uint64_t)>& room)
+    const {
   LV_CHECK(bound <= cap_);  // values above the cap only say they exceed it
   const auto start = std::chrono::steady_clock::now();
   AdaptiveGrid grid;
@@ -570,7 +577,7 @@ AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
   grid.balance_seconds = seconds_since(start);
   grid.balance_visits = refiner.visits();
   const auto emit_start = std::chrono::steady_clock::now();
-  refiner.emit(standard, &grid);
+  refiner.emit(standard, &grid, room);
   grid.emit_seconds = seconds_since(emit_start);
   return grid;
 }

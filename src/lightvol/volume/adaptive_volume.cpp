@@ -114,22 +114,23 @@ Result<Mesh> build_adaptive_volume(const Light& light, const DepthImage& depth,
 
   const bool standard =
       Unprojector(light, depth.width, depth.height, 0, volume.space).standard_winding();
-  AdaptiveGrid grid = pyramid.tessellate(*bound, standard);
+  const bool collapse =
+      options.refinement == Refinement::max_error && options.tessellation == Tessellation::collapse;
+  // What grows with the tessellation (the quadtree's triangles, the collapse's tables, the volume)
+  // is measured against the budget once the leaves are counted, before any of it is allocated.
+  Status room;
+  AdaptiveGrid grid = pyramid.tessellate(*bound, standard, {}, [&](std::uint64_t triangles) {
+    room = check_memory(adaptive_memory_bytes(depth.width, depth.height, 1, triangles, collapse,
+                                              pyramid.texels().float_depths()),
+                        source, "the adaptive volume at this bound");
+    return room.ok();
+  });
+  if (!room) return room.error();
   r.balance_seconds = grid.balance_seconds;
   r.emit_seconds = grid.emit_seconds;
   r.quadtree_triangles = grid.num_triangles();
   r.leaves = grid.leaves;
   r.fixup_rounds = grid.fixup_rounds;
-  const bool collapse =
-      options.refinement == Refinement::max_error && options.tessellation == Tessellation::collapse;
-  // What grows with the tessellation (the collapse's tables, the volume) is measured against the
-  // budget now that its size is known, before it is allocated.
-  if (Status s =
-          check_memory(adaptive_memory_bytes(depth.width, depth.height, 1, grid.num_triangles(),
-                                             collapse, pyramid.texels().float_depths()),
-                       source, "the adaptive volume at this bound");
-      !s)
-    return s.error();
   if (collapse) {
     // The closing follows whatever border the grid keeps: no side is locked.
     CollapseReport c;
