@@ -80,7 +80,8 @@ TEST(Adaptive, RoomIsAskedForTheTrianglesBeforeAnyIsEmitted) {
   EXPECT_EQ(refused.refused_triangles, plain.num_triangles());
   EXPECT_TRUE(refused.indices.empty());
   EXPECT_TRUE(refused.vertices.empty());
-  const AdaptiveGrid accepted = pyramid.tessellate(0.05, true, {}, [](std::uint64_t) { return true; });
+  const AdaptiveGrid accepted =
+      pyramid.tessellate(0.05, true, {}, [](std::uint64_t) { return true; });
   EXPECT_EQ(accepted.refused_triangles, 0u);
   EXPECT_EQ(accepted.indices, plain.indices);
   EXPECT_EQ(accepted.vertices, plain.vertices);

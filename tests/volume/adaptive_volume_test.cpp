@@ -281,8 +281,9 @@ TEST(Adaptive, TessellationBeyondTheMemoryBudgetIsRefused) {
   ASSERT_FALSE(refused.ok());
   ASSERT_FALSE(expected.ok());
   EXPECT_EQ(refused.error().message, expected.error().message);
-  EXPECT_NE(refused.error().message.find("noise.exr: the adaptive volume at this bound needs about"),
-            std::string::npos)
+  EXPECT_NE(
+      refused.error().message.find("noise.exr: the adaptive volume at this bound needs about"),
+      std::string::npos)
       << refused.error().message;
   ASSERT_TRUE(allowed.ok()) << allowed.error().message;
   EXPECT_EQ(allowed->indices, built->indices);

@@ -39,12 +39,6 @@ inline bool vector_lanes() {
 #endif
 }
 
-// Reserves room for `capacity` elements (so later appends never copy the buffer).
-template <class T>
-void reserve_large(std::vector<T>& buffer, std::size_t capacity) {
-  buffer.reserve(capacity);
-}
-
 // Before a large buffer's elements [from, to) are first written in one thread: their pages mapped
 // by all cores (populate_in_parallel), so that the kernel's zeroing of fresh pages, the slowest
 // part of filling a large buffer on a virtual machine, is not left to that one thread.
@@ -60,7 +54,7 @@ void populate_for_fill(const std::vector<T>& buffer, std::size_t from, std::size
 template <class T>
 void assign_large(std::vector<T>& buffer, std::size_t n, const T& value) {
   buffer.clear();
-  reserve_large(buffer, n);
+  buffer.reserve(n);
   populate_for_fill(buffer, 0, n);
   buffer.assign(n, value);
 }
@@ -69,16 +63,9 @@ void assign_large(std::vector<T>& buffer, std::size_t n, const T& value) {
 // all cores when they are many.
 template <class T>
 void resize_large(std::vector<T>& buffer, std::size_t n) {
-  reserve_large(buffer, n);
+  buffer.reserve(n);
   populate_for_fill(buffer, buffer.size(), n);
   buffer.resize(n);
-}
-
-// An array of `n` elements left uninitialized (the caller's parallel loop writes each first, and
-// its threads take the page faults).
-template <class T>
-std::unique_ptr<T[]> uninitialized_large(std::size_t n) {
-  return std::make_unique_for_overwrite<T[]>(n);
 }
 
 }  // namespace lightvol

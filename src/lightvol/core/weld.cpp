@@ -82,7 +82,8 @@ bool first_at_position(const Mesh& mesh, std::vector<std::uint32_t>* first) {
   // The entries, by partition and in each in vertex order: the hash's low 32 bits (the slot and
   // a tag that spares most comparisons of positions) and the vertex.
   // Not zeroed: the scatter writes every entry, and its threads take the page faults.
-  const std::unique_ptr<std::uint64_t[]> entries = uninitialized_large<std::uint64_t>(nv);
+  const std::unique_ptr<std::uint64_t[]> entries =
+      std::make_unique_for_overwrite<std::uint64_t[]>(nv);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
     std::uint64_t* next = &at[b * partitions];
     for (std::size_t v = b * kBlock, end = std::min(nv, v + kBlock); v < end; ++v) {

@@ -536,10 +536,9 @@ AdaptiveGrid RefinementPyramid::tessellate_by_full_rounds(double bound, bool sta
   return tessellate_rounds(bound, standard, forced, true, {});
 }
 
-AdaptiveGrid RefinementPyramid::tessellate_rounds(double bound, bool standard,
-                                                  const BorderSplits& forced, bool full_rounds,
-                                                  const std::function<bool(std::uint64_t)>& room)
-    const {
+AdaptiveGrid RefinementPyramid::tessellate_rounds(
+    double bound, bool standard, const BorderSplits& forced, bool full_rounds,
+    const std::function<bool(std::uint64_t)>& room) const {
   LV_CHECK(bound <= cap_);  // values above the cap only say they exceed it
   const auto start = std::chrono::steady_clock::now();
   AdaptiveGrid grid;

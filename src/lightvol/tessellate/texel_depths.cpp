@@ -51,7 +51,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   if (t.uniform_) {
     t.uniform_scale_ = std::sqrt(h1[0] * h1[0] + h1[1] * h1[1] + h1[2] * h1[2]) / std::abs(t.w0_c_);
   } else {
-    t.scale_ = uninitialized_large<double>(n);
+    t.scale_ = std::make_unique_for_overwrite<double[]>(n);
   }
 
   const bool window = light.depth == DepthEncoding::window;
@@ -88,10 +88,10 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   if (borrowed) {
     t.depth_fp_ = image.values.data();
   } else if (t.float_depths_) {
-    t.depth_f_ = uninitialized_large<float>(n);
+    t.depth_f_ = std::make_unique_for_overwrite<float[]>(n);
     t.depth_fp_ = t.depth_f_.get();
   } else {
-    t.depth_ = uninitialized_large<double>(n);
+    t.depth_ = std::make_unique_for_overwrite<double[]>(n);
   }
   // The error scale of a texel of row r, column c at window depth d (the formula below, term for
   // term: the same doubles whichever loop computes it).
@@ -177,11 +177,11 @@ TexelDepths TexelDepths::with_double_depths() const {
   t.width_ = width_;
   t.height_ = height_;
   const std::size_t n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
-  t.depth_ = uninitialized_large<double>(n);
+  t.depth_ = std::make_unique_for_overwrite<double[]>(n);
   for (int r = 0; r < height_; ++r)
     for (int c = 0; c < width_; ++c) t.depth_[index(c, r)] = window_depth(c, r);
   if (!uniform_) {
-    t.scale_ = uninitialized_large<double>(n);
+    t.scale_ = std::make_unique_for_overwrite<double[]>(n);
     std::copy(scale_.get(), scale_.get() + n, t.scale_.get());
   }
   t.uniform_ = uniform_;

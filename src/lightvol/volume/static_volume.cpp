@@ -133,8 +133,8 @@ Mesh reserve_static_volume(LightType type, int width, int height) {
   LV_CHECK(width >= 2 && height >= 2);
   const VolumeCounts counts = static_volume_counts(type, width, height);
   Mesh mesh;
-  reserve_large(mesh.positions, 3 * counts.vertices);
-  reserve_large(mesh.indices, 3 * counts.triangles);
+  mesh.positions.reserve(3 * counts.vertices);
+  mesh.indices.reserve(3 * counts.triangles);
   populate({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
             {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
   return mesh;
@@ -162,8 +162,8 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
     mesh.indices.clear();
   } else {
     storage = Mesh{};
-    reserve_large(mesh.positions, 3 * counts.vertices);
-    reserve_large(mesh.indices, 3 * counts.triangles);
+    mesh.positions.reserve(3 * counts.vertices);
+    mesh.indices.reserve(3 * counts.triangles);
     populate_in_parallel({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
                           {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
   }

@@ -219,7 +219,7 @@ DecodedFloats::DecodedFloats(int shared_fd, std::size_t texels) : bytes_(texels 
     ::close(shared_fd);
   }
   if (!shared_) {
-    own_ = uninitialized_large<float>(texels);
+    own_ = std::make_unique_for_overwrite<float[]>(texels);
     values_ = own_.get();
   }
 }

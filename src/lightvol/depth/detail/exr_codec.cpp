@@ -541,7 +541,7 @@ void serve_read(ChildOutput& channel, int threads) {
   DecodedFloats floats(shared_fd, texels);
   float* const values = floats.data();
   std::unique_ptr<std::uint16_t[]> halves;
-  if (plain.half) halves = uninitialized_large<std::uint16_t>(texels);
+  if (plain.half) halves = std::make_unique_for_overwrite<std::uint16_t[]>(texels);
   const bool read =
       decode(context.handle, plain, values, halves.get(), threads) && !reported.load();
   floats.unmap();

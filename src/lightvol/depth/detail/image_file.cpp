@@ -446,7 +446,7 @@ Result<ImageChannel> read_image_channel(
       image.values = std::move(*floats);
     } else {
       std::vector<float> values;
-      reserve_large(values, texels);
+      values.reserve(texels);
       values.resize(texels);
       if (!in.read(values.data(), bytes)) return broken;
       image.values = std::move(values);

@@ -343,8 +343,8 @@ class Builder {
     // The kernel zeroes fresh pages as they are mapped: mapped in parallel blocks first, so that
     // both threads share that, then zeroed again by the vectors (in cache-sized strides, fast).
     const std::size_t positions = 3 * static_cast<std::size_t>(header.vertices);
-    reserve_large(mesh_.positions, positions);
-    reserve_large(mesh_.indices, 3 * faces);
+    mesh_.positions.reserve(positions);
+    mesh_.indices.reserve(3 * faces);
     populate_in_parallel(
         {{mesh_.positions.data(), positions * sizeof(float)},
          {mesh_.indices.data(), (triangles ? 3 * faces : 0) * sizeof(std::uint32_t)}});
