@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -152,6 +155,35 @@ double omni_ray_error(const Mesh& mesh, const Light& light, const CubeFaces& cub
       }
   }
   return worst;
+}
+
+std::string unit_box_json() {
+  return R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
+         R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+}
+
+std::vector<LightRange> light_ranges() {
+  return {{spot_json("window"), 0.96, 0.995},
+          {spot_json("linear"), 2.0, 6.0},
+          {directional_json("window"), 0.1, 0.6},
+          {unit_box_json(), 0.05, 0.95}};
+}
+
+DepthImage plateau_scene(int w, int h, const LightRange& range, std::mt19937& rng, double jitter) {
+  const double span = range.hi - range.lo;
+  std::uniform_real_distribution<double> step(0, 0.05 * span), noise(0, jitter * span);
+  std::vector<double> plateau(64);
+  for (double& p : plateau) p = step(rng);
+  return make_depth(w, h, [&](int col, int row) {
+    const double smooth =
+        0.5 + 0.25 * std::sin(col / 37.0) * std::cos(row / 29.0) + 0.2 * (col + row) / (w + h);
+    const double steps = col > w / 2 && row > h / 2
+                             ? plateau[static_cast<std::size_t>(row / 5 * 8 + col / 7) % 64]
+                             : 0.0;
+    const double cliff = col == w / 3 ? 0.2 * span : 0.0;
+    return static_cast<float>(range.lo + span * 0.8 * smooth + steps + cliff +
+                              (jitter > 0 ? noise(rng) : 0.0));
+  });
 }
 
 }  // namespace lightvol::test

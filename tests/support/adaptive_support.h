@@ -2,6 +2,10 @@
 // volume's error (every texel's ray cast against the mesh) and the depth maps they run on.
 #pragma once
 
+#include <random>
+#include <string>
+#include <vector>
+
 #include <lightvol/core/mesh.h>
 #include <lightvol/depth/cube_faces.h>
 #include <lightvol/depth/depth_image.h>
@@ -32,6 +36,27 @@ DepthImage adaptive_scene(int w, int h, double floor_depth);
 
 // Window depths of the same kind of scene, for a window-encoded spot light.
 DepthImage window_scene(int w, int h);
+
+// An orthographic light over the unit square from depth 0 to 1, linear: the window depth is the
+// stored value, so the depths are floats and can be the image's own.
+std::string unit_box_json();
+
+// A light (JSON) and the stored values [lo, hi] its maps below take.
+struct LightRange {
+  std::string light;
+  double lo, hi;
+};
+
+// Every kind of projection: spot window and linear (per-texel error scales), directional window
+// and the unit light box (uniform).
+std::vector<LightRange> light_ranges();
+
+// A smooth surface between range.lo and range.hi, plateaus with steps (64 heights drawn from `rng`)
+// in the lower right quarter and a cliff along column w / 3: leaves of many levels, fix-up rounds,
+// and sizes not 2^k + 1 give clipped cells. With `jitter` > 0, noise of up to jitter × (hi − lo)
+// on every texel, also drawn from `rng`.
+DepthImage plateau_scene(int w, int h, const LightRange& range, std::mt19937& rng,
+                         double jitter = 0);
 
 // Closed, oriented, no degenerate triangle, positive volume (as gtest expectations).
 void expect_valid_volume(const Mesh& mesh);

@@ -32,20 +32,18 @@ using test::light_from_json;
 using test::make_depth;
 using test::ray_errors;
 using test::RayErrors;
+using test::unit_box_json;
 
-// An orthographic light over the unit square from depth 0 to 1, linear: the window depth is the
-// stored value, so the depths are floats and can be the image's own.
-std::string unit_box_json() {
-  return R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
-         R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
+// The pyramid of the 50 × 40 test scene under a directional light, linear depth.
+RefinementPyramid scene_pyramid() {
+  Result<TexelDepths> t = TexelDepths::create(light_from_json(directional_json("linear")),
+                                              adaptive_scene(50, 40, 7.0), 0, "x");
+  EXPECT_TRUE(t.ok());
+  return RefinementPyramid(std::move(*t), Refinement::max_error);
 }
 
 TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
-  const Light light = light_from_json(directional_json("linear"));
-  const DepthImage depth = adaptive_scene(50, 40, 7.0);
-  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
-  ASSERT_TRUE(t.ok());
-  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  const RefinementPyramid pyramid = scene_pyramid();
   const AdaptiveGrid g = pyramid.tessellate(0.05, true);
   EXPECT_TRUE(std::is_sorted(g.vertices.begin(), g.vertices.end()));
   std::vector<int> uses(g.vertices.size(), 0);
@@ -62,11 +60,7 @@ TEST(Adaptive, OutputUsesOnlyItsVerticesInTexelOrder) {
 // A `room` that refuses the leaves' triangles gets their exact number, and nothing is emitted; one
 // that accepts them changes nothing.
 TEST(Adaptive, RoomIsAskedForTheTrianglesBeforeAnyIsEmitted) {
-  const Light light = light_from_json(directional_json("linear"));
-  const DepthImage depth = adaptive_scene(50, 40, 7.0);
-  Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");
-  ASSERT_TRUE(t.ok());
-  const RefinementPyramid pyramid(std::move(*t), Refinement::max_error);
+  const RefinementPyramid pyramid = scene_pyramid();
   const AdaptiveGrid plain = pyramid.tessellate(0.05, true);
   ASSERT_GT(plain.num_triangles(), 0u);
   EXPECT_EQ(plain.refused_triangles, 0u);
@@ -161,6 +155,20 @@ TEST(Adaptive, DepthsHeldAsFloatsGiveTheSameGridsAsDoubles) {
   }
 }
 
+// A w × h map repeating 50 values from lo to hi along the diagonals.
+DepthImage ramp(int w, int h, float lo, float hi) {
+  return make_depth(w, h, [&](int col, int row) {
+    return lo + (hi - lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
+  });
+}
+
+// Every texel's window depth the same in both.
+void expect_same_depths(const TexelDepths& a, const TexelDepths& b) {
+  for (int row = 0; row < a.height(); ++row)
+    for (int col = 0; col < a.width(); ++col)
+      ASSERT_EQ(a.window_depth(col, row), b.window_depth(col, row)) << col << ", " << row;
+}
+
 // With `borrow`, TexelDepths reads the image's floats in place when each is its own window depth
 // (window encoding within [0, 1]; an orthographic light from 0 to 1 in linear depth, where d is the
 // stored value), and copies otherwise (a window value past 1 is clamped; a spot light's linear
@@ -178,9 +186,7 @@ TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
                         {test::spot_json("linear"), 2.0f, 6.0f, false}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.light + " " + std::to_string(c.hi));
-    const DepthImage depth = make_depth(70, 61, [&](int col, int row) {
-      return c.lo + (c.hi - c.lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
-    });
+    const DepthImage depth = ramp(70, 61, c.lo, c.hi);
     const Light light = light_from_json(c.light);
     Result<TexelDepths> lent = TexelDepths::create(light, depth, 0, "x", true);
     Result<TexelDepths> copied = TexelDepths::create(light, depth, 0, "x");
@@ -190,9 +196,7 @@ TEST(Adaptive, TexelDepthsBorrowTheImageFloatsWhenTheyAreTheDepths) {
     EXPECT_NE(copied->float_depths() ? static_cast<const void*>(copied->depth_row_as<float>(0))
                                      : copied->depth_row_as<double>(0),
               static_cast<const void*>(depth.values.data()));
-    for (int row = 0; row < 61; ++row)
-      for (int col = 0; col < 70; ++col)
-        ASSERT_EQ(lent->window_depth(col, row), copied->window_depth(col, row));
+    expect_same_depths(*lent, *copied);
     const RefinementPyramid a(std::move(*lent), Refinement::max_error),
         b(std::move(*copied), Refinement::max_error);
     const AdaptiveGrid ga = a.tessellate(1e-3, true), gb = b.tessellate(1e-3, true);
@@ -220,9 +224,7 @@ TEST(Adaptive, TexelDepthsBorrowOnlyWhenEveryBlockHolds) {
                         {test::spot_json("window"), 0.9f, 1.0f, 1.01f, false}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.light + " " + std::to_string(c.odd));
-    DepthImage depth = make_depth(w, h, [&](int col, int row) {
-      return c.lo + (c.hi - c.lo) * static_cast<float>((col * 7 + row * 13) % 50) / 49.0f;
-    });
+    DepthImage depth = ramp(w, h, c.lo, c.hi);
     if (!std::isnan(c.odd)) depth.values[last] = c.odd;
     const Light light = light_from_json(c.light);
     Result<TexelDepths> lent = TexelDepths::create(light, depth, 0, "x", true);
@@ -230,10 +232,7 @@ TEST(Adaptive, TexelDepthsBorrowOnlyWhenEveryBlockHolds) {
     ASSERT_TRUE(lent.ok() && copied.ok());
     EXPECT_EQ(lent->float_depths() && lent->depth_row_as<float>(0) == depth.values.data(),
               c.borrowed);
-    for (int row = 0; row < h; ++row)
-      for (int col = 0; col < w; ++col)
-        ASSERT_EQ(lent->window_depth(col, row), copied->window_depth(col, row))
-            << col << ", " << row;
+    expect_same_depths(*lent, *copied);
     EXPECT_EQ(copied->window_depth(static_cast<int>(last % w), static_cast<int>(last / w)),
               std::isnan(c.odd) ? depth.values[last] : 1.0);
   }
@@ -251,34 +250,12 @@ TEST(Adaptive, TexelDepthsBorrowOnlyWhenEveryBlockHolds) {
 // of many levels), plateaus with steps (fix-up rounds) and clipped edge cells (sizes not 2^k + 1),
 // with forced border vertices too; and the cap must save measures where leaves are large.
 TEST(Adaptive, PyramidCappedAtTheBoundMakesTheUncappedGrids) {
-  const std::string box = unit_box_json();
-  struct Case {
-    std::string light;
-    double lo, hi;  // stored values: a smooth surface between lo and hi, plateaus, steps
-  };
-  const Case cases[] = {{test::spot_json("window"), 0.96, 0.995},
-                        {test::spot_json("linear"), 2.0, 6.0},
-                        {directional_json("window"), 0.1, 0.6},
-                        {box, 0.05, 0.95}};
   std::mt19937 rng(5);
   std::uint64_t capped_total = 0, uncapped_total = 0;
-  for (const Case& c : cases)
+  for (const test::LightRange& c : test::light_ranges())
     for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}}) {
       SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
-      std::uniform_real_distribution<double> step(0, 0.05 * (c.hi - c.lo));
-      std::vector<double> plateau(64);
-      for (double& p : plateau) p = step(rng);
-      const double span = c.hi - c.lo;
-      const DepthImage depth = make_depth(w, h, [&](int col, int row) {
-        const double smooth =
-            0.5 + 0.25 * std::sin(col / 37.0) * std::cos(row / 29.0) + 0.2 * (col + row) / (w + h);
-        // Plateaus with steps in the lower right quarter, a cliff along one column.
-        const double steps = col > w / 2 && row > h / 2
-                                 ? plateau[static_cast<std::size_t>(row / 5 * 8 + col / 7) % 64]
-                                 : 0.0;
-        const double cliff = col == w / 3 ? 0.2 * span : 0.0;
-        return static_cast<float>(c.lo + span * 0.8 * smooth + steps + cliff);
-      });
+      const DepthImage depth = test::plateau_scene(w, h, c, rng);
       const Light light = light_from_json(c.light);
       const auto texels = [&] {
         Result<TexelDepths> t = TexelDepths::create(light, depth, 0, "x");

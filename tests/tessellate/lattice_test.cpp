@@ -19,6 +19,7 @@
 #include <lightvol/tessellate/detail/depth_bounds.h>
 #include <lightvol/tessellate/detail/lattice.h>
 
+#include "support/adaptive_support.h"
 #include "support/test_support.h"
 
 namespace lightvol {
@@ -33,6 +34,7 @@ using detail::RowSpanWalker;
 using detail::triangle_error;
 using detail::triangle_row_span;
 using detail::within_by_bounds;
+using test::LightRange;
 
 std::int64_t cross(Pt a, Pt b, Pt c) {
   return std::int64_t{b.x - a.x} * (c.y - a.y) - std::int64_t{c.x - a.x} * (b.y - a.y);
@@ -171,39 +173,11 @@ double box_error_reference(const TexelDepths& t, const Quadtree::Box& b, int y_b
 // Maps with a smooth surface, plateaus with steps, a cliff and noise, under uniform and per-texel
 // error scales, depths held as floats and as doubles, sizes whose border cells are clipped at every
 // level.
-struct ErrorCase {
-  std::string light;
-  double lo, hi;  // stored values
-};
-
-std::vector<ErrorCase> error_cases() {
-  const std::string box =
-      R"({"type": "directional", "position": [0, 0, 0], "direction": [0, 0, -1], "up": [0, 1, 0],)"
-      R"( "ortho": [-0.5, 0.5, -0.5, 0.5], "near": 0, "far": 1, "depth": "linear"})";
-  return {{test::spot_json("window"), 0.96, 0.995},
-          {test::spot_json("linear"), 2.0, 6.0},
-          {test::directional_json("window"), 0.1, 0.6},
-          {box, 0.05, 0.95}};
-}
-
-TexelDepths error_map(const ErrorCase& c, int w, int h, std::uint32_t seed) {
+TexelDepths error_map(const LightRange& c, int w, int h, std::uint32_t seed) {
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> step(0, 0.05 * (c.hi - c.lo)),
-      jitter(0, 1e-3 * (c.hi - c.lo));
-  std::vector<double> plateau(64);
-  for (double& p : plateau) p = step(rng);
-  const double span = c.hi - c.lo;
   // Noise on every texel: the largest error of many cells lies on their diagonal, where the two
   // planes agree only to rounding (the kernels must take the same plane there).
-  const DepthImage depth = test::make_depth(w, h, [&](int col, int row) {
-    const double smooth =
-        0.5 + 0.25 * std::sin(col / 37.0) * std::cos(row / 29.0) + 0.2 * (col + row) / (w + h);
-    const double steps = col > w / 2 && row > h / 2
-                             ? plateau[static_cast<std::size_t>(row / 5 * 8 + col / 7) % 64]
-                             : 0.0;
-    const double cliff = col == w / 3 ? 0.2 * span : 0.0;
-    return static_cast<float>(c.lo + span * 0.8 * smooth + steps + cliff + jitter(rng));
-  });
+  const DepthImage depth = test::plateau_scene(w, h, c, rng, 1e-3);
   Result<TexelDepths> t = TexelDepths::create(test::light_from_json(c.light), depth, 0, "x");
   EXPECT_TRUE(t.ok());
   return std::move(*t);
@@ -215,7 +189,7 @@ TexelDepths error_map(const ErrorCase& c, int w, int h, std::uint32_t seed) {
 TEST(BoxErrorRows, SameAsOneTexelAtATime) {
   bool uniform = false, scaled = false, floats = false, doubles = false;
   int capped = 0;
-  for (const ErrorCase& c : error_cases())
+  for (const LightRange& c : test::light_ranges())
     for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}}) {
       SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
       const TexelDepths t = error_map(c, w, h, 5);
@@ -253,7 +227,7 @@ TEST(BoxErrorRows, SameAsOneTexelAtATime) {
 // float (over both triangles by the reference; a whole level-1 cell: its five texels between
 // corners, TexelDepths::error at the midpoints' depths), maxed with its children's values.
 TEST(Pyramid, UncappedValuesAreTheCellsErrorsTexelByTexel) {
-  for (const ErrorCase& c : error_cases())
+  for (const LightRange& c : test::light_ranges())
     for (const auto& [w, h] : {std::pair{300, 261}, std::pair{129, 129}, std::pair{70, 37}}) {
       SCOPED_TRACE(c.light + " " + std::to_string(w) + "x" + std::to_string(h));
       const RefinementPyramid pyramid(error_map(c, w, h, 9), Refinement::max_error);

@@ -68,6 +68,8 @@ template <bool kUniform, class D>
 }
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+// No row to test first (triangle_within's first_row).
+constexpr int kNoRow = std::numeric_limits<int>::min();
 
 // The items k of [0, n) for which live(k) holds, each with its rank among them: counted by blocks
 // in parallel, then visited by blocks in parallel (for_each(fn) calls fn(k, rank)).
@@ -478,7 +480,7 @@ class Collapser {
 
  private:
   // With `first_row`: that row's texels are tested first (triangle_within).
-  bool within(Pt a, Pt b, Pt c, int first_row = std::numeric_limits<int>::min()) const {
+  bool within(Pt a, Pt b, Pt c, int first_row = kNoRow) const {
     if (!bounds_.empty() && within_by_bounds(t_, bounds_, a, b, c, bound_)) return true;
     return with_texel_kind(t_, [&](auto uniform, auto depth) {
       return triangle_within<decltype(uniform)::value, decltype(depth)>(t_, a, b, c, bound_,
@@ -716,14 +718,7 @@ class Collapser {
           break;
         }
         if (over_u == kNone && covers(p, pu)) over_u = k;
-        // Height over the longest edge: |a| / L ≥ h ⇔ a² ≥ h²·L².
-        double longest2 = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double dx = p[(c + 1) % 3].x - p[c].x, dy = p[(c + 1) % 3].y - p[c].y;
-          longest2 = std::max(longest2, dx * dx + dy * dy);
-        }
-        const double ad = static_cast<double>(a);
-        if (ad * ad < options_.min_height * options_.min_height * longest2) {
+        if (thin(p, a)) {
           ok = false;
           break;
         }
@@ -740,7 +735,7 @@ class Collapser {
       for (const std::uint32_t k : star_[u]) {
         const std::span<const std::uint32_t, 3> tr = std::as_const(tri_)[k];
         if (k == over_u || tr[0] == v || tr[1] == v || tr[2] == v) continue;
-        if (!new_within(k, std::numeric_limits<int>::min())) {
+        if (!new_within(k, kNoRow)) {
           ok = false;
           break;
         }
@@ -773,14 +768,20 @@ class Collapser {
     return smallest;
   }
 
+  // Whether triangle p, q, r is too thin: its height over its longest edge below min_height.
   bool thin(Pt p, Pt q, Pt r) const {
     const Pt v[3] = {p, q, r};
+    return thin(v, cross(p, q, r));
+  }
+  // The same for triangle v whose cross product (twice its signed area) is `area2`:
+  // |a| / L < h ⇔ a² < h²·L².
+  bool thin(const Pt (&v)[3], std::int64_t area2) const {
     double longest2 = 0;
     for (int c = 0; c < 3; ++c) {
       const double dx = v[(c + 1) % 3].x - v[c].x, dy = v[(c + 1) % 3].y - v[c].y;
       longest2 = std::max(longest2, dx * dx + dy * dy);
     }
-    const double a = static_cast<double>(cross(p, q, r));
+    const double a = static_cast<double>(area2);
     return a * a < options_.min_height * options_.min_height * longest2;
   }
 

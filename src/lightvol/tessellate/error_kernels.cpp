@@ -144,15 +144,18 @@ void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, 
     const int y = b.y0 + s, cs = kSide - s;
     const D* dt = t.depth_row_as<D>(y) + b.x0;
     const double base1 = p.da + p.g1y * s, base2 = p.dd + p.g2y * (y - b.y1);
-    // The select picks the plane's operands, not its computed depths: GCC vectorizes a select
-    // of values, but not one of two computations it may sink into branches (-ftrapping-math).
+    // Column c's depth on its plane. The select picks the plane's operands, not its computed
+    // depths: GCC vectorizes a select of values, but not one of two computations it may sink into
+    // branches (-ftrapping-math).
+    const auto plane_depth = [&](int c) {
+      const bool upper = c <= cs;
+      const double base = upper ? base1 : base2, gx = upper ? g1x : g2x;
+      return base + gx * (c - (upper ? 0 : kSide));
+    };
     if constexpr (kUniform) {
 #pragma omp simd
       for (int c = 0; c < kTexels; ++c) {
-        const bool upper = c <= cs;
-        const double base = upper ? base1 : base2, gx = upper ? g1x : g2x;
-        const double d = base + gx * (c - (upper ? 0 : kSide));
-        const double e = std::abs(d - dt[c]);
+        const double e = std::abs(plane_depth(c) - dt[c]);
         m[c] = m[c] > e ? m[c] : e;
       }
     } else {
@@ -161,9 +164,7 @@ void square_box_rows(const TexelDepths& t, const Quadtree::Box& b, int y_begin, 
       const double w0y = t.w0(0, y), w0dc = t.w0_dc();
 #pragma omp simd
       for (int c = 0; c < kTexels; ++c) {
-        const bool upper = c <= cs;
-        const double base = upper ? base1 : base2, gx = upper ? g1x : g2x;
-        const double d = base + gx * (c - (upper ? 0 : kSide));
+        const double d = plane_depth(c);
         const double a = std::abs(d - dt[c]);
         const double e = a * k[c] / std::abs(w0y + w0dc * (b.x0 + c) + d * w1);
         m[c] = m[c] > e ? m[c] : e;

@@ -69,8 +69,7 @@ Result<TexelDepths> TexelDepths::create(const Light& light, const DepthImage& im
   // Whether test(stored value) holds for every texel.
   const auto every_value = [&](auto test) {
     const float* values = image.values.data();
-    return detail::first_failing_block(n, [&](std::size_t v) { return test(values[v]); }) ==
-           (n + detail::kScanBlock - 1) / detail::kScanBlock;
+    return detail::first_failing_block(n, [&](std::size_t v) { return test(values[v]); }) == n;
   };
   // Floats when every depth is one exactly (window: always; linear: checked).
   t.float_depths_ = window;

@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
+#include <initializer_list>
 #include <limits>
 #include <string>
 #include <utility>
@@ -126,18 +128,29 @@ std::vector<BorderVertex> closing_ring(int width, int height, bool standard) {
   return ring;
 }
 
+// An empty mesh with room for `counts`, its pages mapped: in this thread alone (populate), or by
+// all cores (populate_in_parallel).
+Mesh reserved_mesh(const VolumeCounts& counts, bool in_parallel) {
+  Mesh mesh;
+  mesh.positions.reserve(3 * counts.vertices);
+  mesh.indices.reserve(3 * counts.triangles);
+  const std::initializer_list<std::pair<const void*, std::size_t>> pages = {
+      {mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
+      {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}};
+  if (in_parallel) {
+    populate_in_parallel(pages);
+  } else {
+    populate(pages);
+  }
+  return mesh;
+}
+
 }  // namespace
 
 Mesh reserve_static_volume(LightType type, int width, int height) {
   LV_CHECK(type != LightType::omni);
   LV_CHECK(width >= 2 && height >= 2);
-  const VolumeCounts counts = static_volume_counts(type, width, height);
-  Mesh mesh;
-  mesh.positions.reserve(3 * counts.vertices);
-  mesh.indices.reserve(3 * counts.triangles);
-  populate({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
-            {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
-  return mesh;
+  return reserved_mesh(static_volume_counts(type, width, height), false);
 }
 
 Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage& depth,
@@ -162,10 +175,7 @@ Result<Mesh> detail::assemble_static_volume(const Light& light, const DepthImage
     mesh.indices.clear();
   } else {
     storage = Mesh{};
-    mesh.positions.reserve(3 * counts.vertices);
-    mesh.indices.reserve(3 * counts.triangles);
-    populate_in_parallel({{mesh.positions.data(), 3 * counts.vertices * sizeof(float)},
-                          {mesh.indices.data(), 3 * counts.triangles * sizeof(std::uint32_t)}});
+    mesh = reserved_mesh(counts, true);
   }
   tbb::parallel_invoke(
       [&] { mesh.positions.resize(3 * grid_vertices); },

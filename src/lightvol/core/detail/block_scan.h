@@ -13,13 +13,14 @@ namespace lightvol::detail {
 
 constexpr std::size_t kScanBlock = std::size_t{1} << 16;
 
-// The first block of kScanBlock items of [0, n) holding an item k for which holds(k) is false, or
-// the number of blocks when there is none. Blocks in parallel, each tested whole with no early
-// exit (the loop vectorizes); a block after a failing one the same task found is skipped.
+// The first item of the first block of kScanBlock items of [0, n) holding an item k for which
+// holds(k) is false, or n when there is none (then every item holds). Blocks in parallel, each
+// tested whole with no early exit (the loop vectorizes); a block after a failing one the same task
+// found is skipped.
 template <class Holds>
 std::size_t first_failing_block(std::size_t n, const Holds& holds) {
   const std::size_t blocks = (n + kScanBlock - 1) / kScanBlock;
-  return tbb::parallel_reduce(
+  const std::size_t failing = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, blocks), blocks,
       [&](const tbb::blocked_range<std::size_t>& range, std::size_t first) {
         for (std::size_t b = range.begin(); b != range.end() && b < first; ++b) {
@@ -32,6 +33,7 @@ std::size_t first_failing_block(std::size_t n, const Holds& holds) {
         return first;
       },
       [](std::size_t a, std::size_t b) { return std::min(a, b); });
+  return std::min(n, failing * kScanBlock);
 }
 
 }  // namespace lightvol::detail
