@@ -51,11 +51,18 @@ class SignedVolumeSum {
   // z floats of corner k of triangle t. Parallel over the leaves of the sum the block touches.
   template <class Corner>
   void add(std::size_t first, std::size_t count, const Corner& corner) {
-    for_each_leaf(first, first + count, [&](std::size_t leaf, std::size_t t0, std::size_t t1) {
-      double acc = leaf_sum_[leaf];
+    add_runs(first, count, [&](std::size_t t0, std::size_t t1, double acc) {
       for (std::size_t t = t0; t != t1; ++t)
         acc += volume_det(corner(t, 0), corner(t, 1), corner(t, 2));
-      leaf_sum_[leaf] = acc;
+      return acc;
+    });
+  }
+  // The same, for callers that walk their triangles faster than one lookup each: run(t0, t1, acc)
+  // returns acc plus volume_det of triangles [t0, t1), added in order.
+  template <class Run>
+  void add_runs(std::size_t first, std::size_t count, const Run& run) {
+    for_each_leaf(first, first + count, [&](std::size_t leaf, std::size_t t0, std::size_t t1) {
+      leaf_sum_[leaf] = run(t0, t1, leaf_sum_[leaf]);
     });
   }
   double volume() const;

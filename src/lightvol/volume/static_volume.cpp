@@ -341,12 +341,18 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
     };
     const std::size_t t_begin = static_cast<std::size_t>(first_row) * quad_triangles_per_row;
     const std::size_t t_end = static_cast<std::size_t>(r1 - 1) * quad_triangles_per_row;
-    volume.add(t_begin, t_end - t_begin, [&](std::size_t t, int k) {
-      const std::size_t q = t / quad_triangles_per_row, c = (t % quad_triangles_per_row) / 2;
-      std::uint32_t tri[6];
-      quad_triangles(static_cast<std::uint32_t>(q), static_cast<std::uint32_t>(c),
-                     static_cast<std::uint32_t>(uw), standard, tri);
-      return row_of(tri[3 * (t % 2) + static_cast<std::size_t>(k)]);
+    // Quad by quad: the division by the row's length once a run.
+    volume.add_runs(t_begin, t_end - t_begin, [&](std::size_t t0, std::size_t t1, double acc) {
+      std::size_t q = t0 / quad_triangles_per_row, c = (t0 % quad_triangles_per_row) / 2;
+      for (std::size_t t = t0; t != t1; ++c) {
+        if (c + 1 == uw) c = 0, ++q;
+        std::uint32_t tri[6];
+        quad_triangles(static_cast<std::uint32_t>(q), static_cast<std::uint32_t>(c),
+                       static_cast<std::uint32_t>(uw), standard, tri);
+        for (std::size_t i = t % 2; i < 2 && t != t1; ++i, ++t)
+          acc += volume_det(row_of(tri[3 * i]), row_of(tri[3 * i + 1]), row_of(tri[3 * i + 2]));
+      }
+      return acc;
     });
     for (int r = r0; r < r1; ++r) {
       const float* row = fresh + 3 * static_cast<std::size_t>(r - r0) * uw;
