@@ -3,7 +3,9 @@
 # the same synthetic spot maps (make_depth), with the I/O floor of each size measured in every
 # round: medians of wall time, user+sys CPU and peak resident size, and the load average before
 # each size. For changes whose effect is smaller than what other jobs on the machine do to one run:
-# alternating runs see the same load. The output file is removed before every run (a rename over
+# alternating runs see the same load. Two floors: `dd` in 1 MiB blocks (what writing the bytes
+# costs at least) and the command the scale targets were first measured against (`head -c` from
+# /dev/zero, 8 KiB writes); and BUILD_DIR's unchecked (streamed) build, the build's own least. The output file is removed before every run (a rename over
 # last run's 637 MB would add its freeing to the run), and the outputs of all builds are compared.
 # Usage: tests/bench/checked_build_pairs.sh BUILD_DIR OTHER_BUILD_DIR[:OTHER...] [ROUNDS] [SIZES...]
 #        (BUILD_DIR configured with -DLIGHTVOL_BUILD_BENCH=ON; an OTHER needs only lightvol and
@@ -23,20 +25,28 @@ source "$(dirname "$0")/bench_common.sh"
 echo '{"type": "spot", "position": [0,0,0], "direction": [0,0,-1], "up": [0,1,0], "fov_y_deg": 60, "near": 0.5, "far": 20, "depth": "window"}' > "$work/spot.json"
 
 # one LIGHTVOL TAG: one run under /usr/bin/time, its "wall cpu peak_kib" appended to $work/TAG.
+# one LIGHTVOL TAG [FLAGS...]
 one() {
   rm -f "$work/v.ply"
   /usr/bin/time -f '%e %U %S %M' -o "$work/t" "$1" build "$work/d.exr" --light "$work/spot.json" \
-    --out "$work/v.ply" -q
+    --out "$work/v.ply" -q "${@:3}"
   read -r wall user sys rss < "$work/t"
   echo "$wall $(echo "$user + $sys" | bc -l) $rss" >> "$work/$2"
 }
+# timed TAG COMMAND: one run of a shell command, its "wall cpu 0" appended to $work/TAG.
+timed() {
+  /usr/bin/time -f '%e %U %S' -o "$work/t" sh -c "$2"
+  read -r wall user sys < "$work/t"
+  echo "$wall $(echo "$user + $sys" | bc -l) 0" >> "$work/$1"
+}
+walls() { awk '{ printf "%s%s", (NR > 1 ? " " : ""), $1 }' "$work/$1"; }
 col() { awk -v c="$2" '{ print $c }' "$work/$1" | median; }
 
 printf '| map | load (1 min) | build | wall | user+sys | peak RSS | walls of the runs |\n|---|---|---|---:|---:|---:|---|\n'
 for n in "${sizes[@]}"; do
   "$build/tests/bench/make_depth" "$n" "$n" "$work/d.exr"
   load=$(cut -d' ' -f1 /proc/loadavg)
-  rm -f "$work"/t_* "$work/floor_t"
+  rm -f "$work"/t_* "$work/floor_t" "$work/head_t" "$work/nocheck_t"
   for ((i = 0; i < rounds; i++)); do
     for k in "${!builds[@]}"; do
       one "${builds[$k]}/lightvol" "t_$k"
@@ -47,20 +57,25 @@ for n in "${sizes[@]}"; do
       bytes=$(stat -c %s "$work/v.ply")
       rm -f "$work/v.ply"
     done
-    /usr/bin/time -f '%e %U %S' -o "$work/t" sh -c \
-      "cat '$work/d.exr' > /dev/null; dd if=/dev/zero of='$work/floor' bs=1M count=$(( (bytes + 1048575) / 1048576 )) status=none"
+    one "$build/lightvol" nocheck_t --no-check
+    rm -f "$work/v.ply"
+    timed floor_t "cat '$work/d.exr' > /dev/null; dd if=/dev/zero of='$work/floor' bs=1M count=$(( (bytes + 1048575) / 1048576 )) status=none"
     rm -f "$work/floor"
-    read -r wall user sys < "$work/t"
-    echo "$wall $(echo "$user + $sys" | bc -l) 0" >> "$work/floor_t"
+    timed head_t "cat '$work/d.exr' > /dev/null; head -c $bytes /dev/zero > '$work/floor'"
+    rm -f "$work/floor"
   done
   for k in "${!builds[@]}"; do
     printf '| %d² | %s | %s | %.2f s | %.2f s | %.1f MiB | %s |\n' "$n" "$load" "${builds[$k]}" \
       "$(col "t_$k" 1)" "$(col "t_$k" 2)" "$(echo "$(col "t_$k" 3) / 1024" | bc -l)" \
-      "$(awk '{ printf "%s%s", (NR > 1 ? " " : ""), $1 }' "$work/t_$k")"
+      "$(walls "t_$k")"
   done
-  printf '| %d² | | I/O floor: cat EXR + dd %s MB | %.2f s | %.2f s | | %s |\n' "$n" \
-    "$(( bytes / 1000000 ))" "$(col floor_t 1)" "$(col floor_t 2)" \
-    "$(awk '{ printf "%s%s", (NR > 1 ? " " : ""), $1 }' "$work/floor_t")"
+  printf '| %d² | | %s --no-check (streamed) | %.2f s | %.2f s | %.1f MiB | %s |\n' "$n" "$build" \
+    "$(col nocheck_t 1)" "$(col nocheck_t 2)" "$(echo "$(col nocheck_t 3) / 1024" | bc -l)" \
+    "$(walls nocheck_t)"
+  printf '| %d² | | I/O floor: cat EXR + dd %s MB (1 MiB writes) | %.2f s | %.2f s | | %s |\n' "$n" \
+    "$(( bytes / 1000000 ))" "$(col floor_t 1)" "$(col floor_t 2)" "$(walls floor_t)"
+  printf '| %d² | | I/O floor: cat EXR + head -c %s MB (8 KiB writes) | %.2f s | %.2f s | | %s |\n' \
+    "$n" "$(( bytes / 1000000 ))" "$(col head_t 1)" "$(col head_t 2)" "$(walls head_t)"
   rm -f "$work/d.exr"
 done
 echo "load average at the end: $(cut -d' ' -f1-3 /proc/loadavg)"

@@ -4,11 +4,14 @@
 // every texel's ray against the emitted triangles.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <lightvol/core/limits.h>
+#include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
 
@@ -190,6 +193,46 @@ TEST(OmniAdaptive, FlipYFacesAreClosedToo) {
   ASSERT_TRUE(mesh.ok()) << mesh.error().message;
   EXPECT_TRUE(is_closed_and_oriented(*mesh));
   EXPECT_TRUE(is_star_shaped_from(*mesh, light.position));
+}
+
+// A cube whose quadtrees at the bound are too large for the memory budget is refused as the faces'
+// leaves are counted, before the rest are emitted: white noise on every face (the quadtree at full
+// resolution, 2 (W − 1)² triangles a face), a budget the first face fits and the first two do not,
+// and the estimate for those two in the message, not the six's. The faces are large enough for the
+// triangles to outweigh the image reader's share of the estimate (which small maps' estimates are).
+TEST(OmniAdaptive, TessellationBeyondTheMemoryBudgetIsRefusedFaceByFace) {
+  const Light light = scene_light();
+  constexpr int w = 640;
+  CubeFaces cube = test::omni_scene(w);
+  std::uint32_t state = 12345;
+  for (DepthImage& face : cube.faces)
+    face = test::make_depth(w, w, [&](int, int) {
+      state = state * 1664525u + 1013904223u;
+      return 0.95f + 0.04f * static_cast<float>(state >> 8) * 0x1p-24f;
+    });
+  Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[0], 0, cube.sources[0], true);
+  ASSERT_TRUE(texels.ok());
+  const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
+  const std::uint64_t face = std::uint64_t{2} * (w - 1) * (w - 1);
+  ASSERT_EQ(pyramid.tessellate(1e-7, true).num_triangles(), face);
+  const auto needed = [&](std::uint64_t triangles) {
+    return adaptive_memory_bytes(w, w, kOmniFaces, triangles, true,
+                                 pyramid.texels().float_depths());
+  };
+  const std::string what = "the adaptive omni volume at this bound";
+  ASSERT_LT(needed(face), needed(2 * face));
+  AdaptiveOptions o;
+  o.max_error = 1e-7;
+  set_memory_budget(needed(2 * face) - 1);
+  Result<Mesh> refused = build_adaptive_omni_volume(light, cube, {}, o);
+  const Status expected = check_memory(needed(2 * face), cube.sources[0], what);
+  const Status six = check_memory(needed(kOmniFaces * face), cube.sources[0], what);
+  set_memory_budget(0);  // back to the default
+  ASSERT_FALSE(refused.ok());
+  ASSERT_FALSE(expected.ok());
+  ASSERT_FALSE(six.ok());
+  ASSERT_NE(expected.error().message, six.error().message);
+  EXPECT_EQ(refused.error().message, expected.error().message);
 }
 
 }  // namespace

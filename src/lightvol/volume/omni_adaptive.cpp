@@ -2,6 +2,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <utility>
@@ -133,6 +134,20 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   OmniAdaptiveDetail d;
   r.pyramid_seconds = seconds_;
 
+  const bool collapse =
+      pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse;
+  const bool floats = std::all_of(pyramids.begin(), pyramids.end(), [](const RefinementPyramid& p) {
+    return p.texels().float_depths();
+  });
+  // What grows with the tessellation (the quadtree's triangles, the collapse's tables, the volume)
+  // is measured against the budget: as each face's leaves are counted, with the other faces'
+  // grids as they stand (before its triangles are emitted), and once the seams agree.
+  const auto within_budget = [&](std::uint64_t triangles) {
+    *memory = check_memory(adaptive_memory_bytes(w, w, kOmniFaces, triangles, collapse, floats),
+                           cube.sources[0], "the adaptive omni volume at this bound");
+    return memory->ok();
+  };
+
   // Tessellate; force each border to hold its neighbour's border vertices until they agree.
   const OmniAdjacency adjacency = omni_adjacency(light_);
   std::array<BorderSplits, kOmniFaces> forced;
@@ -144,7 +159,15 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     LV_CHECK_LE(d.seam_rounds, 4 * w + 4);  // every round adds at least one border vertex
     for (int f = 0; f < kOmniFaces; ++f) {
       if (!dirty[f]) continue;
-      grids[f] = pyramids[f].tessellate(bound, faces[f].standard_winding(), forced[f]);
+      std::uint64_t others = 0;
+      for (int g = 0; g < kOmniFaces; ++g)
+        if (g != f) others += grids[g].num_triangles();
+      grids[f] = pyramids[f].tessellate(
+          bound, faces[f].standard_winding(), forced[f],
+          memory ? std::function<bool(std::uint64_t)>(
+                       [&](std::uint64_t triangles) { return within_budget(others + triangles); })
+                 : nullptr);
+      if (memory && !*memory) return Mesh{};
       dirty[f] = false;
     }
     if (!unite_seams(adjacency, grids, w, &dirty, [&](int f, GridSide side, std::vector<int> p) {
@@ -159,19 +182,7 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     r.leaves += g.leaves;
     r.fixup_rounds = std::max(r.fixup_rounds, g.fixup_rounds);
   }
-  const bool collapse =
-      pyramids[0].refinement() == Refinement::max_error && tessellation == Tessellation::collapse;
-  // What grows with the tessellation (the collapse's tables, the volume) is measured against the
-  // budget now that its size is known, before it is allocated.
-  if (memory) {
-    const bool floats =
-        std::all_of(pyramids.begin(), pyramids.end(),
-                    [](const RefinementPyramid& p) { return p.texels().float_depths(); });
-    *memory = check_memory(
-        adaptive_memory_bytes(w, w, kOmniFaces, r.quadtree_triangles, collapse, floats),
-        cube.sources[0], "the adaptive omni volume at this bound");
-    if (!*memory) return Mesh{};
-  }
+  if (memory && !within_budget(r.quadtree_triangles)) return Mesh{};
   if (collapse) {
     // Each face collapses its quadtree grid, seam vertices too (they slide along their side);
     // then each seam keeps what either of its faces kept, and a face that kept less collapses its

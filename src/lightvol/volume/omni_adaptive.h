@@ -45,8 +45,10 @@ class OmniRefinement {
   // `report` and `detail` as for build_adaptive_omni_volume (report's pyramid_seconds: seconds()).
   // With Tessellation::collapse (max_error only), each face's grid is coarsened after the seams
   // agree, with its four borders locked: both faces of a seam keep the same border vertices.
-  // With `memory`, what grows with the tessellation is first measured against the memory budget
-  // (adaptive_memory_bytes, core/limits.h): over it, *memory is the Error and the Mesh is empty.
+  // With `memory`, what grows with the tessellation is measured against the memory budget
+  // (adaptive_memory_bytes, core/limits.h) as each face's leaves are counted, with the other
+  // faces' grids as they stand, before that face's triangles are emitted, and once the seams
+  // agree: over it, *memory is the Error and the Mesh is empty.
   Mesh build(double bound, bool measure, AdaptiveReport* report = nullptr,
              OmniAdaptiveDetail* detail = nullptr,
              Tessellation tessellation = Tessellation::collapse, Status* memory = nullptr) const;
