@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <lightvol/core/limits.h>
+#include <lightvol/light/light.h>
 #include <lightvol/tessellate/adaptive_grid.h>
 #include <lightvol/volume/omni_adaptive.h>
 #include <lightvol/volume/omni_volume.h>
@@ -196,42 +197,60 @@ TEST(OmniAdaptive, FlipYFacesAreClosedToo) {
 }
 
 // A cube whose quadtrees at the bound are too large for the memory budget is refused as the faces'
-// leaves are counted, before the rest are emitted: white noise on every face (the quadtree at full
-// resolution, 2 (W − 1)² triangles a face), a budget the first face fits and the first two do not,
-// and the estimate for those two in the message, not the six's. The faces are large enough for the
-// triangles to outweigh the image reader's share of the estimate (which small maps' estimates are).
-TEST(OmniAdaptive, TessellationBeyondTheMemoryBudgetIsRefusedFaceByFace) {
+// leaves are counted, before their triangles are emitted, with the estimate for all six faces'
+// quadtrees as they are counted, not as the seams would make them: white noise on faces +X and −X
+// (the quadtree at full resolution, 2 (W − 1)² triangles each), the room on the other four (which
+// the seams then refine along their borders), and a budget the first face fits and the first two
+// do not. The faces are large enough for the triangles to outweigh the image reader's share of the
+// estimate (which small maps' estimates are).
+TEST(OmniAdaptive, TessellationBeyondTheMemoryBudgetIsRefusedBeforeItsTrianglesAreEmitted) {
   const Light light = scene_light();
   constexpr int w = 640;
   CubeFaces cube = test::omni_scene(w);
   std::uint32_t state = 12345;
-  for (DepthImage& face : cube.faces)
-    face = test::make_depth(w, w, [&](int, int) {
+  for (int f : {0, 1})
+    cube.faces[f] = test::make_depth(w, w, [&](int, int) {
       state = state * 1664525u + 1013904223u;
       return 0.95f + 0.04f * static_cast<float>(state >> 8) * 0x1p-24f;
     });
-  Result<TexelDepths> texels = TexelDepths::create(light, cube.faces[0], 0, cube.sources[0], true);
-  ASSERT_TRUE(texels.ok());
-  const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
-  const std::uint64_t face = std::uint64_t{2} * (w - 1) * (w - 1);
-  ASSERT_EQ(pyramid.tessellate(1e-7, true).num_triangles(), face);
+  constexpr double bound = 1e-4;
+  // Each face's quadtree alone (no border forced), as the first round counts it.
+  std::uint64_t counted = 0, noise = 0;
+  bool float_depths = true;
+  for (int f = 0; f < kOmniFaces; ++f) {
+    Result<TexelDepths> texels =
+        TexelDepths::create(light, cube.faces[f], f, cube.sources[f], true);
+    ASSERT_TRUE(texels.ok());
+    float_depths = float_depths && texels->float_depths();
+    const RefinementPyramid pyramid(std::move(*texels), Refinement::max_error);
+    const std::uint64_t t =
+        pyramid.tessellate(bound, Unprojector(light, w, w, f, Space::world).standard_winding())
+            .num_triangles();
+    counted += t;
+    if (f == 0) noise = t;
+  }
+  ASSERT_EQ(noise, std::uint64_t{2} * (w - 1) * (w - 1));
+  AdaptiveOptions o;
+  o.max_error = bound;
+  o.tessellation = Tessellation::quadtree;
+  AdaptiveReport seams;
+  ASSERT_TRUE(build_adaptive_omni_volume(light, cube, {}, o, &seams).ok());
+  ASSERT_GT(seams.quadtree_triangles, counted);  // what the seams add
+
   const auto needed = [&](std::uint64_t triangles) {
-    return adaptive_memory_bytes(w, w, kOmniFaces, triangles, true,
-                                 pyramid.texels().float_depths());
+    return adaptive_memory_bytes(w, w, kOmniFaces, triangles, true, float_depths);
   };
   const std::string what = "the adaptive omni volume at this bound";
-  ASSERT_LT(needed(face), needed(2 * face));
-  AdaptiveOptions o;
-  o.max_error = 1e-7;
-  set_memory_budget(needed(2 * face) - 1);
+  ASSERT_LT(needed(noise), needed(2 * noise));
+  o.tessellation = Tessellation::collapse;
+  set_memory_budget(needed(2 * noise) - 1);
   Result<Mesh> refused = build_adaptive_omni_volume(light, cube, {}, o);
-  const Status expected = check_memory(needed(2 * face), cube.sources[0], what);
-  const Status six = check_memory(needed(kOmniFaces * face), cube.sources[0], what);
+  const Status expected = check_memory(needed(counted), cube.sources[0], what);
+  const Status after_seams = check_memory(needed(seams.quadtree_triangles), cube.sources[0], what);
   set_memory_budget(0);  // back to the default
   ASSERT_FALSE(refused.ok());
   ASSERT_FALSE(expected.ok());
-  ASSERT_FALSE(six.ok());
-  ASSERT_NE(expected.error().message, six.error().message);
+  ASSERT_NE(expected.error().message, after_seams.error().message);
   EXPECT_EQ(refused.error().message, expected.error().message);
 }
 

@@ -141,7 +141,10 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
   });
   // What grows with the tessellation (the quadtree's triangles, the collapse's tables, the volume)
   // is measured against the budget: as each face's leaves are counted, with the other faces'
-  // grids as they stand (before its triangles are emitted), and once the seams agree.
+  // grids as they stand (before its triangles are emitted), and once the seams agree. A refusal
+  // gives the estimate for all six faces: the faces the round has not reached yet are counted
+  // (their leaves, nothing emitted), so that raising the budget to it is not refused again at the
+  // next face.
   const auto within_budget = [&](std::uint64_t triangles) {
     *memory = check_memory(adaptive_memory_bytes(w, w, kOmniFaces, triangles, collapse, floats),
                            cube.sources[0], "the adaptive omni volume at this bound");
@@ -167,7 +170,20 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
           memory ? std::function<bool(std::uint64_t)>(
                        [&](std::uint64_t triangles) { return within_budget(others + triangles); })
                  : nullptr);
-      if (memory && !*memory) return Mesh{};
+      if (memory && !*memory) {
+        std::uint64_t total = grids[f].refused_triangles;
+        for (int g = 0; g < kOmniFaces; ++g) {
+          if (g == f) continue;
+          total += g > f && dirty[g]
+                       ? pyramids[g]
+                             .tessellate(bound, faces[g].standard_winding(), forced[g],
+                                         [](std::uint64_t) { return false; })
+                             .refused_triangles
+                       : grids[g].num_triangles();
+        }
+        within_budget(total);
+        return Mesh{};
+      }
       dirty[f] = false;
     }
     if (!unite_seams(adjacency, grids, w, &dirty, [&](int f, GridSide side, std::vector<int> p) {
