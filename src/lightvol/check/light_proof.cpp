@@ -245,22 +245,30 @@ LightSums light_sums(const Mesh& mesh, const LightView& view, std::size_t begin,
     // Every vertex the faces name has its distance: the faces kLanes at a time.
     const auto lanes = std::make_unique_for_overwrite<FaceLanes>();
     FaceLanes& f = *lanes;
+    // The decided faces in a loop without calls, so that its sums stay in registers; it stops at
+    // each face add_point_face must classify (which adds to s.positive itself, in face order).
+    double positive = s.positive;
     for (std::size_t first = begin; first < end; first += kLanes) {
       const std::size_t n = std::min(kLanes, end - first);
       decide_lanes(idx + 3 * first, p, near.distance, near.first, n, view.eye, view.extra, f);
       for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t t = first + i;
-        const auto [ia, ib, ic] = mesh.triangle(t);
-        const bool repeated = ia == ib || ib == ic || ia == ic;
-        const bool apex = ia == view.apex || ib == view.apex || ic == view.apex;
-        acc += f.det[i];
-        zero_area += repeated || f.flat[i] != 0 ? 1 : 0;
-        if (f.decided[i] != 0 && !repeated && !apex)
-          s.positive += f.omega[i];
-        else
-          add_point_face(t);
+        for (; i < n; ++i) {
+          const auto [ia, ib, ic] = mesh.triangle(first + i);
+          const bool repeated = ia == ib || ib == ic || ia == ic;
+          const bool apex = ia == view.apex || ib == view.apex || ic == view.apex;
+          acc += f.det[i];
+          zero_area += repeated || f.flat[i] != 0 ? 1 : 0;
+          if (f.decided[i] == 0 || repeated || apex) break;
+          positive += f.omega[i];
+        }
+        if (i == n) break;
+        // Face first + i: its determinant and area are counted, its side is not.
+        s.positive = positive;
+        add_point_face(first + i);
+        positive = s.positive;
       }
     }
+    s.positive = positive;
     *det = acc;
     *degenerate += zero_area;
     return s;
