@@ -43,18 +43,48 @@ constexpr std::array<int, 3> kCleanupSignals = {SIGINT, SIGTERM, SIGHUP};
 std::atomic<int> g_defer_depth{0};
 std::atomic<int> g_deferred_signal{0};
 
-// Set once a signal's cleanup begins: the process is about to die of it. Another thread may be
-// registering a temporary at that moment (it took no part in deferring the signal, or began after
-// the deferred signal was acted on); either the cleanup sees its slot armed, or the registration
-// sees this flag and unlinks its own file (sequentially consistent both ways: a store then a load
-// on each side).
+// Set once a signal's cleanup begins: the process is about to die of it. Another thread may enter
+// a deferring scope at that moment (it took no part in deferring the signal, or began after the
+// deferred signal was acted on), to create a temporary: a file the cleanup's pass may miss, and
+// that dying would leave behind before it is registered. So the cleanup, once this flag is set,
+// waits for the deferring scopes to end before its last pass (sequentially consistent both ways:
+// each side stores, then loads the other's), and a scope that sees the flag ends at once: on
+// entering, before it creates anything; on registering, unlinking its own file first. Either way
+// its thread then waits for the process to die.
 std::atomic<bool> g_dying{false};
 
-void unlink_temporaries() {
-  g_dying.store(true);
+// How long the cleanup waits for the deferring scopes (a thread in one may need a lock that the
+// thread the signal interrupted holds): then it goes on, and a file created meanwhile may stay.
+constexpr long kScopeWaitNanoseconds = 1'000'000'000;
+
+void unlink_armed() {
   const pid_t self = ::getpid();
   for (TempSlot& slot : g_slots)
     if (slot.state.load() == 2 && slot.owner == self) ::unlink(slot.path);
+}
+
+// Only async-signal-safe calls: clock_gettime, nanosleep, unlink.
+void unlink_temporaries() {
+  g_dying.store(true);
+  unlink_armed();
+  timespec start{}, now{};
+  ::clock_gettime(CLOCK_MONOTONIC, &start);
+  while (g_defer_depth.load() > 0) {
+    ::clock_gettime(CLOCK_MONOTONIC, &now);
+    if ((now.tv_sec - start.tv_sec) * 1'000'000'000L + (now.tv_nsec - start.tv_nsec) >
+        kScopeWaitNanoseconds)
+      break;
+    const timespec pause{0, 100'000};
+    ::nanosleep(&pause, nullptr);
+  }
+  unlink_armed();
+}
+
+// A thread in a deferring scope that finds the process dying: it leaves the scope (so that the
+// cleanup's wait ends) and waits to die with the process.
+[[noreturn]] void leave_scope_and_wait() {
+  g_defer_depth.fetch_sub(1);
+  for (;;) ::pause();
 }
 
 extern "C" void unlink_temporaries_and_reraise(int sig) {
@@ -89,7 +119,8 @@ void install_signal_cleanup() {
 }
 
 // Returns the slot index, or -1 when the table is full or the path too long (the file is then
-// only removed by the normal paths, not on a signal).
+// only removed by the normal paths, not on a signal). Called in a SignalDefer scope, right after
+// the file is created.
 int register_temporary(const std::string& absolute_path) {
   install_signal_cleanup();
   if (absolute_path.size() >= PATH_MAX) return -1;
@@ -101,7 +132,7 @@ int register_temporary(const std::string& absolute_path) {
     g_slots[i].state.store(2);
     if (g_dying.load()) {  // a signal's cleanup may have passed this slot: the process dies now
       ::unlink(g_slots[i].path);
-      for (;;) ::pause();
+      leave_scope_and_wait();
     }
     return i;
   }
@@ -117,7 +148,10 @@ void unregister_temporary(int slot) {
 // whole; a signal that came meanwhile is acted on at the end of the scope.
 class SignalDefer {
  public:
-  SignalDefer() { g_defer_depth.fetch_add(1); }
+  SignalDefer() {
+    g_defer_depth.fetch_add(1);
+    if (g_dying.load()) leave_scope_and_wait();  // a signal's cleanup has begun
+  }
   ~SignalDefer() {
     if (g_defer_depth.fetch_sub(1) != 1) return;
     if (const int sig = g_deferred_signal.exchange(0); sig != 0) {
