@@ -24,23 +24,24 @@ source "$(dirname "$0")/bench_common.sh"
 # The light of docs/performance.md's scale targets (the eye at the origin, looking down −Z).
 echo '{"type": "spot", "position": [0,0,0], "direction": [0,0,-1], "up": [0,1,0], "fov_y_deg": 60, "near": 0.5, "far": 20, "depth": "window"}' > "$work/spot.json"
 
-# one LIGHTVOL TAG: one run under /usr/bin/time, its "wall cpu peak_kib" appended to $work/TAG.
-# one LIGHTVOL TAG [FLAGS...]
+# timed TAG COMMAND...: one run under /usr/bin/time, its "wall cpu peak_kib" appended to $work/TAG.
+timed() {
+  /usr/bin/time -f '%e %U %S %M' -o "$work/t" "${@:2}"
+  read -r wall user sys rss < "$work/t"
+  echo "$wall $(echo "$user + $sys" | bc -l) $rss" >> "$work/$1"
+}
+# one LIGHTVOL TAG [FLAGS...]: the build of the map into $work/v.ply, timed.
 one() {
   rm -f "$work/v.ply"
-  /usr/bin/time -f '%e %U %S %M' -o "$work/t" "$1" build "$work/d.exr" --light "$work/spot.json" \
-    --out "$work/v.ply" -q "${@:3}"
-  read -r wall user sys rss < "$work/t"
-  echo "$wall $(echo "$user + $sys" | bc -l) $rss" >> "$work/$2"
-}
-# timed TAG COMMAND: one run of a shell command, its "wall cpu 0" appended to $work/TAG.
-timed() {
-  /usr/bin/time -f '%e %U %S' -o "$work/t" sh -c "$2"
-  read -r wall user sys < "$work/t"
-  echo "$wall $(echo "$user + $sys" | bc -l) 0" >> "$work/$1"
+  timed "$2" "$1" build "$work/d.exr" --light "$work/spot.json" --out "$work/v.ply" -q "${@:3}"
 }
 walls() { awk '{ printf "%s%s", (NR > 1 ? " " : ""), $1 }' "$work/$1"; }
 col() { awk -v c="$2" '{ print $c }' "$work/$1" | median; }
+# row LOAD LABEL TAG: the medians of TAG's runs at map size $n, with their peak.
+row() {
+  printf '| %d² | %s | %s | %.2f s | %.2f s | %.1f MiB | %s |\n' "$n" "$1" "$2" "$(col "$3" 1)" \
+    "$(col "$3" 2)" "$(echo "$(col "$3" 3) / 1024" | bc -l)" "$(walls "$3")"
+}
 
 printf '| map | load (1 min) | build | wall | user+sys | peak RSS | walls of the runs |\n|---|---|---|---:|---:|---:|---|\n'
 for n in "${sizes[@]}"; do
@@ -59,19 +60,13 @@ for n in "${sizes[@]}"; do
     done
     one "$build/lightvol" nocheck_t --no-check
     rm -f "$work/v.ply"
-    timed floor_t "cat '$work/d.exr' > /dev/null; dd if=/dev/zero of='$work/floor' bs=1M count=$(( (bytes + 1048575) / 1048576 )) status=none"
+    timed floor_t sh -c "cat '$work/d.exr' > /dev/null; dd if=/dev/zero of='$work/floor' bs=1M count=$(( (bytes + 1048575) / 1048576 )) status=none"
     rm -f "$work/floor"
-    timed head_t "cat '$work/d.exr' > /dev/null; head -c $bytes /dev/zero > '$work/floor'"
+    timed head_t sh -c "cat '$work/d.exr' > /dev/null; head -c $bytes /dev/zero > '$work/floor'"
     rm -f "$work/floor"
   done
-  for k in "${!builds[@]}"; do
-    printf '| %d² | %s | %s | %.2f s | %.2f s | %.1f MiB | %s |\n' "$n" "$load" "${builds[$k]}" \
-      "$(col "t_$k" 1)" "$(col "t_$k" 2)" "$(echo "$(col "t_$k" 3) / 1024" | bc -l)" \
-      "$(walls "t_$k")"
-  done
-  printf '| %d² | | %s --no-check (streamed) | %.2f s | %.2f s | %.1f MiB | %s |\n' "$n" "$build" \
-    "$(col nocheck_t 1)" "$(col nocheck_t 2)" "$(echo "$(col nocheck_t 3) / 1024" | bc -l)" \
-    "$(walls nocheck_t)"
+  for k in "${!builds[@]}"; do row "$load" "${builds[$k]}" "t_$k"; done
+  row "" "$build --no-check (streamed)" nocheck_t
   printf '| %d² | | I/O floor: cat EXR + dd %s MB (1 MiB writes) | %.2f s | %.2f s | | %s |\n' "$n" \
     "$(( bytes / 1000000 ))" "$(col floor_t 1)" "$(col floor_t 2)" "$(walls floor_t)"
   printf '| %d² | | I/O floor: cat EXR + head -c %s MB (8 KiB writes) | %.2f s | %.2f s | | %s |\n' \

@@ -186,4 +186,11 @@ DepthImage plateau_scene(int w, int h, const LightRange& range, std::mt19937& rn
   });
 }
 
+DepthImage white_noise(int w, int h, float lo, float span, std::uint32_t& state) {
+  return make_depth(w, h, [&](int, int) {
+    state = state * 1664525u + 1013904223u;
+    return lo + span * (static_cast<float>(state >> 8) * 0x1p-24f);
+  });
+}
+
 }  // namespace lightvol::test

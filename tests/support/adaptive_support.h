@@ -2,6 +2,7 @@
 // volume's error (every texel's ray cast against the mesh) and the depth maps they run on.
 #pragma once
 
+#include <cstdint>
 #include <random>
 #include <string>
 #include <vector>
@@ -57,6 +58,10 @@ std::vector<LightRange> light_ranges();
 // on every texel, also drawn from `rng`.
 DepthImage plateau_scene(int w, int h, const LightRange& range, std::mt19937& rng,
                          double jitter = 0);
+
+// White noise where nothing coarsens: each texel lo + span × u, u uniform in [0, 1) from a linear
+// congruential generator whose `state` goes on from map to map.
+DepthImage white_noise(int w, int h, float lo, float span, std::uint32_t& state);
 
 // Closed, oriented, no degenerate triangle, positive volume (as gtest expectations).
 void expect_valid_volume(const Mesh& mesh);

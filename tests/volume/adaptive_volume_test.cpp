@@ -257,10 +257,7 @@ TEST(Adaptive, RadialDepthNoParallelRayReachesIsAnError) {
 TEST(Adaptive, TessellationBeyondTheMemoryBudgetIsRefused) {
   const Light light = light_from_json(directional_json("linear"));
   std::uint32_t state = 12345;
-  const DepthImage depth = make_depth(64, 64, [&](int, int) {
-    state = state * 1664525u + 1013904223u;
-    return 2.0f + static_cast<float>(state >> 8) * 0x1p-24f;
-  });
+  const DepthImage depth = test::white_noise(64, 64, 2.0f, 1.0f, state);
   AdaptiveOptions o;
   o.max_error = 1e-6;
   Result<Mesh> built = build_adaptive_volume(light, depth, {}, o, "noise.exr");

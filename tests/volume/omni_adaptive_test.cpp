@@ -208,11 +208,7 @@ TEST(OmniAdaptive, TessellationBeyondTheMemoryBudgetIsRefusedBeforeItsTrianglesA
   constexpr int w = 640;
   CubeFaces cube = test::omni_scene(w);
   std::uint32_t state = 12345;
-  for (int f : {0, 1})
-    cube.faces[f] = test::make_depth(w, w, [&](int, int) {
-      state = state * 1664525u + 1013904223u;
-      return 0.95f + 0.04f * static_cast<float>(state >> 8) * 0x1p-24f;
-    });
+  for (int f : {0, 1}) cube.faces[f] = test::white_noise(w, w, 0.95f, 0.04f, state);
   constexpr double bound = 1e-4;
   // Each face's quadtree alone (no border forced), as the first round counts it.
   std::uint64_t counted = 0, noise = 0;

@@ -60,10 +60,10 @@ Status validate_depths(const DepthImage& image, const std::string& source) {
   // The first block of texels holding a depth that is not finite and ≥ 0, then that block one
   // texel at a time.
   const float* values = image.values.data();
-  const std::size_t block = detail::first_failing_block(n, [values](std::size_t i) {
+  const std::size_t from = detail::first_failing_block(n, [values](std::size_t i) {
     return (values[i] >= 0.0f) & (values[i] <= std::numeric_limits<float>::max());
   });
-  for (std::size_t i = block; i < n; ++i) {
+  for (std::size_t i = from; i < n; ++i) {
     const float v = image.values[i];
     if (std::isfinite(v) && v >= 0) continue;
     const std::size_t col = i % static_cast<std::size_t>(image.width);

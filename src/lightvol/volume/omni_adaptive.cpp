@@ -162,26 +162,30 @@ Mesh OmniRefinement::build(double bound, bool measure, AdaptiveReport* report,
     LV_CHECK_LE(d.seam_rounds, 4 * w + 4);  // every round adds at least one border vertex
     for (int f = 0; f < kOmniFaces; ++f) {
       if (!dirty[f]) continue;
-      std::uint64_t others = 0;
-      for (int g = 0; g < kOmniFaces; ++g)
-        if (g != f) others += grids[g].num_triangles();
+      // The other faces' triangles: their grids as they stand, or (`recount`) for the faces this
+      // round has yet to tessellate, their leaves counted afresh, nothing emitted.
+      const auto others = [&](bool recount) {
+        std::uint64_t n = 0;
+        for (int g = 0; g < kOmniFaces; ++g) {
+          if (g == f) continue;
+          if (recount && g > f && dirty[g])
+            n += pyramids[g]
+                     .tessellate(bound, faces[g].standard_winding(), forced[g],
+                                 [](std::uint64_t) { return false; })
+                     .refused_triangles;
+          else
+            n += grids[g].num_triangles();
+        }
+        return n;
+      };
+      const std::uint64_t standing = others(false);
       grids[f] = pyramids[f].tessellate(
           bound, faces[f].standard_winding(), forced[f],
           memory ? std::function<bool(std::uint64_t)>(
-                       [&](std::uint64_t triangles) { return within_budget(others + triangles); })
+                       [&](std::uint64_t triangles) { return within_budget(standing + triangles); })
                  : nullptr);
       if (memory && !*memory) {
-        std::uint64_t total = grids[f].refused_triangles;
-        for (int g = 0; g < kOmniFaces; ++g) {
-          if (g == f) continue;
-          total += g > f && dirty[g]
-                       ? pyramids[g]
-                             .tessellate(bound, faces[g].standard_winding(), forced[g],
-                                         [](std::uint64_t) { return false; })
-                             .refused_triangles
-                       : grids[g].num_triangles();
-        }
-        within_budget(total);
+        within_budget(grids[f].refused_triangles + others(true));
         return Mesh{};
       }
       dirty[f] = false;

@@ -80,6 +80,14 @@ inline void quad_triangles(std::uint32_t r, std::uint32_t c, std::uint32_t uw, b
   }
 }
 
+// The corners of column 0's quad in a quad row whose upper grid row starts at `above` (the lower
+// row right after it): corner k of triangle i of column c's quad is corner[3i + k] + 3c.
+void quad_corners(const float* above, std::uint32_t uw, bool standard, const float* (&corner)[6]) {
+  std::uint32_t tri[6];
+  quad_triangles(0, 0, uw, standard, tri);
+  for (int k = 0; k < 6; ++k) corner[k] = above + 3 * std::size_t{tri[k]};
+}
+
 // Grid triangles of quad rows [q0, q1) (two per texel quad, wound to face away from the light)
 // into `out`, 6·(W − 1) indices a row, in parallel.
 void grid_quad_rows(int q0, int q1, std::uint32_t uw, bool standard, std::uint32_t* out) {
@@ -306,15 +314,9 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
         tbb::blocked_range<int>(std::max(r0, 1), r1), FaceTally{},
         [&](const tbb::blocked_range<int>& rows, FaceTally acc) {
           for (int r = rows.begin(); r != rows.end(); ++r) {
-            const float* out = fresh + 3 * static_cast<std::size_t>(r - r0) * uw;
-            const float* above = out - 3 * uw;
-            // The quads' corners in rows 0 (above) and 1 (out), the same for every quad but for
-            // its column.
-            std::uint32_t tri[6];
-            quad_triangles(0, 0, static_cast<std::uint32_t>(uw), standard, tri);
             const float* corner[6];
-            for (int k = 0; k < 6; ++k)
-              corner[k] = tri[k] >= uw ? out + 3 * (tri[k] - uw) : above + 3 * std::size_t{tri[k]};
+            quad_corners(fresh + 3 * (static_cast<std::size_t>(r - r0) - 1) * uw,
+                         static_cast<std::uint32_t>(uw), standard, corner);
             std::uint64_t collapsed = 0, turned = 0;
             for (std::size_t c = 0; c + 1 < uw; ++c) {
               const std::size_t o = 3 * c;
@@ -335,22 +337,22 @@ Status StaticVolumeStream::positions(const PositionSink& sink) {
         });
     faces.merge(block);
     if (!sink(fresh, static_cast<std::size_t>(r1 - r0) * uw)) return {};
-    // The volume's sum takes the grid triangles in order: quad rows [first_row, r1 − 1).
-    const auto row_of = [&](std::size_t v) {
-      return buffer.data() + 3 * (v - static_cast<std::size_t>(first_row) * uw);
-    };
+    // The volume's sum takes the grid triangles in order: quad rows [first_row, r1 − 1), whose
+    // upper rows begin the buffer.
     const std::size_t t_begin = static_cast<std::size_t>(first_row) * quad_triangles_per_row;
     const std::size_t t_end = static_cast<std::size_t>(r1 - 1) * quad_triangles_per_row;
-    // Quad by quad: the division by the row's length once a run.
+    // Quad row by quad row, with the tally's corners.
     volume.add_runs(t_begin, t_end - t_begin, [&](std::size_t t0, std::size_t t1, double acc) {
-      std::size_t q = t0 / quad_triangles_per_row, c = (t0 % quad_triangles_per_row) / 2;
-      for (std::size_t t = t0; t != t1; ++c) {
-        if (c + 1 == uw) c = 0, ++q;
-        std::uint32_t tri[6];
-        quad_triangles(static_cast<std::uint32_t>(q), static_cast<std::uint32_t>(c),
-                       static_cast<std::uint32_t>(uw), standard, tri);
-        for (std::size_t i = t % 2; i < 2 && t != t1; ++i, ++t)
-          acc += volume_det(row_of(tri[3 * i]), row_of(tri[3 * i + 1]), row_of(tri[3 * i + 2]));
+      for (std::size_t t = t0; t != t1;) {
+        const std::size_t q = t / quad_triangles_per_row;
+        const float* corner[6];
+        quad_corners(buffer.data() + 3 * (q - static_cast<std::size_t>(first_row)) * uw,
+                     static_cast<std::uint32_t>(uw), standard, corner);
+        for (std::size_t k = t - q * quad_triangles_per_row; k < quad_triangles_per_row && t != t1;
+             ++k, ++t) {
+          const std::size_t o = 3 * (k / 2), i = 3 * (k % 2);
+          acc += volume_det(corner[i] + o, corner[i + 1] + o, corner[i + 2] + o);
+        }
       }
       return acc;
     });
